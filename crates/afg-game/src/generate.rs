@@ -1,0 +1,128 @@
+//! Seeded instance generator: the paper's distribution with SPEC §1 defaults.
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::{GameError, Instance, Point, Task};
+
+/// Inclusive range from which each task's capacity is drawn uniformly.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct CapacityRange {
+    /// Smallest capacity.
+    pub min: usize,
+    /// Largest capacity.
+    pub max: usize,
+}
+
+/// Every parameter of the generator, already resolved to numbers, so that an
+/// instance file records exactly what produced it.
+///
+/// Draw order (part of the format: changing it changes every dataset): robot
+/// positions `(x, y)` in index order, then per task its position, reward and,
+/// if capacities are drawn, its capacity. All uniform, from one
+/// `ChaCha8Rng::seed_from_u64(seed)`.
+///
+/// # Examples
+/// ```
+/// use afg_game::GeneratorConfig;
+/// let cfg = GeneratorConfig::paper(20, 5, 7);
+/// assert_eq!(cfg.eps, 4.0); // max(2, N/M)
+/// assert_eq!((cfg.reward_min, cfg.reward_max), (4.0, 8.0)); // [N/M, 2N/M]
+/// let inst = cfg.generate()?;
+/// assert_eq!(inst.num_robots(), 20);
+/// assert_eq!(inst, cfg.generate()?); // same seed, same instance
+/// # Ok::<(), afg_game::GameError>(())
+/// ```
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GeneratorConfig {
+    /// Number of robots N.
+    pub robots: usize,
+    /// Number of tasks M.
+    pub tasks: usize,
+    /// Seed of the ChaCha8 generator.
+    pub seed: u64,
+    /// Lower end of the uniform initial reward.
+    pub reward_min: f64,
+    /// Upper end of the uniform initial reward.
+    pub reward_max: f64,
+    /// eps_j, the same for every task.
+    pub eps: f64,
+    /// Distance penalty beta.
+    pub beta: f64,
+    /// Capacity range; `None` for unbounded tasks.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub capacity: Option<CapacityRange>,
+}
+
+impl GeneratorConfig {
+    /// The paper's setting: positions uniform in the unit square, rewards uniform in
+    /// `[N/M, 2N/M]`, beta = 1; SPEC defaults `eps = max(2, N/M)` and no capacities.
+    pub fn paper(robots: usize, tasks: usize, seed: u64) -> Self {
+        let per_task = robots as f64 / tasks.max(1) as f64;
+        GeneratorConfig {
+            robots,
+            tasks,
+            seed,
+            reward_min: per_task,
+            reward_max: 2.0 * per_task,
+            eps: per_task.max(2.0),
+            beta: 1.0,
+            capacity: None,
+        }
+    }
+
+    /// Adds capacities drawn uniformly from `ceil(N/M) ..= ceil(slack * N/M)`; their
+    /// total is then at least N. `slack` must be at least 1.
+    pub fn with_capacity_slack(mut self, slack: f64) -> Self {
+        let per_task = self.robots as f64 / self.tasks.max(1) as f64;
+        let min = per_task.ceil() as usize;
+        let max = (slack * per_task).ceil().max(min as f64) as usize;
+        self.capacity = Some(CapacityRange { min, max });
+        self
+    }
+
+    /// Draws the instance.
+    ///
+    /// # Errors
+    /// [`GameError::InvalidGenerator`] for a reward range that is not finite and
+    /// ordered or an empty capacity range, and any error of [`Instance::new`]
+    /// (N = 0, M = 0, eps < φ, capacities below N, ...).
+    pub fn generate(&self) -> Result<Instance, GameError> {
+        if !(self.reward_min.is_finite()
+            && self.reward_max.is_finite()
+            && self.reward_min <= self.reward_max)
+        {
+            return Err(GameError::InvalidGenerator(format!(
+                "reward range [{}, {}] must be finite and ordered",
+                self.reward_min, self.reward_max
+            )));
+        }
+        if let Some(c) = self.capacity
+            && c.min > c.max
+        {
+            return Err(GameError::InvalidGenerator(format!(
+                "capacity range {}..={} is empty",
+                c.min, c.max
+            )));
+        }
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
+        let point = |rng: &mut ChaCha8Rng| Point::new(rng.random::<f64>(), rng.random::<f64>());
+        let robots: Vec<Point> = (0..self.robots).map(|_| point(&mut rng)).collect();
+        let tasks = (0..self.tasks)
+            .map(|_| {
+                let position = point(&mut rng);
+                let reward =
+                    self.reward_min + (self.reward_max - self.reward_min) * rng.random::<f64>();
+                let capacity = self.capacity.map(|c| rng.random_range(c.min..=c.max));
+                Task {
+                    position,
+                    reward,
+                    eps: self.eps,
+                    capacity,
+                }
+            })
+            .collect();
+        Ok(Instance::new(robots, tasks, self.beta)?.with_generator(self.clone()))
+    }
+}

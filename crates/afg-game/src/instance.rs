@@ -1,0 +1,272 @@
+//! Problem instances: robots, tasks, the coalition value F_j and the utility u_i (paper eq. 2).
+
+use serde::{Deserialize, Serialize};
+
+use crate::{GameError, GeneratorConfig, RobotId, TaskId};
+
+/// The golden ratio φ = (1 + √5) / 2: the smallest `eps` for which F_j is concave in n.
+pub const GOLDEN_RATIO: f64 = 1.618_033_988_749_895;
+
+/// A point in the plane (the paper uses the unit square, but any finite point is allowed).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Point {
+    /// x coordinate.
+    pub x: f64,
+    /// y coordinate.
+    pub y: f64,
+}
+
+impl Point {
+    /// A point from its coordinates.
+    pub const fn new(x: f64, y: f64) -> Self {
+        Point { x, y }
+    }
+
+    /// Euclidean distance to `other`.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::Point;
+    /// assert_eq!(Point::new(0.0, 0.0).distance(Point::new(3.0, 4.0)), 5.0);
+    /// ```
+    #[inline]
+    pub fn distance(self, other: Point) -> f64 {
+        (self.x - other.x).hypot(self.y - other.y)
+    }
+
+    fn is_finite(self) -> bool {
+        self.x.is_finite() && self.y.is_finite()
+    }
+}
+
+/// A task: where it is, what it pays, how its value grows with the coalition.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Task {
+    /// Location.
+    pub position: Point,
+    /// Initial reward `r_j`: the value of a coalition of one robot, F_j(1).
+    pub reward: f64,
+    /// Base `eps_j` of the logarithm in F_j; must be at least the golden ratio.
+    pub eps: f64,
+    /// Largest coalition the task accepts (the paper's h̄_j); `None` means unbounded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub capacity: Option<usize>,
+}
+
+/// One game: N robots, M tasks, the distance penalty beta.
+///
+/// Built only through [`Instance::new`] (or deserialisation, which calls it),
+/// so every `Instance` is valid: N ≥ 1, M ≥ 1, finite coordinates, rewards ≥ 0,
+/// eps ≥ φ, beta ≥ 0 and capacities that can hold all robots.
+///
+/// # Examples
+/// ```
+/// use afg_game::{Instance, Point, Task, TaskId};
+/// let task = Task { position: Point::new(0.0, 0.0), reward: 2.0, eps: 2.0, capacity: None };
+/// let inst = Instance::new(vec![Point::new(0.0, 1.0)], vec![task], 1.0)?;
+/// // F(1) = r, and one robot at distance 1 gets 2 - 1.
+/// assert_eq!(inst.coalition_value(TaskId(0), 1), 2.0);
+/// assert_eq!(inst.utility(0.into(), TaskId(0), 1), 1.0);
+/// # Ok::<(), afg_game::GameError>(())
+/// ```
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "crate::io::InstanceFile", into = "crate::io::InstanceFile")]
+pub struct Instance {
+    robots: Vec<Point>,
+    tasks: Vec<Task>,
+    beta: f64,
+    generator: Option<GeneratorConfig>,
+    /// 1 / ln(eps_j), cached because F_j is evaluated in every inner loop.
+    inv_ln_eps: Vec<f64>,
+}
+
+impl Instance {
+    /// Validates and builds an instance.
+    ///
+    /// # Errors
+    /// [`GameError::NoRobots`], [`GameError::NoTasks`],
+    /// [`GameError::NonFiniteCoordinate`], [`GameError::InvalidReward`],
+    /// [`GameError::EpsBelowGoldenRatio`], [`GameError::InvalidBeta`] or
+    /// [`GameError::CapacityTooSmall`].
+    pub fn new(robots: Vec<Point>, tasks: Vec<Task>, beta: f64) -> Result<Self, GameError> {
+        if robots.is_empty() {
+            return Err(GameError::NoRobots);
+        }
+        if tasks.is_empty() {
+            return Err(GameError::NoTasks);
+        }
+        if u32::try_from(robots.len()).is_err() || u32::try_from(tasks.len()).is_err() {
+            return Err(GameError::InvalidGenerator(
+                "at most 2^32 - 1 robots and tasks".into(),
+            ));
+        }
+        for (index, p) in robots.iter().enumerate() {
+            if !p.is_finite() {
+                return Err(GameError::NonFiniteCoordinate {
+                    what: "robot",
+                    index,
+                    x: p.x,
+                    y: p.y,
+                });
+            }
+        }
+        for (index, t) in tasks.iter().enumerate() {
+            let p = t.position;
+            if !p.is_finite() {
+                return Err(GameError::NonFiniteCoordinate {
+                    what: "task",
+                    index,
+                    x: p.x,
+                    y: p.y,
+                });
+            }
+            if !(t.reward.is_finite() && t.reward >= 0.0) {
+                return Err(GameError::InvalidReward {
+                    task: index,
+                    reward: t.reward,
+                });
+            }
+            // `!(>=)` also rejects NaN.
+            if !(t.eps >= GOLDEN_RATIO && t.eps.is_finite()) {
+                return Err(GameError::EpsBelowGoldenRatio {
+                    task: index,
+                    eps: t.eps,
+                });
+            }
+        }
+        if !(beta.is_finite() && beta >= 0.0) {
+            return Err(GameError::InvalidBeta(beta));
+        }
+        if tasks.iter().all(|t| t.capacity.is_some()) {
+            let total = tasks
+                .iter()
+                .map(|t| t.capacity.unwrap_or(0))
+                .fold(0usize, usize::saturating_add);
+            if total < robots.len() {
+                return Err(GameError::CapacityTooSmall {
+                    total,
+                    robots: robots.len(),
+                });
+            }
+        }
+        let inv_ln_eps = tasks.iter().map(|t| 1.0 / t.eps.ln()).collect();
+        Ok(Instance {
+            robots,
+            tasks,
+            beta,
+            generator: None,
+            inv_ln_eps,
+        })
+    }
+
+    /// Records the generator parameters that produced this instance.
+    pub fn with_generator(mut self, generator: GeneratorConfig) -> Self {
+        self.generator = Some(generator);
+        self
+    }
+
+    /// Number of robots N.
+    #[inline]
+    pub fn num_robots(&self) -> usize {
+        self.robots.len()
+    }
+
+    /// Number of tasks M.
+    #[inline]
+    pub fn num_tasks(&self) -> usize {
+        self.tasks.len()
+    }
+
+    /// Robot positions, indexed by [`RobotId`].
+    pub fn robots(&self) -> &[Point] {
+        &self.robots
+    }
+
+    /// The tasks, indexed by [`TaskId`].
+    pub fn tasks(&self) -> &[Task] {
+        &self.tasks
+    }
+
+    /// One task.
+    #[inline]
+    pub fn task(&self, task: TaskId) -> &Task {
+        &self.tasks[task.index()]
+    }
+
+    /// The distance penalty beta.
+    pub fn beta(&self) -> f64 {
+        self.beta
+    }
+
+    /// The generator parameters, if this instance was generated.
+    pub fn generator(&self) -> Option<&GeneratorConfig> {
+        self.generator.as_ref()
+    }
+
+    /// All robot ids, `0..N`.
+    pub fn robot_ids(&self) -> impl ExactSizeIterator<Item = RobotId> + use<> {
+        (0..self.robots.len() as u32).map(RobotId)
+    }
+
+    /// All task ids, `0..M`.
+    pub fn task_ids(&self) -> impl ExactSizeIterator<Item = TaskId> + use<> {
+        (0..self.tasks.len() as u32).map(TaskId)
+    }
+
+    /// Capacity of a task; `usize::MAX` when unbounded.
+    #[inline]
+    pub fn capacity(&self, task: TaskId) -> usize {
+        self.tasks[task.index()].capacity.unwrap_or(usize::MAX)
+    }
+
+    /// Euclidean distance d(i, j) from a robot to a task.
+    #[inline]
+    pub fn distance(&self, robot: RobotId, task: TaskId) -> f64 {
+        self.robots[robot.index()].distance(self.tasks[task.index()].position)
+    }
+
+    /// Travel cost beta * d(i, j).
+    #[inline]
+    pub fn cost(&self, robot: RobotId, task: TaskId) -> f64 {
+        self.beta * self.distance(robot, task)
+    }
+
+    /// Coalition value `F_j(n) = r_j log_{eps_j}(n + eps_j - 1)`, with `F_j(0) = 0`.
+    ///
+    /// # Examples
+    /// ```
+    /// # use afg_game::{Instance, Point, Task, TaskId};
+    /// # let task = Task { position: Point::new(0.0, 0.0), reward: 3.0, eps: 2.0, capacity: None };
+    /// # let inst = Instance::new(vec![Point::new(0.0, 0.0)], vec![task], 1.0).unwrap();
+    /// // eps = 2: F(3) = r log2(4) = 2r.
+    /// assert!((inst.coalition_value(TaskId(0), 3) - 6.0).abs() < 1e-12);
+    /// ```
+    #[inline]
+    pub fn coalition_value(&self, task: TaskId, n: usize) -> f64 {
+        if n == 0 {
+            return 0.0;
+        }
+        let t = &self.tasks[task.index()];
+        t.reward * (n as f64 + t.eps - 1.0).ln() * self.inv_ln_eps[task.index()]
+    }
+
+    /// Marginal value of the n-th member, `F_j(n) - F_j(n - 1)` (n ≥ 1); decreasing in n.
+    #[inline]
+    pub fn marginal_value(&self, task: TaskId, n: usize) -> f64 {
+        debug_assert!(n >= 1);
+        let t = &self.tasks[task.index()];
+        if n == 1 {
+            return t.reward;
+        }
+        // log((n + eps - 1) / (n + eps - 2)) loses less precision than a difference of logs.
+        t.reward * (1.0 / (n as f64 + t.eps - 2.0)).ln_1p() * self.inv_ln_eps[task.index()]
+    }
+
+    /// Utility of robot i in a coalition of size n at task j (paper eq. 2):
+    /// `u_i(j, n) = F_j(n) / n - beta d(i, j)`, for n ≥ 1.
+    #[inline]
+    pub fn utility(&self, robot: RobotId, task: TaskId, n: usize) -> f64 {
+        debug_assert!(n >= 1);
+        self.coalition_value(task, n) / n as f64 - self.cost(robot, task)
+    }
+}

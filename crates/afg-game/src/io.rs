@@ -1,0 +1,246 @@
+//! JSON formats (versioned), JSON Lines datasets and atomic file writes.
+//!
+//! An instance file is one JSON object:
+//! `{"format": "afg-instance", "version": 1, "beta": 1.0, "robots": [{"x":..,"y":..}, ..],
+//!   "tasks": [{"position": {..}, "reward": .., "eps": .., "capacity": ..}, ..],
+//!   "generator": {..}}` (`capacity` and `generator` optional).
+//! A dataset is a JSON Lines file with one such object per line.
+//! An assignment file is `{"format": "afg-assignment", "version": 1, "tasks": [0, 3, null, ..]}`.
+
+use std::fs;
+use std::io::Write;
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::{Assignment, GameError, GeneratorConfig, Instance, Point, Task, TaskId};
+
+/// Format name of instance documents.
+pub const INSTANCE_FORMAT: &str = "afg-instance";
+/// Format name of assignment documents.
+pub const ASSIGNMENT_FORMAT: &str = "afg-assignment";
+/// Version of both formats written by this build.
+pub const FORMAT_VERSION: u32 = 1;
+
+/// The serialised shape of an [`Instance`]; deserialising validates it.
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct InstanceFile {
+    format: String,
+    version: u32,
+    beta: f64,
+    robots: Vec<Point>,
+    tasks: Vec<Task>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    generator: Option<GeneratorConfig>,
+}
+
+fn check_header(format: &str, version: u32, expected: &'static str) -> Result<(), GameError> {
+    if format != expected {
+        return Err(GameError::WrongFormat {
+            expected,
+            found: format.to_owned(),
+        });
+    }
+    if version != FORMAT_VERSION {
+        return Err(GameError::UnsupportedVersion {
+            format: expected,
+            found: version,
+            supported: FORMAT_VERSION,
+        });
+    }
+    Ok(())
+}
+
+impl TryFrom<InstanceFile> for Instance {
+    type Error = GameError;
+    fn try_from(f: InstanceFile) -> Result<Self, GameError> {
+        check_header(&f.format, f.version, INSTANCE_FORMAT)?;
+        let inst = Instance::new(f.robots, f.tasks, f.beta)?;
+        Ok(match f.generator {
+            Some(g) => inst.with_generator(g),
+            None => inst,
+        })
+    }
+}
+
+impl From<Instance> for InstanceFile {
+    fn from(inst: Instance) -> Self {
+        InstanceFile {
+            format: INSTANCE_FORMAT.to_owned(),
+            version: FORMAT_VERSION,
+            beta: inst.beta(),
+            robots: inst.robots().to_vec(),
+            tasks: inst.tasks().to_vec(),
+            generator: inst.generator().cloned(),
+        }
+    }
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AssignmentFile {
+    format: String,
+    version: u32,
+    tasks: Vec<Option<TaskId>>,
+}
+
+fn json_error(line: Option<usize>) -> impl FnOnce(serde_json::Error) -> GameError {
+    move |source| GameError::Json { line, source }
+}
+
+/// Parses a JSON error, unwrapping a validation error raised inside serde.
+fn parse_instance(text: &str, line: Option<usize>) -> Result<Instance, GameError> {
+    // Deserialise the raw shape first so that validation errors keep their type.
+    let file: InstanceFile = serde_json::from_str(text).map_err(json_error(line))?;
+    Instance::try_from(file)
+}
+
+impl Instance {
+    /// Parses an instance document and validates it.
+    ///
+    /// # Errors
+    /// [`GameError::Json`] for malformed JSON or a wrong shape,
+    /// [`GameError::WrongFormat`] / [`GameError::UnsupportedVersion`] for another kind of
+    /// document, and any validation error of [`Instance::new`].
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::{GameError, GeneratorConfig, Instance};
+    /// let inst = GeneratorConfig::paper(6, 2, 1).generate()?;
+    /// assert_eq!(Instance::from_json(&inst.to_json())?, inst);
+    /// let err = Instance::from_json(r#"{"format":"afg-instance","version":9}"#).unwrap_err();
+    /// assert!(matches!(err, GameError::Json { .. }));
+    /// # Ok::<(), GameError>(())
+    /// ```
+    pub fn from_json(text: &str) -> Result<Self, GameError> {
+        parse_instance(text, None)
+    }
+
+    /// The instance as one line of compact JSON.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string(self).expect("an instance always serialises")
+    }
+
+    /// Reads an instance file.
+    ///
+    /// # Errors
+    /// [`GameError::Io`] if the file cannot be read, otherwise as [`Instance::from_json`].
+    pub fn read(path: &Path) -> Result<Self, GameError> {
+        Self::from_json(&read_to_string(path)?)
+    }
+
+    /// Writes the instance to `path` atomically.
+    ///
+    /// # Errors
+    /// [`GameError::Io`] if the file cannot be written.
+    pub fn write(&self, path: &Path) -> Result<(), GameError> {
+        write_atomic(path, self.to_json().as_bytes())
+    }
+}
+
+impl Assignment {
+    /// The assignment as a JSON document.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::{Assignment, GeneratorConfig, RobotId, TaskId};
+    /// let inst = GeneratorConfig::paper(2, 2, 1).generate()?;
+    /// let mut a = Assignment::unassigned(2, 2);
+    /// a.set(RobotId(1), Some(TaskId(0)));
+    /// assert_eq!(a.to_json(), r#"{"format":"afg-assignment","version":1,"tasks":[null,0]}"#);
+    /// assert_eq!(Assignment::from_json(&a.to_json(), &inst)?, a);
+    /// # Ok::<(), afg_game::GameError>(())
+    /// ```
+    pub fn to_json(&self) -> String {
+        let file = AssignmentFile {
+            format: ASSIGNMENT_FORMAT.to_owned(),
+            version: FORMAT_VERSION,
+            tasks: self.tasks().to_vec(),
+        };
+        serde_json::to_string(&file).expect("an assignment always serialises")
+    }
+
+    /// Parses an assignment document and validates it against `instance`.
+    ///
+    /// # Errors
+    /// [`GameError::Json`], [`GameError::WrongFormat`], [`GameError::UnsupportedVersion`],
+    /// and the errors of [`Assignment::from_tasks`].
+    pub fn from_json(text: &str, instance: &Instance) -> Result<Self, GameError> {
+        let file: AssignmentFile = serde_json::from_str(text).map_err(json_error(None))?;
+        check_header(&file.format, file.version, ASSIGNMENT_FORMAT)?;
+        Assignment::from_tasks(instance, file.tasks)
+    }
+}
+
+/// Reads a JSON Lines dataset: one instance per non-empty line.
+///
+/// # Errors
+/// [`GameError::Io`] if the file cannot be read; a parse or validation error
+/// names its line in [`GameError::Json`].
+pub fn read_dataset(path: &Path) -> Result<Vec<Instance>, GameError> {
+    parse_dataset(&read_to_string(path)?)
+}
+
+/// Parses the text of a JSON Lines dataset.
+///
+/// # Errors
+/// As [`read_dataset`].
+pub fn parse_dataset(text: &str) -> Result<Vec<Instance>, GameError> {
+    text.lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+        .map(|(i, l)| parse_instance(l, Some(i + 1)))
+        .collect()
+}
+
+/// The JSON Lines text of a dataset.
+pub fn dataset_to_jsonl(instances: &[Instance]) -> String {
+    let mut out = String::new();
+    for inst in instances {
+        out.push_str(&inst.to_json());
+        out.push('\n');
+    }
+    out
+}
+
+/// Writes `bytes` to `path` atomically: to a temporary file beside it, flushed, then
+/// renamed over the target, so a crash never leaves a half-written file.
+///
+/// # Errors
+/// [`GameError::Io`] if any step fails; the target is then untouched.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), GameError> {
+    let io_err = |source| GameError::Io {
+        path: path.display().to_string(),
+        source,
+    };
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let name = path
+        .file_name()
+        .ok_or_else(|| io_err(std::io::Error::other("not a file path")))?;
+    let tmp = dir.join(format!(
+        ".{}.{}.tmp",
+        name.to_string_lossy(),
+        std::process::id()
+    ));
+    let result = (|| {
+        let mut f = fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = fs::remove_file(&tmp);
+    }
+    result.map_err(io_err)
+}
+
+fn read_to_string(path: &Path) -> Result<String, GameError> {
+    fs::read_to_string(path).map_err(|source| GameError::Io {
+        path: path.display().to_string(),
+        source,
+    })
+}

@@ -1,0 +1,146 @@
+//! Preferences (balanced, paper Def. 2; selfish, GRAPE), best responses, stability (Def. 3)
+//! and the NS_rate of Tables I and II.
+//!
+//! Both rules score a robot's place in a task from the others already there,
+//! `m = n_j^{-i}`, so the same score serves the task it is in and the tasks it
+//! could move to:
+//! - balanced: `F_j(m + 1) - F_j(m) - beta d(i, j)`, its marginal contribution to
+//!   welfare; a move between two tasks changes welfare by exactly the difference of
+//!   the two scores;
+//! - selfish: `u_i(j, m + 1) = F_j(m + 1) / (m + 1) - beta d(i, j)`, its own utility.
+//!
+//! An unassigned robot scores −∞ where it is, so it prefers any task with room.
+//! A robot strictly prefers a task when its score there exceeds its current score
+//! by more than [`TOLERANCE`] × max(1, |either score|): differences below that are
+//! floating-point noise, not preferences.
+
+use serde::{Deserialize, Serialize};
+
+use crate::{Assignment, Instance, RobotId, TaskId};
+
+/// Relative tolerance of a strict preference (see the module docs).
+pub const TOLERANCE: f64 = 1e-9;
+
+/// Which preference relation robots follow.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Preference {
+    /// Utilitarian (paper Def. 2): a robot prefers a task when moving there raises welfare.
+    Balanced,
+    /// Selfish (GRAPE): a robot prefers a task when its own utility there is higher.
+    Selfish,
+}
+
+/// Whether score `a` is strictly better than `b` beyond the tolerance.
+///
+/// # Examples
+/// ```
+/// use afg_game::strictly_better;
+/// assert!(strictly_better(1.0, f64::NEG_INFINITY));
+/// assert!(!strictly_better(1.0 + 1e-12, 1.0));
+/// assert!(strictly_better(1.1, 1.0));
+/// ```
+#[inline]
+pub fn strictly_better(a: f64, b: f64) -> bool {
+    if b == f64::NEG_INFINITY {
+        return a > b;
+    }
+    a - b > TOLERANCE * a.abs().max(b.abs()).max(1.0)
+}
+
+impl Instance {
+    /// Score of `robot` in `task` under `pref`, counting the others there (see module docs).
+    #[inline]
+    pub fn score(
+        &self,
+        assignment: &Assignment,
+        robot: RobotId,
+        task: TaskId,
+        pref: Preference,
+    ) -> f64 {
+        let m = assignment.others_in(robot, task);
+        let value = match pref {
+            Preference::Balanced => self.marginal_value(task, m + 1),
+            Preference::Selfish => self.coalition_value(task, m + 1) / (m + 1) as f64,
+        };
+        value - self.cost(robot, task)
+    }
+
+    /// Score of `robot` where it is now; −∞ when unassigned.
+    #[inline]
+    pub fn current_score(&self, assignment: &Assignment, robot: RobotId, pref: Preference) -> f64 {
+        match assignment.task_of(robot) {
+            Some(task) => self.score(assignment, robot, task, pref),
+            None => f64::NEG_INFINITY,
+        }
+    }
+
+    /// The task `robot` most prefers to move to, if it strictly prefers any over where it is.
+    /// Ties go to the lowest task index; full tasks are not candidates.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::{Assignment, Instance, Point, Preference, RobotId, Task, TaskId};
+    /// let at = |x| Task { position: Point::new(x, 0.0), reward: 1.0, eps: 2.0, capacity: None };
+    /// let inst = Instance::new(vec![Point::new(0.9, 0.0)], vec![at(0.0), at(1.0)], 1.0)?;
+    /// let mut a = Assignment::unassigned(1, 2);
+    /// assert_eq!(inst.best_response(&a, RobotId(0), Preference::Selfish), Some(TaskId(1)));
+    /// a.set(RobotId(0), Some(TaskId(1)));
+    /// assert_eq!(inst.best_response(&a, RobotId(0), Preference::Selfish), None);
+    /// # Ok::<(), afg_game::GameError>(())
+    /// ```
+    pub fn best_response(
+        &self,
+        assignment: &Assignment,
+        robot: RobotId,
+        pref: Preference,
+    ) -> Option<TaskId> {
+        let current = assignment.task_of(robot);
+        let mut best: Option<(TaskId, f64)> = None;
+        for task in self.task_ids() {
+            if Some(task) == current || !assignment.has_room(self, robot, task) {
+                continue;
+            }
+            let s = self.score(assignment, robot, task, pref);
+            if best.is_none_or(|(_, b)| s > b) {
+                best = Some((task, s));
+            }
+        }
+        let (task, s) = best?;
+        strictly_better(s, self.current_score(assignment, robot, pref)).then_some(task)
+    }
+
+    /// Whether `robot` has no strictly preferred move (Def. 3 for one robot).
+    pub fn is_satisfied(&self, assignment: &Assignment, robot: RobotId, pref: Preference) -> bool {
+        self.best_response(assignment, robot, pref).is_none()
+    }
+
+    /// Whether no robot strictly prefers another task (Def. 3). Unassigned robots
+    /// always prefer a task, so only a complete assignment can be stable.
+    pub fn is_stable(&self, assignment: &Assignment, pref: Preference) -> bool {
+        self.robot_ids()
+            .all(|i| self.is_satisfied(assignment, i, pref))
+    }
+
+    /// NS_rate: the fraction of robots that are satisfied (no strictly preferred move)
+    /// under `pref`. The paper reports it without a definition; this is ours.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::{Assignment, Instance, Point, Preference, Task, TaskId};
+    /// let at = |x| Task { position: Point::new(x, 0.0), reward: 1.0, eps: 2.0, capacity: None };
+    /// let robots = vec![Point::new(0.0, 0.0), Point::new(1.0, 0.0)];
+    /// let inst = Instance::new(robots, vec![at(0.0), at(1.0)], 1.0)?;
+    /// // Both robots on the far task: robot 0 would rather move.
+    /// let a = Assignment::from_tasks(&inst, vec![Some(TaskId(1)), Some(TaskId(1))])?;
+    /// assert_eq!(inst.ns_rate(&a, Preference::Balanced), 0.5);
+    /// # Ok::<(), afg_game::GameError>(())
+    /// ```
+    pub fn ns_rate(&self, assignment: &Assignment, pref: Preference) -> f64 {
+        let satisfied = self
+            .robot_ids()
+            .filter(|&i| self.is_satisfied(assignment, i, pref))
+            .count();
+        satisfied as f64 / self.num_robots() as f64
+    }
+}
