@@ -1,1 +1,191 @@
-//! Placeholder
+//! Classical allocators for the alliance formation game (SPEC §2), all behind one
+//! [`Allocator`] trait: GRAPE's decentralised algorithm and its centralised twin
+//! ([`DecentralisedDa`], [`CentralisedDa`], selfish or balanced preference), the exact
+//! optimum ([`Optimum`]), and the trivial [`Greedy`], [`Nearest`] and
+//! [`RandomAllocator`].
+//!
+//! # Examples
+//! ```
+//! use afg_baseline::{Allocator, Method};
+//! use afg_game::GeneratorConfig;
+//! let inst = GeneratorConfig::paper(60, 5, 1).generate()?;
+//! let opt = Method::Opt.allocator(0).allocate(&inst)?;
+//! for method in Method::ALL {
+//!     let out = method.allocator(0).allocate(&inst)?;
+//!     assert!(inst.welfare(&out.assignment) <= inst.welfare(&opt.assignment) + 1e-9);
+//! }
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+mod dynamics;
+mod optimum;
+mod simple;
+
+use std::time::{Duration, Instant};
+
+use afg_game::{Assignment, GameError, Instance, Preference};
+use afg_graph::GraphError;
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+pub use dynamics::{CentralisedDa, DecentralisedDa, DecentralisedRun};
+pub use optimum::Optimum;
+pub use simple::{Greedy, Nearest, RandomAllocator};
+
+/// An allocation method: instance in, complete assignment and statistics out.
+pub trait Allocator {
+    /// Short name used in tables and on the command line (e.g. `"opt"`).
+    fn name(&self) -> String;
+
+    /// Assigns every robot of `instance` to a task, respecting capacities.
+    ///
+    /// # Errors
+    /// Method-specific; see [`AllocError`].
+    fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError>;
+}
+
+/// What an allocator returns.
+#[derive(Clone, Debug)]
+pub struct Allocation {
+    /// The assignment (complete).
+    pub assignment: Assignment,
+    /// How it was reached.
+    pub stats: AllocStats,
+}
+
+/// Work counters of one allocation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct AllocStats {
+    /// Changes of assignment: robot moves for the dynamics (for the decentralised one,
+    /// the final evolution number), robots placed for one-pass methods, path shifts for OPT.
+    pub iterations: u64,
+    /// Synchronous communication rounds (decentralised) or sweeps over all robots.
+    pub rounds: u64,
+    /// Messages sent (decentralised only).
+    pub messages: u64,
+    /// Wall-clock time of the allocation.
+    #[serde(with = "seconds")]
+    pub wall_time: Duration,
+    /// Seed of a randomised method.
+    pub seed: Option<u64>,
+}
+
+mod seconds {
+    use std::time::Duration;
+
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(d: &Duration, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_f64(d.as_secs_f64())
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Duration, D::Error> {
+        let secs = f64::deserialize(d)?;
+        Duration::try_from_secs_f64(secs).map_err(serde::de::Error::custom)
+    }
+}
+
+/// Errors of the allocators.
+#[derive(Debug, Error)]
+pub enum AllocError {
+    /// The instance or assignment is invalid.
+    #[error(transparent)]
+    Game(#[from] GameError),
+    /// The communication graph could not be built.
+    #[error(transparent)]
+    Graph(#[from] GraphError),
+    /// A method parameter is out of range.
+    #[error("invalid parameter: {0}")]
+    InvalidParameter(String),
+    /// The dynamics did not settle within the safety bound of rounds.
+    #[error("no stable partition after {rounds} rounds")]
+    NotConverged {
+        /// The bound that was hit.
+        rounds: u64,
+    },
+}
+
+/// The built-in methods, by command-line name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// [`Optimum`].
+    Opt,
+    /// GRAPE DA, centralised twin ([`CentralisedDa`], selfish).
+    Da,
+    /// GRAPE DA, decentralised ([`DecentralisedDa`], selfish).
+    DaDecentralised,
+    /// Balanced DA ([`CentralisedDa`], balanced).
+    DaBalanced,
+    /// [`Greedy`].
+    Greedy,
+    /// [`Nearest`].
+    Nearest,
+    /// [`RandomAllocator`].
+    Random,
+}
+
+impl Method {
+    /// Every method, OPT first.
+    pub const ALL: [Method; 7] = [
+        Method::Opt,
+        Method::Da,
+        Method::DaDecentralised,
+        Method::DaBalanced,
+        Method::Greedy,
+        Method::Nearest,
+        Method::Random,
+    ];
+
+    /// The allocator; `seed` is used by the randomised methods.
+    pub fn allocator(self, seed: u64) -> Box<dyn Allocator> {
+        match self {
+            Method::Opt => Box::new(Optimum),
+            Method::Da => Box::new(CentralisedDa::new(Preference::Selfish)),
+            Method::DaDecentralised => Box::new(DecentralisedDa::new(Preference::Selfish, seed)),
+            Method::DaBalanced => Box::new(CentralisedDa::new(Preference::Balanced)),
+            Method::Greedy => Box::new(Greedy),
+            Method::Nearest => Box::new(Nearest),
+            Method::Random => Box::new(RandomAllocator { seed }),
+        }
+    }
+
+    /// The command-line name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Opt => "opt",
+            Method::Da => "da",
+            Method::DaDecentralised => "da-decentralised",
+            Method::DaBalanced => "da-balanced",
+            Method::Greedy => "greedy",
+            Method::Nearest => "nearest",
+            Method::Random => "random",
+        }
+    }
+}
+
+impl std::fmt::Display for Method {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for Method {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        Method::ALL
+            .into_iter()
+            .find(|m| m.name() == s)
+            .ok_or_else(|| {
+                let names: Vec<_> = Method::ALL.iter().map(|m| m.name()).collect();
+                format!("unknown method '{s}'; expected one of {}", names.join(", "))
+            })
+    }
+}
+
+/// Runs `f` and measures its wall time.
+fn timed<T>(f: impl FnOnce() -> T) -> (T, Duration) {
+    let start = Instant::now();
+    let out = f();
+    (out, start.elapsed())
+}

@@ -1,0 +1,318 @@
+//! Best-response dynamics: GRAPE's decentralised algorithm (Jang et al. 2018) and its
+//! centralised twin, under either preference (selfish = GRAPE DA, balanced = Def. 2).
+//!
+//! Both start with every robot unassigned. A *change* is one robot switching to its
+//! most preferred task (strictly better than where it is, [`Instance::best_response`]).
+//!
+//! **Decentralised.** Each robot keeps a local view of the partition with an
+//! evolution number (how many changes it has seen) and a random time stamp. In a
+//! synchronous round every unsatisfied robot best-responds on its view (a change
+//! bumps the evolution number and draws a new stamp), then every robot sends its view
+//! to its neighbours on the communication graph and keeps the one with the highest
+//! (evolution, stamp): GRAPE's distributed mutex. A robot that adopts another view
+//! becomes unsatisfied and reconsiders. It ends when a round has no change and no
+//! adoption: all views agree and nobody wants to move.
+//!
+//! Every surviving view descends from the empty partition through a chain of changes,
+//! each a best response to the view before it. Replaying that chain's robot order
+//! through the centralised twin reproduces the same partition (tested).
+
+use std::rc::Rc;
+
+use afg_game::{Assignment, Instance, Preference, RobotId, TaskId};
+use afg_graph::{GraphKind, RobotGraph};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use crate::{AllocError, AllocStats, Allocation, Allocator, timed};
+
+/// Best-response dynamics run centrally: robots take turns, first in the order of
+/// `schedule` (one turn per entry, so a robot may appear several times), then in
+/// sweeps over robots 0..N until a sweep makes no change.
+///
+/// # Complexity
+/// O(M) per turn; sizes are kept incrementally.
+///
+/// # Examples
+/// ```
+/// use afg_baseline::{Allocator, CentralisedDa};
+/// use afg_game::{GeneratorConfig, Preference};
+/// let inst = GeneratorConfig::paper(60, 5, 3).generate()?;
+/// let da = CentralisedDa::new(Preference::Selfish).allocate(&inst)?;
+/// assert!(inst.is_stable(&da.assignment, Preference::Selfish));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Clone, Debug)]
+pub struct CentralisedDa {
+    /// Which preference robots follow.
+    pub preference: Preference,
+    /// Turns taken before the index-order sweeps.
+    pub schedule: Vec<RobotId>,
+}
+
+impl CentralisedDa {
+    /// Index-order sweeps under `preference`.
+    pub fn new(preference: Preference) -> Self {
+        CentralisedDa {
+            preference,
+            schedule: Vec::new(),
+        }
+    }
+}
+
+impl Allocator for CentralisedDa {
+    fn name(&self) -> String {
+        match self.preference {
+            Preference::Selfish => "da".into(),
+            Preference::Balanced => "da-balanced".into(),
+        }
+    }
+
+    fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
+        let (result, wall_time) = timed(|| {
+            let n = instance.num_robots();
+            let mut a = Assignment::unassigned(n, instance.num_tasks());
+            let mut changes = 0u64;
+            let mut turn = |a: &mut Assignment, i: RobotId| match instance.best_response(
+                a,
+                i,
+                self.preference,
+            ) {
+                Some(j) => {
+                    a.set(i, Some(j));
+                    changes += 1;
+                    true
+                }
+                None => false,
+            };
+            for &i in &self.schedule {
+                if i.index() >= n {
+                    return Err(AllocError::InvalidParameter(format!(
+                        "schedule names robot {i}, N = {n}"
+                    )));
+                }
+                turn(&mut a, i);
+            }
+            let mut sweeps = 0u64;
+            loop {
+                sweeps += 1;
+                let mut changed = false;
+                for i in instance.robot_ids() {
+                    changed |= turn(&mut a, i);
+                }
+                if !changed {
+                    break;
+                }
+            }
+            Ok((a, changes, sweeps))
+        });
+        let (assignment, iterations, rounds) = result?;
+        Ok(Allocation {
+            assignment,
+            stats: AllocStats {
+                iterations,
+                rounds,
+                wall_time,
+                ..AllocStats::default()
+            },
+        })
+    }
+}
+
+/// GRAPE's decentralised algorithm, simulated round by round over the robot
+/// communication graph (see the module docs). The graph defaults to kNN, k = 10;
+/// if it is disconnected, each stray component is linked to its nearest robot
+/// outside it (reported in [`DecentralisedRun::added_edges`]).
+///
+/// # Examples
+/// ```
+/// use afg_baseline::{Allocator, DecentralisedDa};
+/// use afg_game::{GeneratorConfig, Preference};
+/// let inst = GeneratorConfig::paper(20, 5, 3).generate()?;
+/// let da = DecentralisedDa::new(Preference::Selfish, 7).allocate(&inst)?;
+/// assert!(inst.is_stable(&da.assignment, Preference::Selfish));
+/// assert!(da.stats.messages > 0);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Clone, Debug)]
+pub struct DecentralisedDa {
+    /// Which preference robots follow.
+    pub preference: Preference,
+    /// Communication graph.
+    pub graph: GraphKind,
+    /// Seed of the time stamps.
+    pub seed: u64,
+}
+
+impl DecentralisedDa {
+    /// The default kNN (k = 10) communication graph.
+    pub fn new(preference: Preference, seed: u64) -> Self {
+        DecentralisedDa {
+            preference,
+            graph: GraphKind::default(),
+            seed,
+        }
+    }
+}
+
+/// A decentralised run: the allocation, the robots of the winning chain of changes
+/// in order, and the edges added to connect the graph.
+#[derive(Clone, Debug)]
+pub struct DecentralisedRun {
+    /// Final partition and statistics (`iterations` is the final evolution number).
+    pub allocation: Allocation,
+    /// Robot of each change on the surviving chain, oldest first.
+    pub chain: Vec<RobotId>,
+    /// Edges added by the connectivity fallback.
+    pub added_edges: usize,
+}
+
+/// One change on a chain of views.
+struct Change {
+    robot: RobotId,
+    prev: Option<Rc<Change>>,
+}
+
+impl Drop for Change {
+    /// Unlinks the chain iteratively: a long chain dropped recursively would overflow the stack.
+    fn drop(&mut self) {
+        let mut prev = self.prev.take();
+        while let Some(rc) = prev {
+            match Rc::try_unwrap(rc) {
+                Ok(mut c) => prev = c.prev.take(),
+                Err(_) => break,
+            }
+        }
+    }
+}
+
+/// A robot's local view of the partition.
+struct View {
+    assignment: Assignment,
+    evolution: u64,
+    stamp: u64,
+    last: Option<Rc<Change>>,
+}
+
+impl View {
+    fn key(&self) -> (u64, u64) {
+        (self.evolution, self.stamp)
+    }
+}
+
+impl DecentralisedDa {
+    /// Runs the algorithm and returns the chain of changes as well.
+    ///
+    /// # Errors
+    /// [`AllocError::Graph`] if the communication graph cannot be built, and
+    /// [`AllocError::NotConverged`] if the rounds exceed a safety bound (never seen).
+    pub fn run(&self, instance: &Instance) -> Result<DecentralisedRun, AllocError> {
+        let n = instance.num_robots();
+        let limit = 1000 + 4 * (n as u64) * (n as u64 + 1);
+        let (result, wall_time) = timed(|| {
+            let mut graph = RobotGraph::build(instance.robots(), self.graph)?;
+            let added_edges = graph.connect_components(instance.robots());
+            let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
+            let empty = Rc::new(View {
+                assignment: Assignment::unassigned(n, instance.num_tasks()),
+                evolution: 0,
+                stamp: 0,
+                last: None,
+            });
+            let mut views: Vec<Rc<View>> = vec![empty; n];
+            let mut satisfied = vec![false; n];
+            let (mut rounds, mut messages) = (0u64, 0u64);
+            loop {
+                rounds += 1;
+                if rounds > limit {
+                    return Err(AllocError::NotConverged { rounds: limit });
+                }
+                let mut active = false;
+                for i in instance.robot_ids() {
+                    let a = i.index();
+                    if satisfied[a] {
+                        continue;
+                    }
+                    satisfied[a] = true;
+                    if let Some(j) =
+                        instance.best_response(&views[a].assignment, i, self.preference)
+                    {
+                        views[a] = Rc::new(changed_view(&views[a], i, j, rng.random()));
+                        active = true;
+                    }
+                }
+                // Everyone broadcasts its view; each keeps the highest (evolution, stamp).
+                let sent = views.clone();
+                for i in instance.robot_ids() {
+                    let a = i.index();
+                    messages += graph.degree(i) as u64;
+                    let best = graph
+                        .neighbours(i)
+                        .iter()
+                        .map(|&b| &sent[b as usize])
+                        .max_by_key(|v| v.key())
+                        .filter(|v| v.key() > sent[a].key());
+                    if let Some(v) = best {
+                        views[a] = Rc::clone(v);
+                        satisfied[a] = false;
+                        active = true;
+                    }
+                }
+                if !active {
+                    break;
+                }
+            }
+            Ok((Rc::clone(&views[0]), rounds, messages, added_edges))
+        });
+        let (view, rounds, messages, added_edges) = result?;
+        let mut chain = Vec::with_capacity(view.evolution as usize);
+        let mut link = view.last.as_deref();
+        while let Some(c) = link {
+            chain.push(c.robot);
+            link = c.prev.as_deref();
+        }
+        chain.reverse();
+        let stats = AllocStats {
+            iterations: view.evolution,
+            rounds,
+            messages,
+            wall_time,
+            seed: Some(self.seed),
+        };
+        Ok(DecentralisedRun {
+            allocation: Allocation {
+                assignment: view.assignment.clone(),
+                stats,
+            },
+            chain,
+            added_edges,
+        })
+    }
+}
+
+fn changed_view(view: &View, robot: RobotId, task: TaskId, stamp: u64) -> View {
+    let mut assignment = view.assignment.clone();
+    assignment.set(robot, Some(task));
+    View {
+        assignment,
+        evolution: view.evolution + 1,
+        stamp,
+        last: Some(Rc::new(Change {
+            robot,
+            prev: view.last.clone(),
+        })),
+    }
+}
+
+impl Allocator for DecentralisedDa {
+    fn name(&self) -> String {
+        match self.preference {
+            Preference::Selfish => "da-decentralised".into(),
+            Preference::Balanced => "da-balanced-decentralised".into(),
+        }
+    }
+
+    fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
+        self.run(instance).map(|r| r.allocation)
+    }
+}

@@ -1,0 +1,260 @@
+//! OPT against brute force, every method against OPT, the dynamics' guarantees.
+
+use std::path::PathBuf;
+
+use afg_baseline::{Allocator, CentralisedDa, DecentralisedDa, Method, Optimum};
+use afg_game::io::read_dataset;
+use afg_game::{Assignment, GeneratorConfig, Instance, Preference, RobotId, TaskId};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+fn dataset(n: usize) -> Vec<Instance> {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../../datasets/n{n}.jsonl"));
+    read_dataset(&path).expect("committed dataset")
+}
+
+/// The best welfare over all M^N assignments that respect capacities.
+fn brute_force(inst: &Instance) -> f64 {
+    let (n, m) = (inst.num_robots(), inst.num_tasks());
+    let mut best = f64::NEG_INFINITY;
+    let mut code = vec![0usize; n];
+    'outer: loop {
+        let tasks = code.iter().map(|&j| Some(TaskId(j as u32))).collect();
+        if let Ok(a) = Assignment::from_tasks(inst, tasks) {
+            best = best.max(inst.welfare(&a));
+        }
+        for digit in code.iter_mut() {
+            *digit += 1;
+            if *digit < m {
+                continue 'outer;
+            }
+            *digit = 0;
+        }
+        return best;
+    }
+}
+
+#[test]
+fn opt_equals_brute_force_on_small_instances() {
+    let mut rng = ChaCha8Rng::seed_from_u64(2024);
+    for case in 0..1200 {
+        let n = rng.random_range(1..=7);
+        let m = rng.random_range(1..=4);
+        let mut cfg = GeneratorConfig::paper(n, m, rng.random());
+        cfg.eps = rng.random_range(1.62..6.0);
+        cfg.beta = rng.random_range(0.0..3.0);
+        if case % 2 == 1 {
+            // Tight capacities: total just above N, so many tasks are full.
+            cfg = cfg.with_capacity_slack(rng.random_range(1.0..1.5));
+        }
+        let inst = cfg.generate().unwrap();
+        let opt = Optimum.allocate(&inst).unwrap().assignment;
+        inst.check(&opt).unwrap();
+        assert!(opt.is_complete());
+        let (got, want) = (inst.welfare(&opt), brute_force(&inst));
+        assert!(
+            (got - want).abs() < 1e-9 * want.abs().max(1.0),
+            "case {case}: OPT {got} vs brute force {want}"
+        );
+    }
+}
+
+/// Checks every method on one instance: valid, complete, capacity-respecting, ≤ OPT,
+/// and OPT balanced-stable. Returns OPT's welfare.
+fn check_all_methods(inst: &Instance) -> f64 {
+    let opt = Optimum.allocate(inst).unwrap().assignment;
+    let best = inst.welfare(&opt);
+    assert!(
+        inst.is_stable(&opt, Preference::Balanced),
+        "Lemma 1: OPT is balanced-stable"
+    );
+    for method in Method::ALL {
+        let a = method.allocator(1).allocate(inst).unwrap().assignment;
+        inst.check(&a).unwrap();
+        assert!(a.is_complete(), "{method}");
+        let w = inst.welfare(&a);
+        assert!(
+            w <= best + 1e-9 * best.abs().max(1.0),
+            "{method}: {w} above OPT {best}"
+        );
+    }
+    best
+}
+
+#[test]
+fn opt_dominates_every_method_on_the_table_datasets() {
+    for n in [20, 60, 100] {
+        for inst in dataset(n) {
+            check_all_methods(&inst);
+        }
+    }
+}
+
+#[test]
+fn opt_dominates_the_fast_methods_at_scale() {
+    for n in [500, 1000] {
+        for inst in dataset(n).iter().take(10) {
+            let best = inst.welfare(&Optimum.allocate(inst).unwrap().assignment);
+            for method in [
+                Method::Da,
+                Method::DaBalanced,
+                Method::Greedy,
+                Method::Nearest,
+                Method::Random,
+            ] {
+                let a = method.allocator(1).allocate(inst).unwrap().assignment;
+                assert!(inst.welfare(&a) <= best + 1e-9 * best.abs());
+            }
+        }
+    }
+}
+
+#[test]
+fn capacities_are_respected_by_every_method() {
+    for seed in 0..30 {
+        let inst = GeneratorConfig::paper(40, 5, seed)
+            .with_capacity_slack(1.2)
+            .generate()
+            .unwrap();
+        check_all_methods(&inst);
+    }
+    let inst = GeneratorConfig::paper(40, 5, 3)
+        .with_capacity_slack(1.0)
+        .generate()
+        .unwrap();
+    let opt = Optimum.allocate(&inst).unwrap().assignment;
+    assert!(
+        inst.task_ids().all(|j| opt.size(j) == inst.capacity(j)),
+        "capacities sum to N: all full"
+    );
+}
+
+#[test]
+fn dynamics_end_stable_within_the_grape_bound_and_twins_agree() {
+    for n in [20, 60, 100] {
+        let bound = (n * (n + 1) / 2) as u64;
+        for (idx, inst) in dataset(n).iter().enumerate() {
+            for pref in [Preference::Selfish, Preference::Balanced] {
+                let central = CentralisedDa::new(pref).allocate(inst).unwrap();
+                assert!(
+                    inst.is_stable(&central.assignment, pref),
+                    "N={n} #{idx} {pref:?} centralised"
+                );
+                assert!(central.stats.iterations <= bound);
+
+                let run = DecentralisedDa::new(pref, idx as u64).run(inst).unwrap();
+                let a = &run.allocation.assignment;
+                assert!(
+                    inst.is_stable(a, pref),
+                    "N={n} #{idx} {pref:?} decentralised"
+                );
+                assert!(
+                    run.allocation.stats.iterations <= bound,
+                    "{} changes",
+                    run.allocation.stats.iterations
+                );
+                assert_eq!(run.chain.len() as u64, run.allocation.stats.iterations);
+
+                // The centralised twin, given the surviving chain's robot order, makes the same
+                // changes and stops at the same partition.
+                let twin = CentralisedDa {
+                    preference: pref,
+                    schedule: run.chain.clone(),
+                }
+                .allocate(inst)
+                .unwrap();
+                assert_eq!(&twin.assignment, a, "N={n} #{idx} {pref:?}");
+                assert_eq!(twin.stats.iterations, run.allocation.stats.iterations);
+            }
+        }
+    }
+}
+
+#[test]
+fn seeded_methods_repeat_and_vary() {
+    let inst = dataset(60).swap_remove(0);
+    for method in [Method::Random, Method::DaDecentralised] {
+        let a = method.allocator(5).allocate(&inst).unwrap();
+        let b = method.allocator(5).allocate(&inst).unwrap();
+        assert_eq!(a.assignment, b.assignment, "{method}");
+        assert_eq!(
+            (a.stats.rounds, a.stats.messages),
+            (b.stats.rounds, b.stats.messages)
+        );
+        assert_eq!(a.stats.seed, Some(5));
+    }
+    let differs = (0..10).any(|s| {
+        Method::Random
+            .allocator(s)
+            .allocate(&inst)
+            .unwrap()
+            .assignment
+            != Method::Random
+                .allocator(s + 100)
+                .allocate(&inst)
+                .unwrap()
+                .assignment
+    });
+    assert!(differs);
+}
+
+#[test]
+fn greedy_is_the_first_sweep_of_balanced_dynamics() {
+    // Hand-made: two tasks on a line, robots at 0.1 and 0.9.
+    let inst = Instance::new(
+        vec![
+            afg_game::Point::new(0.1, 0.0),
+            afg_game::Point::new(0.9, 0.0),
+        ],
+        vec![
+            afg_game::Task {
+                position: afg_game::Point::new(0.0, 0.0),
+                reward: 1.0,
+                eps: 2.0,
+                capacity: None,
+            },
+            afg_game::Task {
+                position: afg_game::Point::new(1.0, 0.0),
+                reward: 1.0,
+                eps: 2.0,
+                capacity: None,
+            },
+        ],
+        1.0,
+    )
+    .unwrap();
+    let a = Method::Greedy
+        .allocator(0)
+        .allocate(&inst)
+        .unwrap()
+        .assignment;
+    assert_eq!(a.tasks(), &[Some(TaskId(0)), Some(TaskId(1))]);
+    // Welfare 1 + 1 - 0.1 - 0.1 = 1.8, which is also the optimum.
+    assert!((inst.welfare(&a) - 1.8).abs() < 1e-12);
+    let opt = Optimum.allocate(&inst).unwrap().assignment;
+    assert_eq!(opt, a);
+    assert_eq!(a.task_of(RobotId(1)), Some(TaskId(1)));
+}
+
+#[test]
+fn method_names_round_trip_and_unknown_names_are_errors() {
+    for m in Method::ALL {
+        assert_eq!(m.name().parse::<Method>().unwrap(), m);
+        assert_eq!(m.allocator(0).name(), m.name());
+    }
+    let err = "hungarian".parse::<Method>().unwrap_err();
+    assert!(err.contains("expected one of opt"), "{err}");
+}
+
+#[test]
+fn schedule_naming_a_missing_robot_is_an_error() {
+    let inst = GeneratorConfig::paper(3, 2, 0).generate().unwrap();
+    let da = CentralisedDa {
+        preference: Preference::Selfish,
+        schedule: vec![RobotId(3)],
+    };
+    assert!(matches!(
+        da.allocate(&inst),
+        Err(afg_baseline::AllocError::InvalidParameter(_))
+    ));
+}
