@@ -1,5 +1,6 @@
 //! `cargo xtask <command>`: the project's jobs — datasets, solving, benchmarks.
 
+mod bench;
 mod datasets;
 mod solve;
 
@@ -20,13 +21,28 @@ enum Command {
     GenDatasets(datasets::GenArgs),
     /// Solve an instance or a dataset with one allocator and print welfare, % of OPT, NS_rate.
     Solve(solve::SolveArgs),
+    /// Time the classical allocators over a sweep of N and print a Markdown table.
+    BenchBaselines(bench::BenchArgs),
 }
 
 fn main() -> Result<()> {
     match Cli::parse().command {
         Command::GenDatasets(args) => datasets::run(args),
         Command::Solve(args) => solve::run(args),
+        Command::BenchBaselines(args) => bench::run(args),
     }
+}
+
+/// A progress bar on stderr (hidden when stderr is not a terminal).
+pub fn progress(len: u64, message: &str) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(len);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} ({eta})")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    bar.set_message(message.to_owned());
+    bar
 }
 
 /// The repository root (xtask lives one level below it).
