@@ -1,10 +1,16 @@
 //! The allocation feature graph of the paper (§III A): the robot communication graph
-//! with distance-weighted edges. Shared by the decentralised baseline (its message
-//! graph) and the learned models (their neighbourhoods).
+//! with distance-weighted edges ([`RobotGraph`]), the robot and task node features of
+//! an assignment in progress with their incremental update ([`AllocationState`]), and
+//! several graphs packed into flat arrays for batched tensor work ([`GraphBatch`]).
+//! No ML dependency: the learning crate turns a [`GraphBatch`] into tensors.
 
+mod batch;
 mod neighbours;
+mod state;
 
+pub use batch::GraphBatch;
 pub use neighbours::{GraphKind, RobotGraph};
+pub use state::{AllocationState, FULL_TASK_FEATURE, feature_scale};
 
 use thiserror::Error;
 

@@ -1,0 +1,109 @@
+//! Several allocation feature graphs packed into flat arrays, ready to become a few
+//! large tensors: nodes of all graphs stacked, edges as (receiver, sender) lists with
+//! global node indices, and per-graph pooling and acting-robot indices.
+
+use afg_game::RobotId;
+
+use crate::{AllocationState, RobotGraph};
+
+/// A batch of graph states (one acting robot each), in flat row-major arrays.
+///
+/// # Examples
+/// ```
+/// use afg_game::{GeneratorConfig, RobotId};
+/// use afg_graph::{AllocationState, GraphBatch, GraphKind, RobotGraph};
+/// let inst = GeneratorConfig::paper(12, 3, 1).generate()?;
+/// let graph = RobotGraph::build(inst.robots(), GraphKind::Knn { k: 4 }).unwrap();
+/// let state = AllocationState::new(&inst);
+/// let mut batch = GraphBatch::new(3);
+/// batch.push(&graph, &state, RobotId(0));
+/// batch.push(&graph, &state, RobotId(5));
+/// assert_eq!((batch.num_graphs(), batch.num_nodes()), (2, 24));
+/// assert_eq!(batch.actors, vec![0, 17]);
+/// # Ok::<(), afg_game::GameError>(())
+/// ```
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct GraphBatch {
+    /// Number of tasks M (feature width).
+    pub num_tasks: usize,
+    /// Robot features ν, `[nodes, M]`.
+    pub nu: Vec<f32>,
+    /// Task features μ, `[nodes, M]`.
+    pub mu: Vec<f32>,
+    /// Degree |N_i| of each node, `[nodes]`.
+    pub degree: Vec<f32>,
+    /// Receiving node i of each directed edge, `[edges]`.
+    pub edge_receiver: Vec<u32>,
+    /// Sending neighbour k of each directed edge, `[edges]`.
+    pub edge_sender: Vec<u32>,
+    /// Weight w_ik = d(i, k) of each edge, `[edges]`.
+    pub edge_weight: Vec<f32>,
+    /// Graph of each node, `[nodes]`.
+    pub node_graph: Vec<u32>,
+    /// Node count of each graph, `[graphs]`.
+    pub graph_size: Vec<f32>,
+    /// Global node index of each graph's acting robot, `[graphs]`.
+    pub actors: Vec<u32>,
+    /// Action mask of each graph's acting robot, `[graphs, M]`.
+    pub mask: Vec<bool>,
+}
+
+impl GraphBatch {
+    /// An empty batch for instances with `num_tasks` tasks.
+    pub fn new(num_tasks: usize) -> Self {
+        GraphBatch {
+            num_tasks,
+            ..Default::default()
+        }
+    }
+
+    /// Number of graphs.
+    pub fn num_graphs(&self) -> usize {
+        self.actors.len()
+    }
+
+    /// Number of nodes over all graphs.
+    pub fn num_nodes(&self) -> usize {
+        self.degree.len()
+    }
+
+    /// Number of directed edges over all graphs.
+    pub fn num_edges(&self) -> usize {
+        self.edge_receiver.len()
+    }
+
+    /// Appends one graph in `state`, with `actor` about to act.
+    ///
+    /// # Panics
+    /// If the state's task count differs from the batch's, or the graph was built for
+    /// another number of robots.
+    pub fn push(&mut self, graph: &RobotGraph, state: &AllocationState<'_>, actor: RobotId) {
+        let inst = state.instance();
+        assert_eq!(
+            inst.num_tasks(),
+            self.num_tasks,
+            "every graph of a batch has the same M"
+        );
+        assert_eq!(
+            graph.num_nodes(),
+            inst.num_robots(),
+            "graph of another instance"
+        );
+        let offset = self.num_nodes() as u32;
+        let g = self.num_graphs() as u32;
+        for i in inst.robot_ids() {
+            self.nu.extend(state.nu(i));
+            self.mu.extend_from_slice(state.mu(i));
+            self.degree.push(graph.degree(i) as f32);
+            self.node_graph.push(g);
+            for (&k, &w) in graph.neighbours(i).iter().zip(graph.weights(i)) {
+                self.edge_receiver.push(offset + i.0);
+                self.edge_sender.push(offset + k);
+                self.edge_weight.push(w as f32);
+            }
+        }
+        self.graph_size.push(inst.num_robots() as f32);
+        self.actors.push(offset + actor.0);
+        self.mask.extend(state.action_mask(actor));
+    }
+}

@@ -1,0 +1,159 @@
+//! The allocation feature graph's node features and their incremental update.
+//!
+//! For robot i and task j (SPEC §3, paper §III A):
+//! - robot feature `ν_i ∈ R^M`: one-hot of i's task, zero while unassigned;
+//! - task feature `μ_i[j] = u_i(j, n_j^{-i} + 1)`: the utility i would get in j given
+//!   the others' current assignment (eq. 2), divided by the instance's
+//!   [`feature_scale`] so that features are O(1) whatever N is; a task that is full for
+//!   i gets [`FULL_TASK_FEATURE`] and is masked as an action.
+//!
+//! When one robot moves into task j, `n_j^{-i}` changes for every robot except the
+//! mover, so exactly column j of μ changes (and the column of the task it left, if
+//! any): O(N) per move, never a rebuild.
+
+use afg_game::{Assignment, Instance, RobotId, TaskId};
+
+/// μ of a task that has no room for the robot (in feature units, below any real utility
+/// on instances where beta·√2 < the mean reward, such as the paper's).
+pub const FULL_TASK_FEATURE: f32 = -1.0;
+
+/// The unit of task features: the mean initial reward `mean_j r_j` of the instance
+/// (1 if all rewards are 0). Utilities scale with N/M in the paper's distribution;
+/// dividing by this keeps features comparable across N, so a model trained at one
+/// scale can be applied at another.
+pub fn feature_scale(instance: &Instance) -> f64 {
+    let mean = instance.tasks().iter().map(|t| t.reward).sum::<f64>() / instance.num_tasks() as f64;
+    if mean > 0.0 { mean } else { 1.0 }
+}
+
+/// An assignment in progress with its μ features kept up to date.
+///
+/// # Examples
+/// ```
+/// use afg_game::{GeneratorConfig, RobotId, TaskId};
+/// use afg_graph::AllocationState;
+/// let inst = GeneratorConfig::paper(10, 3, 1).generate()?;
+/// let mut s = AllocationState::new(&inst);
+/// s.assign(RobotId(0), TaskId(2));
+/// assert_eq!(s.nu(RobotId(0)), vec![0.0, 0.0, 1.0]);
+/// assert_eq!(s, AllocationState::from_assignment(&inst, s.assignment().clone()));
+/// # Ok::<(), afg_game::GameError>(())
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct AllocationState<'a> {
+    instance: &'a Instance,
+    assignment: Assignment,
+    /// `mu[i * M + j]`, in feature units.
+    mu: Vec<f32>,
+    scale: f64,
+}
+
+impl<'a> AllocationState<'a> {
+    /// The empty assignment.
+    pub fn new(instance: &'a Instance) -> Self {
+        Self::from_assignment(
+            instance,
+            Assignment::unassigned(instance.num_robots(), instance.num_tasks()),
+        )
+    }
+
+    /// Features of `assignment` computed from scratch (the reference for the incremental update).
+    pub fn from_assignment(instance: &'a Instance, assignment: Assignment) -> Self {
+        let mut s = AllocationState {
+            instance,
+            assignment,
+            mu: vec![0.0; instance.num_robots() * instance.num_tasks()],
+            scale: feature_scale(instance),
+        };
+        for j in instance.task_ids() {
+            s.refresh_column(j);
+        }
+        s
+    }
+
+    /// The instance.
+    pub fn instance(&self) -> &'a Instance {
+        self.instance
+    }
+
+    /// The current assignment.
+    pub fn assignment(&self) -> &Assignment {
+        &self.assignment
+    }
+
+    /// Consumes the state, returning the assignment.
+    pub fn into_assignment(self) -> Assignment {
+        self.assignment
+    }
+
+    /// Moves `robot` into `task` and updates the features: O(N).
+    ///
+    /// # Panics
+    /// If the task has no room for the robot; check [`AllocationState::is_available`].
+    pub fn assign(&mut self, robot: RobotId, task: TaskId) {
+        assert!(
+            self.is_available(robot, task),
+            "task {task} is full for robot {robot}"
+        );
+        let old = self.assignment.task_of(robot);
+        self.assignment.set(robot, Some(task));
+        if let Some(old) = old.filter(|&o| o != task) {
+            self.refresh_column(old);
+        }
+        self.refresh_column(task);
+    }
+
+    /// Whether `robot` may take `task` (the task has room for it).
+    #[inline]
+    pub fn is_available(&self, robot: RobotId, task: TaskId) -> bool {
+        self.assignment.has_room(self.instance, robot, task)
+    }
+
+    /// The action mask of `robot`: `true` where the task has room.
+    pub fn action_mask(&self, robot: RobotId) -> Vec<bool> {
+        self.instance
+            .task_ids()
+            .map(|j| self.is_available(robot, j))
+            .collect()
+    }
+
+    /// Robot feature ν_i (one-hot of the task, zeros if unassigned).
+    pub fn nu(&self, robot: RobotId) -> Vec<f32> {
+        let mut v = vec![0.0; self.instance.num_tasks()];
+        if let Some(j) = self.assignment.task_of(robot) {
+            v[j.index()] = 1.0;
+        }
+        v
+    }
+
+    /// Task features μ_i of one robot, in feature units.
+    pub fn mu(&self, robot: RobotId) -> &[f32] {
+        let m = self.instance.num_tasks();
+        &self.mu[robot.index() * m..(robot.index() + 1) * m]
+    }
+
+    /// All task features, row-major `[N, M]`.
+    pub fn mu_matrix(&self) -> &[f32] {
+        &self.mu
+    }
+
+    /// Recomputes column j of μ. The value part F_j(m+1)/(m+1) takes only two values:
+    /// m = n_j for robots outside j and m = n_j - 1 for its members.
+    fn refresh_column(&mut self, task: TaskId) {
+        let (inst, m) = (self.instance, self.instance.num_tasks());
+        let n_j = self.assignment.size(task);
+        let cap = inst.capacity(task);
+        let share = |others: usize| inst.coalition_value(task, others + 1) / (others + 1) as f64;
+        let (outside, inside) = (share(n_j), if n_j > 0 { share(n_j - 1) } else { 0.0 });
+        for i in inst.robot_ids() {
+            let member = self.assignment.task_of(i) == Some(task);
+            let others = n_j - usize::from(member);
+            self.mu[i.index() * m + task.index()] = if others >= cap {
+                FULL_TASK_FEATURE
+            } else {
+                let value = if member { inside } else { outside };
+                ((value - inst.cost(i, task)) / self.scale) as f32
+            };
+        }
+    }
+}
