@@ -102,6 +102,14 @@ pub enum AllocError {
     /// A method parameter is out of range.
     #[error("invalid parameter: {0}")]
     InvalidParameter(String),
+    /// A method defined outside this crate failed.
+    #[error("{method}: {message}")]
+    Failed {
+        /// The method's name.
+        method: String,
+        /// What went wrong.
+        message: String,
+    },
     /// The dynamics did not settle within the safety bound of rounds.
     #[error("no stable partition after {rounds} rounds")]
     NotConverged {

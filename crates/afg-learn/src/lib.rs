@@ -1,1 +1,28 @@
-//! Placeholder
+//! Learned allocators (SPEC §3): the AFGNet and S2V Q networks in Burn, the sequential
+//! allocation environment, and a greedy policy that implements
+//! [`afg_baseline::Allocator`].
+//!
+//! Model code is generic over the Burn [`Backend`](burn::tensor::backend::Backend):
+//! [`TrainBackend`] (autodiff over ndarray) trains, [`InferBackend`] (ndarray)
+//! evaluates, and a user with a GPU back end can swap one in.
+
+mod afgnet;
+mod env;
+mod layers;
+mod network;
+mod policy;
+mod s2v;
+mod tensors;
+
+pub use afgnet::{AfgLayer, AfgNet, AfgNetConfig};
+pub use env::Env;
+pub use layers::{Activation, QHead};
+pub use network::{NetworkConfig, QNetwork};
+pub use policy::{LearnError, LearnedPolicy, load_network, save_network};
+pub use s2v::{S2v, S2vConfig};
+pub use tensors::GraphTensors;
+
+/// The CPU inference back end.
+pub type InferBackend = burn::backend::NdArray<f32>;
+/// The CPU training back end.
+pub type TrainBackend = burn::backend::Autodiff<InferBackend>;

@@ -1,0 +1,135 @@
+//! AFGNet (paper eqs. 4–9, SPEC §3): robot features, task features and
+//! distance-weighted neighbour messages embedded in L rounds.
+
+use burn::config::Config;
+use burn::module::Module;
+use burn::nn::Linear;
+use burn::tensor::Tensor;
+use burn::tensor::backend::Backend;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+use crate::layers::{Activation, QHead, seeded_linear};
+use crate::tensors::GraphTensors;
+
+/// Shape and seed of an [`AfgNet`].
+#[derive(Config, Debug, PartialEq)]
+pub struct AfgNetConfig {
+    /// Number of tasks M (input width of ν and μ, number of Q values).
+    pub tasks: usize,
+    /// Embedding width d.
+    #[config(default = 64)]
+    pub hidden: usize,
+    /// Number of message-passing layers L.
+    #[config(default = 3)]
+    pub layers: usize,
+    /// The nonlinearity σ.
+    #[config(default = "Activation::Relu")]
+    pub activation: Activation,
+    /// Seed of the weight initialisation.
+    #[config(default = 0)]
+    pub seed: u64,
+}
+
+impl AfgNetConfig {
+    /// Builds the network with weights drawn from `seed`.
+    pub fn init<B: Backend>(&self, device: &B::Device) -> AfgNet<B> {
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
+        let (m, d) = (self.tasks, self.hidden);
+        let theta1 = seeded_linear(&mut rng, m, d, device);
+        let theta2 = seeded_linear(&mut rng, m, d, device);
+        let layers = (0..self.layers)
+            .map(|_| AfgLayer {
+                theta4: seeded_linear(&mut rng, 1 + m, d, device),
+                theta3: seeded_linear(&mut rng, d + 1, d, device),
+                theta6: seeded_linear(&mut rng, 2 * d, d, device),
+                theta5: seeded_linear(&mut rng, 2 * d, d, device),
+            })
+            .collect();
+        let head = QHead::new(&mut rng, d, m, self.activation, device);
+        AfgNet {
+            theta1,
+            theta2,
+            layers,
+            head,
+            activation: self.activation,
+        }
+    }
+}
+
+/// One message-passing layer with its own θ3–θ6.
+#[derive(Module, Debug)]
+pub struct AfgLayer<B: Backend> {
+    /// θ4: `[w_ik || ν_k]`, `1 + M → d`.
+    pub theta4: Linear<B>,
+    /// θ3: `[mean message || |N_i|]`, `d + 1 → d`. (The paper's shape for θ3 is
+    /// inconsistent with its input; this is the width the input has.)
+    pub theta3: Linear<B>,
+    /// θ6: `[mean_k w_ik δ_k || η_i]`, `2d → d`.
+    pub theta6: Linear<B>,
+    /// θ5: `[δ_i || σ(θ6 …)]`, `2d → d`.
+    pub theta5: Linear<B>,
+}
+
+/// The AFGNet Q network.
+#[derive(Module, Debug)]
+pub struct AfgNet<B: Backend> {
+    /// θ1: robot features, `M → d`.
+    pub theta1: Linear<B>,
+    /// θ2: task features, `M → d`.
+    pub theta2: Linear<B>,
+    /// The L layers.
+    pub layers: Vec<AfgLayer<B>>,
+    /// θ7 and the Q MLP.
+    pub head: QHead<B>,
+    #[module(skip)]
+    activation: Activation,
+}
+
+impl<B: Backend> AfgNet<B> {
+    /// Node embeddings δ^L.
+    ///
+    /// # Shapes
+    /// output: `[V, d]`
+    pub fn embed(&self, g: &GraphTensors<B>) -> Tensor<B, 2> {
+        let s = self.activation;
+        // eq. 4: δ_i = σ(θ1 ν_i) + σ(θ2 μ_i)                        [V, d]
+        let mut delta =
+            s.apply(self.theta1.forward(g.nu.clone())) + s.apply(self.theta2.forward(g.mu.clone()));
+        let d = delta.dims()[1];
+        // [w_ik || ν_k] for every edge                                [E, 1 + M]
+        let edge_input = (g.num_edges() > 0)
+            .then(|| Tensor::cat(vec![g.weight.clone(), g.senders_of(g.nu.clone())], 1));
+        for layer in &self.layers {
+            // eq. 5: η_i = σ(θ3 [mean_k σ(θ4 [w_ik || ν_k]) || |N_i|])   [V, d]
+            let messages = g.neighbour_mean(d, || {
+                s.apply(
+                    layer
+                        .theta4
+                        .forward(edge_input.clone().expect("edges exist")),
+                )
+            });
+            let eta = s.apply(
+                layer
+                    .theta3
+                    .forward(Tensor::cat(vec![messages, g.degree.clone()], 1)),
+            );
+            // eqs. 6–7: mean_k w_ik δ_k                               [V, d]
+            let weighted = g.neighbour_mean(d, || g.senders_of(delta.clone()) * g.weight.clone());
+            let inner = s.apply(layer.theta6.forward(Tensor::cat(vec![weighted, eta], 1)));
+            // eq. 8: δ'_i = σ(θ5 [δ_i || σ(θ6 [..])])                 [V, d]
+            delta = s.apply(layer.theta5.forward(Tensor::cat(vec![delta, inner], 1)));
+        }
+        delta
+    }
+
+    /// Q values of each graph's acting robot (eq. 9 and the head).
+    ///
+    /// # Shapes
+    /// output: `[G, M]`
+    pub fn forward(&self, g: &GraphTensors<B>) -> Tensor<B, 2> {
+        let delta = self.embed(g);
+        self.head
+            .forward(g.graph_mean(delta.clone()), g.actor_rows(delta))
+    }
+}

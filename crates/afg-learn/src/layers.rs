@@ -1,0 +1,101 @@
+//! Building blocks shared by the networks: seeded linear layers, the activation σ and
+//! the Q head.
+
+use burn::module::{Module, Param};
+use burn::nn::Linear;
+use burn::tensor::activation::{leaky_relu, relu, tanh};
+use burn::tensor::backend::Backend;
+use burn::tensor::{Tensor, TensorData};
+use rand::Rng;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+/// The nonlinearity σ (the paper leaves it open; ReLU by default).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Activation {
+    /// max(0, x).
+    #[default]
+    Relu,
+    /// max(0.01 x, x).
+    LeakyRelu,
+    /// tanh(x).
+    Tanh,
+}
+
+impl Activation {
+    /// Applies σ elementwise.
+    pub fn apply<B: Backend, const D: usize>(self, x: Tensor<B, D>) -> Tensor<B, D> {
+        match self {
+            Activation::Relu => relu(x),
+            Activation::LeakyRelu => leaky_relu(x, 0.01),
+            Activation::Tanh => tanh(x),
+        }
+    }
+}
+
+/// A linear layer `[.., d_in] → [.., d_out]` with weights and bias drawn uniformly from
+/// ±1/√d_in by `rng` (Burn's default scheme, but reproducible from our own seed rather
+/// than the backend's global generator).
+pub fn seeded_linear<B: Backend>(
+    rng: &mut ChaCha8Rng,
+    d_in: usize,
+    d_out: usize,
+    device: &B::Device,
+) -> Linear<B> {
+    let bound = 1.0 / (d_in as f32).sqrt();
+    let mut draw =
+        |len: usize| -> Vec<f32> { (0..len).map(|_| rng.random_range(-bound..bound)).collect() };
+    let weight = Tensor::from_data(TensorData::new(draw(d_in * d_out), [d_in, d_out]), device);
+    let bias = Tensor::from_data(TensorData::new(draw(d_out), [d_out]), device);
+    Linear {
+        weight: Param::from_tensor(weight),
+        bias: Some(Param::from_tensor(bias)),
+    }
+}
+
+/// The Q head of both networks: graph embedding and acting-robot embedding in,
+/// M action values out.
+///
+/// `s_t = [σ(θ7 pooled) || actor]` (paper eq. 9), then `Q = W2 σ(W1 s_t)`.
+#[derive(Module, Debug)]
+pub struct QHead<B: Backend> {
+    /// θ7: `d → d`, applied to the pooled embedding.
+    pub theta7: Linear<B>,
+    /// First layer of the MLP: `2d → d`.
+    pub hidden: Linear<B>,
+    /// Output layer: `d → M`.
+    pub output: Linear<B>,
+    #[module(skip)]
+    activation: Activation,
+}
+
+impl<B: Backend> QHead<B> {
+    /// A head for embeddings of width `d` and `tasks` actions.
+    pub fn new(
+        rng: &mut ChaCha8Rng,
+        d: usize,
+        tasks: usize,
+        activation: Activation,
+        device: &B::Device,
+    ) -> Self {
+        QHead {
+            theta7: seeded_linear(rng, d, d, device),
+            hidden: seeded_linear(rng, 2 * d, d, device),
+            output: seeded_linear(rng, d, tasks, device),
+            activation,
+        }
+    }
+
+    /// Q values.
+    ///
+    /// # Shapes
+    /// - `pooled`: `[G, d]`, the mean node embedding of each graph
+    /// - `actor`: `[G, d]`, the acting robot's embedding
+    /// - output: `[G, M]`
+    pub fn forward(&self, pooled: Tensor<B, 2>, actor: Tensor<B, 2>) -> Tensor<B, 2> {
+        let s = self.activation;
+        let state = Tensor::cat(vec![s.apply(self.theta7.forward(pooled)), actor], 1);
+        self.output.forward(s.apply(self.hidden.forward(state)))
+    }
+}

@@ -1,0 +1,82 @@
+//! One type for "a Q network": AFGNet or S2V, chosen by configuration.
+
+use burn::module::Module;
+use burn::tensor::Tensor;
+use burn::tensor::backend::Backend;
+use serde::{Deserialize, Serialize};
+
+use crate::afgnet::{AfgNet, AfgNetConfig};
+use crate::s2v::{S2v, S2vConfig};
+use crate::tensors::GraphTensors;
+
+/// Which network, with its shape and seed. Serialised beside saved weights, so a
+/// weight file is never loaded into a network of another shape.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "net", rename_all = "lowercase")]
+pub enum NetworkConfig {
+    /// [`AfgNet`].
+    AfgNet(AfgNetConfig),
+    /// [`S2v`].
+    S2v(S2vConfig),
+}
+
+impl NetworkConfig {
+    /// AFGNet with the SPEC defaults (d = 64, L = 3, ReLU) for `tasks` tasks.
+    pub fn afgnet(tasks: usize, seed: u64) -> Self {
+        NetworkConfig::AfgNet(AfgNetConfig::new(tasks).with_seed(seed))
+    }
+
+    /// S2V with the SPEC defaults (p = 64, T = 4) for `tasks` tasks.
+    pub fn s2v(tasks: usize, seed: u64) -> Self {
+        NetworkConfig::S2v(S2vConfig::new(tasks).with_seed(seed))
+    }
+
+    /// Number of tasks (actions).
+    pub fn tasks(&self) -> usize {
+        match self {
+            NetworkConfig::AfgNet(c) => c.tasks,
+            NetworkConfig::S2v(c) => c.tasks,
+        }
+    }
+
+    /// Short name: `afgnet` or `s2v`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            NetworkConfig::AfgNet(_) => "afgnet",
+            NetworkConfig::S2v(_) => "s2v",
+        }
+    }
+
+    /// Builds the network.
+    pub fn init<B: Backend>(&self, device: &B::Device) -> QNetwork<B> {
+        match self {
+            NetworkConfig::AfgNet(c) => QNetwork::AfgNet(c.init(device)),
+            NetworkConfig::S2v(c) => QNetwork::S2v(c.init(device)),
+        }
+    }
+}
+
+/// A Q network of either kind.
+// Both variants are a few hundred bytes of parameter handles; one network lives per
+// policy or trainer, so boxing would only add indirection.
+#[allow(clippy::large_enum_variant)]
+#[derive(Module, Debug)]
+pub enum QNetwork<B: Backend> {
+    /// AFGNet.
+    AfgNet(AfgNet<B>),
+    /// structure2vec.
+    S2v(S2v<B>),
+}
+
+impl<B: Backend> QNetwork<B> {
+    /// Q values of each graph's acting robot.
+    ///
+    /// # Shapes
+    /// output: `[G, M]`
+    pub fn forward(&self, g: &GraphTensors<B>) -> Tensor<B, 2> {
+        match self {
+            QNetwork::AfgNet(n) => n.forward(g),
+            QNetwork::S2v(n) => n.forward(g),
+        }
+    }
+}

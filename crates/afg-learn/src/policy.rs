@@ -1,0 +1,289 @@
+//! Greedy rollout of a trained Q network as an [`Allocator`], and weight files.
+//!
+//! Weights are stored as two files with one stem: `STEM.json`, a manifest
+//! (`{"format": "afg-weights", "version": 1, "network": {..config..}}`), and
+//! `STEM.mpk`, Burn's named MessagePack record in full precision. Loading checks the
+//! manifest and then every parameter's shape against the configured network.
+
+use std::path::{Path, PathBuf};
+
+use afg_baseline::{AllocError, AllocStats, Allocation, Allocator};
+use afg_game::{GameError, Instance, TaskId};
+use afg_graph::{GraphBatch, GraphError, GraphKind, RobotGraph};
+use burn::module::{Module, ModuleVisitor, Param};
+use burn::record::{FullPrecisionSettings, NamedMpkFileRecorder};
+use burn::tensor::Tensor;
+use burn::tensor::backend::Backend;
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+use crate::{Env, GraphTensors, InferBackend, NetworkConfig, QNetwork};
+
+/// Errors of the learning crate.
+#[derive(Debug, Error)]
+pub enum LearnError {
+    /// Invalid instance or assignment.
+    #[error(transparent)]
+    Game(#[from] GameError),
+    /// The robot graph could not be built.
+    #[error(transparent)]
+    Graph(#[from] GraphError),
+    /// An action that the environment does not allow.
+    #[error("invalid action: {0}")]
+    InvalidAction(String),
+    /// A weight file that cannot be used.
+    #[error("{path}: {reason}")]
+    Weights {
+        /// The file.
+        path: String,
+        /// What is wrong, and what to do.
+        reason: String,
+    },
+}
+
+fn weights_error(path: &Path, reason: impl Into<String>) -> LearnError {
+    LearnError::Weights {
+        path: path.display().to_string(),
+        reason: reason.into(),
+    }
+}
+
+const WEIGHTS_FORMAT: &str = "afg-weights";
+const WEIGHTS_VERSION: u32 = 1;
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Manifest {
+    format: String,
+    version: u32,
+    network: NetworkConfig,
+}
+
+fn with_extension(stem: &Path, ext: &str) -> PathBuf {
+    let mut s = stem.as_os_str().to_owned();
+    s.push(".");
+    s.push(ext);
+    PathBuf::from(s)
+}
+
+/// Saves `network` (built from `config`) as `stem.json` + `stem.mpk`, each written to a
+/// temporary file first and renamed, so existing weights are never half-overwritten.
+///
+/// # Errors
+/// [`LearnError::Weights`] if a file cannot be written.
+pub fn save_network<B: Backend>(
+    network: QNetwork<B>,
+    config: &NetworkConfig,
+    stem: &Path,
+) -> Result<(), LearnError> {
+    // Burn replaces the extension of the path it is given, so give it one ending in .mpk.
+    let record = with_extension(stem, "mpk");
+    let tmp = with_extension(stem, &format!("{}-tmp.mpk", std::process::id()));
+    let recorder = NamedMpkFileRecorder::<FullPrecisionSettings>::new();
+    network
+        .save_file(tmp.clone(), &recorder)
+        .map_err(|e| weights_error(&record, e.to_string()))?;
+    std::fs::rename(&tmp, &record).map_err(|e| weights_error(&record, e.to_string()))?;
+    let manifest = Manifest {
+        format: WEIGHTS_FORMAT.into(),
+        version: WEIGHTS_VERSION,
+        network: config.clone(),
+    };
+    let json = serde_json::to_string_pretty(&manifest).expect("a manifest always serialises");
+    afg_game::io::write_atomic(&with_extension(stem, "json"), json.as_bytes())?;
+    Ok(())
+}
+
+/// Collects parameter shapes in visiting order.
+struct Shapes(Vec<Vec<usize>>);
+
+impl<B: Backend> ModuleVisitor<B> for Shapes {
+    fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<B, D>>) {
+        self.0.push(param.val().dims().to_vec());
+    }
+}
+
+fn shapes<B: Backend>(network: &QNetwork<B>) -> Vec<Vec<usize>> {
+    let mut v = Shapes(Vec::new());
+    network.visit(&mut v);
+    v.0
+}
+
+/// Loads weights saved by [`save_network`].
+///
+/// # Errors
+/// [`LearnError::Weights`] for a missing or malformed manifest, a manifest of another
+/// format or version, a corrupt or truncated record, or parameters whose shapes differ
+/// from the network the manifest describes.
+pub fn load_network<B: Backend>(
+    stem: &Path,
+    device: &B::Device,
+) -> Result<(NetworkConfig, QNetwork<B>), LearnError> {
+    let manifest_path = with_extension(stem, "json");
+    let text = std::fs::read_to_string(&manifest_path)
+        .map_err(|e| weights_error(&manifest_path, e.to_string()))?;
+    let manifest: Manifest = serde_json::from_str(&text)
+        .map_err(|e| weights_error(&manifest_path, format!("not a weights manifest: {e}")))?;
+    if manifest.format != WEIGHTS_FORMAT || manifest.version != WEIGHTS_VERSION {
+        return Err(weights_error(
+            &manifest_path,
+            format!(
+                "format {} version {}, expected {WEIGHTS_FORMAT} version {WEIGHTS_VERSION}",
+                manifest.format, manifest.version
+            ),
+        ));
+    }
+    let fresh = manifest.network.init::<B>(device);
+    let expected = shapes(&fresh);
+    let recorder = NamedMpkFileRecorder::<FullPrecisionSettings>::new();
+    let record_path = with_extension(stem, "mpk");
+    // Burn panics when a record holds another network variant; report that as an error too.
+    let loaded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        fresh.load_file(record_path.clone(), &recorder, device)
+    }));
+    let network = match loaded {
+        Ok(Ok(network)) => network,
+        Ok(Err(e)) => {
+            return Err(weights_error(
+                &record_path,
+                format!("unreadable weights ({e}); corrupt or truncated?"),
+            ));
+        }
+        Err(_) => {
+            return Err(weights_error(
+                &record_path,
+                "the record holds another kind of network than its manifest says",
+            ));
+        }
+    };
+    if shapes(&network) != expected {
+        return Err(weights_error(
+            &record_path,
+            format!(
+                "parameter shapes differ from the {} network its manifest describes",
+                manifest.network.name()
+            ),
+        ));
+    }
+    Ok((manifest.network, network))
+}
+
+/// A trained network used greedily: each robot in index order takes the task with the
+/// highest Q value among those with room.
+///
+/// # Examples
+/// ```
+/// use afg_baseline::Allocator;
+/// use afg_game::GeneratorConfig;
+/// use afg_learn::{LearnedPolicy, NetworkConfig};
+/// let inst = GeneratorConfig::paper(20, 5, 1).generate()?;
+/// let policy = LearnedPolicy::new(NetworkConfig::afgnet(5, 0)); // untrained weights
+/// let out = policy.allocate(&inst)?;
+/// assert!(out.assignment.is_complete());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Debug)]
+pub struct LearnedPolicy {
+    config: NetworkConfig,
+    network: QNetwork<InferBackend>,
+    /// The robot graph the network reads (kNN, k = 10 by default).
+    pub graph: GraphKind,
+}
+
+impl LearnedPolicy {
+    /// A policy with freshly initialised weights from `config`.
+    pub fn new(config: NetworkConfig) -> Self {
+        let network = config.init(&Default::default());
+        LearnedPolicy {
+            config,
+            network,
+            graph: GraphKind::default(),
+        }
+    }
+
+    /// A policy from saved weights (see [`load_network`]).
+    ///
+    /// # Errors
+    /// As [`load_network`].
+    pub fn load(stem: &Path) -> Result<Self, LearnError> {
+        let (config, network) = load_network(stem, &Default::default())?;
+        Ok(LearnedPolicy {
+            config,
+            network,
+            graph: GraphKind::default(),
+        })
+    }
+
+    /// The network's configuration.
+    pub fn config(&self) -> &NetworkConfig {
+        &self.config
+    }
+
+    /// The network.
+    pub fn network(&self) -> &QNetwork<InferBackend> {
+        &self.network
+    }
+
+    /// Greedy rollout: one forward pass per robot.
+    ///
+    /// # Errors
+    /// [`LearnError::InvalidAction`] if the instance's task count differs from the
+    /// network's, and graph errors.
+    pub fn rollout(&self, instance: &Instance) -> Result<afg_game::Assignment, LearnError> {
+        let m = instance.num_tasks();
+        if m != self.config.tasks() {
+            return Err(LearnError::InvalidAction(format!(
+                "the network was built for M = {} tasks, the instance has {m}",
+                self.config.tasks()
+            )));
+        }
+        let graph = RobotGraph::build(instance.robots(), self.graph)?;
+        let mut env = Env::reset(instance);
+        let device = Default::default();
+        while let Some(robot) = env.actor() {
+            let mut batch = GraphBatch::new(m);
+            batch.push(&graph, env.state(), robot);
+            let q: Vec<f32> = self
+                .network
+                .forward(&GraphTensors::<InferBackend>::new(&batch, &device))
+                .into_data()
+                .to_vec()
+                .expect("f32 Q values");
+            let task = best_action(&q, &batch.mask).expect("capacities leave a task with room");
+            env.step(TaskId(task as u32))?;
+        }
+        Ok(env.state().assignment().clone())
+    }
+}
+
+/// Index of the largest value among allowed entries (ties to the lowest index).
+pub(crate) fn best_action(q: &[f32], mask: &[bool]) -> Option<usize> {
+    let mut best: Option<usize> = None;
+    for (j, (&v, &ok)) in q.iter().zip(mask).enumerate() {
+        if ok && best.is_none_or(|b| v > q[b]) {
+            best = Some(j);
+        }
+    }
+    best
+}
+
+impl Allocator for LearnedPolicy {
+    fn name(&self) -> String {
+        self.config.name().into()
+    }
+
+    fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
+        let start = std::time::Instant::now();
+        let assignment = self.rollout(instance).map_err(|e| AllocError::Failed {
+            method: self.name(),
+            message: e.to_string(),
+        })?;
+        let stats = AllocStats {
+            iterations: instance.num_robots() as u64,
+            rounds: instance.num_robots() as u64,
+            wall_time: start.elapsed(),
+            ..AllocStats::default()
+        };
+        Ok(Allocation { assignment, stats })
+    }
+}

@@ -1,0 +1,135 @@
+//! A [`GraphBatch`] as Burn tensors, plus the two graph operations every model needs:
+//! gathering neighbour rows and summing edge messages into their receivers.
+
+use afg_graph::GraphBatch;
+use burn::tensor::backend::Backend;
+use burn::tensor::{IndexingUpdateOp, Int, Tensor, TensorData};
+
+/// Tensors of a packed batch of graphs on one device.
+///
+/// Shapes use `V` for nodes over all graphs, `E` for directed edges, `G` for graphs
+/// and `M` for tasks.
+#[derive(Clone, Debug)]
+pub struct GraphTensors<B: Backend> {
+    /// Robot features ν, `[V, M]`.
+    pub nu: Tensor<B, 2>,
+    /// Task features μ, `[V, M]`.
+    pub mu: Tensor<B, 2>,
+    /// Degree |N_i|, `[V, 1]`.
+    pub degree: Tensor<B, 2>,
+    /// `1 / max(|N_i|, 1)`, `[V, 1]`: turns neighbour sums into means.
+    pub inv_degree: Tensor<B, 2>,
+    /// Receiving node of each edge, `[E]`.
+    pub receiver: Tensor<B, 1, Int>,
+    /// Sending node of each edge, `[E]`.
+    pub sender: Tensor<B, 1, Int>,
+    /// Edge weight w_ik, `[E, 1]`.
+    pub weight: Tensor<B, 2>,
+    /// Graph of each node, `[V]`.
+    pub node_graph: Tensor<B, 1, Int>,
+    /// `1 / N_g`, `[G, 1]`: turns per-graph sums into means.
+    pub inv_graph_size: Tensor<B, 2>,
+    /// Global index of each graph's acting robot, `[G]`.
+    pub actors: Tensor<B, 1, Int>,
+}
+
+fn float2<B: Backend>(values: &[f32], cols: usize, device: &B::Device) -> Tensor<B, 2> {
+    Tensor::from_data(
+        TensorData::new(values.to_vec(), [values.len() / cols.max(1), cols]),
+        device,
+    )
+}
+
+fn int1<B: Backend>(values: &[u32], device: &B::Device) -> Tensor<B, 1, Int> {
+    let v: Vec<i64> = values.iter().map(|&x| i64::from(x)).collect();
+    Tensor::from_data(TensorData::new(v, [values.len()]), device)
+}
+
+impl<B: Backend> GraphTensors<B> {
+    /// Uploads a batch.
+    pub fn new(batch: &GraphBatch, device: &B::Device) -> Self {
+        let m = batch.num_tasks;
+        let inv_degree: Vec<f32> = batch.degree.iter().map(|&d| 1.0 / d.max(1.0)).collect();
+        let inv_size: Vec<f32> = batch.graph_size.iter().map(|&n| 1.0 / n).collect();
+        GraphTensors {
+            nu: float2(&batch.nu, m, device),
+            mu: float2(&batch.mu, m, device),
+            degree: float2(&batch.degree, 1, device),
+            inv_degree: float2(&inv_degree, 1, device),
+            receiver: int1(&batch.edge_receiver, device),
+            sender: int1(&batch.edge_sender, device),
+            weight: float2(&batch.edge_weight, 1, device),
+            node_graph: int1(&batch.node_graph, device),
+            inv_graph_size: float2(&inv_size, 1, device),
+            actors: int1(&batch.actors, device),
+        }
+    }
+
+    /// Number of nodes V.
+    pub fn num_nodes(&self) -> usize {
+        self.degree.dims()[0]
+    }
+
+    /// Number of graphs G.
+    pub fn num_graphs(&self) -> usize {
+        self.inv_graph_size.dims()[0]
+    }
+
+    /// Rows of the sending node of each edge.
+    ///
+    /// # Shapes
+    /// `x: [V, D]` → `[E, D]`
+    pub fn senders_of(&self, x: Tensor<B, 2>) -> Tensor<B, 2> {
+        x.select(0, self.sender.clone())
+    }
+
+    /// Number of directed edges E.
+    pub fn num_edges(&self) -> usize {
+        self.receiver.dims()[0]
+    }
+
+    /// Mean over each node's neighbours of per-edge messages of width `d`, made by
+    /// `messages` (not called when there are no edges: Burn's matmul rejects empty inputs).
+    ///
+    /// # Shapes
+    /// `messages(): [E, d]` → `[V, d]`
+    pub fn neighbour_mean(
+        &self,
+        d: usize,
+        messages: impl FnOnce() -> Tensor<B, 2>,
+    ) -> Tensor<B, 2> {
+        self.neighbour_sum(d, messages) * self.inv_degree.clone()
+    }
+
+    /// Sum over each node's neighbours of per-edge messages of width `d` (see
+    /// [`GraphTensors::neighbour_mean`]).
+    ///
+    /// # Shapes
+    /// `messages(): [E, d]` → `[V, d]`
+    pub fn neighbour_sum(&self, d: usize, messages: impl FnOnce() -> Tensor<B, 2>) -> Tensor<B, 2> {
+        let zeros = Tensor::zeros([self.num_nodes(), d], &self.degree.device());
+        if self.num_edges() == 0 {
+            return zeros;
+        }
+        zeros.select_assign(0, self.receiver.clone(), messages(), IndexingUpdateOp::Add)
+    }
+
+    /// Mean over each graph's nodes.
+    ///
+    /// # Shapes
+    /// `x: [V, D]` → `[G, D]`
+    pub fn graph_mean(&self, x: Tensor<B, 2>) -> Tensor<B, 2> {
+        let d = x.dims()[1];
+        let zeros = Tensor::zeros([self.num_graphs(), d], &x.device());
+        zeros.select_assign(0, self.node_graph.clone(), x, IndexingUpdateOp::Add)
+            * self.inv_graph_size.clone()
+    }
+
+    /// Rows of each graph's acting robot.
+    ///
+    /// # Shapes
+    /// `x: [V, D]` → `[G, D]`
+    pub fn actor_rows(&self, x: Tensor<B, 2>) -> Tensor<B, 2> {
+        x.select(0, self.actors.clone())
+    }
+}

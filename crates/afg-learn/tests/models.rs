@@ -1,0 +1,351 @@
+//! Shapes, permutation invariance, batching, the environment, a gradient step, weight files.
+
+use std::path::PathBuf;
+
+use afg_baseline::Allocator;
+use afg_game::io::read_dataset;
+use afg_game::{GeneratorConfig, Instance, Point, RobotId, Task, TaskId};
+use afg_graph::{AllocationState, GraphBatch, GraphKind, RobotGraph};
+use afg_learn::{
+    Env, GraphTensors, InferBackend, LearnError, LearnedPolicy, NetworkConfig, TrainBackend,
+    load_network, save_network,
+};
+use burn::module::AutodiffModule;
+use burn::optim::{AdamConfig, GradientsParams, Optimizer};
+use burn::tensor::Tensor;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+type B = InferBackend;
+
+fn configs() -> [NetworkConfig; 2] {
+    [NetworkConfig::afgnet(5, 3), NetworkConfig::s2v(5, 3)]
+}
+
+/// An instance after `steps` random actions, with the next robot to act.
+fn midway(inst: &Instance, steps: usize, seed: u64) -> (AllocationState<'_>, RobotId) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut env = Env::reset(inst);
+    for _ in 0..steps.min(inst.num_robots() - 1) {
+        let open: Vec<usize> = env
+            .action_mask()
+            .iter()
+            .enumerate()
+            .filter(|(_, ok)| **ok)
+            .map(|(j, _)| j)
+            .collect();
+        env.step(TaskId(open[rng.random_range(0..open.len())] as u32))
+            .unwrap();
+    }
+    let actor = env.actor().unwrap();
+    (env.state().clone(), actor)
+}
+
+fn q_values(config: &NetworkConfig, batch: &GraphBatch) -> Vec<f32> {
+    let device = Default::default();
+    let net = config.init::<B>(&device);
+    let q = net.forward(&GraphTensors::new(batch, &device));
+    assert_eq!(q.dims(), [batch.num_graphs(), 5]);
+    q.into_data().to_vec().unwrap()
+}
+
+#[test]
+fn shapes_for_several_sizes_and_batches() {
+    for n in [1, 2, 20, 137] {
+        let insts: Vec<Instance> = (0..7)
+            .map(|s| GeneratorConfig::paper(n, 5, s).generate().unwrap())
+            .collect();
+        for graphs in [1, 7] {
+            let mut batch = GraphBatch::new(5);
+            for (g, inst) in insts.iter().take(graphs).enumerate() {
+                let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
+                let (state, actor) = midway(inst, g * n / 7, g as u64);
+                batch.push(&graph, &state, actor);
+            }
+            for config in configs() {
+                let q = q_values(&config, &batch);
+                assert!(q.iter().all(|v| v.is_finite()), "N = {n}, G = {graphs}");
+            }
+        }
+    }
+}
+
+#[test]
+fn relabelling_robots_does_not_change_q_values() {
+    let inst = GeneratorConfig::paper(30, 5, 8).generate().unwrap();
+    let (state, actor) = midway(&inst, 17, 2);
+    // A permutation of robot labels: reverse, then rotate.
+    let n = inst.num_robots();
+    let perm: Vec<usize> = (0..n).map(|i| (n - 1 - i + 7) % n).collect(); // new index of old robot i
+    let mut robots = vec![Point::new(0.0, 0.0); n];
+    let mut tasks = vec![None; n];
+    for i in 0..n {
+        robots[perm[i]] = inst.robots()[i];
+        tasks[perm[i]] = state.assignment().tasks()[i];
+    }
+    let permuted = Instance::new(robots, inst.tasks().to_vec(), inst.beta()).unwrap();
+    let assignment = afg_game::Assignment::from_tasks(&permuted, tasks).unwrap();
+    let permuted_state = AllocationState::from_assignment(&permuted, assignment);
+    for config in configs() {
+        let mut a = GraphBatch::new(5);
+        a.push(
+            &RobotGraph::build(inst.robots(), GraphKind::default()).unwrap(),
+            &state,
+            actor,
+        );
+        let mut b = GraphBatch::new(5);
+        b.push(
+            &RobotGraph::build(permuted.robots(), GraphKind::default()).unwrap(),
+            &permuted_state,
+            RobotId(perm[actor.index()] as u32),
+        );
+        let (qa, qb) = (q_values(&config, &a), q_values(&config, &b));
+        for (x, y) in qa.iter().zip(&qb) {
+            assert!(
+                (x - y).abs() < 1e-4 * x.abs().max(1.0),
+                "{} {qa:?} vs {qb:?}",
+                config.name()
+            );
+        }
+    }
+}
+
+#[test]
+fn batched_q_values_equal_single_graph_ones() {
+    let insts: Vec<Instance> = [7usize, 20, 33, 60]
+        .iter()
+        .enumerate()
+        .map(|(s, &n)| GeneratorConfig::paper(n, 5, s as u64).generate().unwrap())
+        .collect();
+    let mut batch = GraphBatch::new(5);
+    let mut singles = Vec::new();
+    for (g, inst) in insts.iter().enumerate() {
+        let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
+        let (state, actor) = midway(inst, inst.num_robots() / 2, g as u64);
+        batch.push(&graph, &state, actor);
+        let mut one = GraphBatch::new(5);
+        one.push(&graph, &state, actor);
+        singles.push(one);
+    }
+    for config in configs() {
+        let together = q_values(&config, &batch);
+        let alone: Vec<f32> = singles.iter().flat_map(|b| q_values(&config, b)).collect();
+        for (x, y) in together.iter().zip(&alone) {
+            assert!(
+                (x - y).abs() < 1e-5 * x.abs().max(1.0),
+                "{together:?} vs {alone:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn episode_return_equals_final_welfare_on_every_dataset_instance() {
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    for n in [20, 60, 100, 500, 1000] {
+        let path =
+            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../../datasets/n{n}.jsonl"));
+        for inst in read_dataset(&path).unwrap() {
+            let mut env = Env::reset(&inst);
+            let mut ret = 0.0;
+            let mut done = false;
+            while !done {
+                let open: Vec<usize> = env
+                    .action_mask()
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, ok)| **ok)
+                    .map(|(j, _)| j)
+                    .collect();
+                let (r, d) = env
+                    .step(TaskId(open[rng.random_range(0..open.len())] as u32))
+                    .unwrap();
+                ret += r;
+                done = d;
+            }
+            let w = inst.welfare(env.state().assignment());
+            assert!(
+                (ret - w).abs() < 1e-9 * w.abs().max(1.0),
+                "N = {n}: return {ret} vs welfare {w}"
+            );
+            assert!(matches!(
+                env.step(TaskId(0)),
+                Err(LearnError::InvalidAction(_))
+            ));
+        }
+    }
+}
+
+#[test]
+fn full_tasks_are_refused() {
+    let task = |x| Task {
+        position: Point::new(x, 0.0),
+        reward: 1.0,
+        eps: 2.0,
+        capacity: Some(1),
+    };
+    let inst = Instance::new(
+        vec![Point::new(0.0, 0.0); 2],
+        vec![task(0.0), task(1.0)],
+        1.0,
+    )
+    .unwrap();
+    let mut env = Env::reset(&inst);
+    env.step(TaskId(0)).unwrap();
+    assert_eq!(env.action_mask(), vec![false, true]);
+    assert!(matches!(
+        env.step(TaskId(0)),
+        Err(LearnError::InvalidAction(_))
+    ));
+    assert!(matches!(
+        env.step(TaskId(9)),
+        Err(LearnError::InvalidAction(_))
+    ));
+    assert_eq!(env.step(TaskId(1)).unwrap().1, true);
+}
+
+#[test]
+fn one_adam_step_reduces_a_fixed_mse() {
+    let device = Default::default();
+    let inst = GeneratorConfig::paper(20, 5, 4).generate().unwrap();
+    let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
+    let mut batch = GraphBatch::new(5);
+    for g in 0..8 {
+        let (state, actor) = midway(&inst, 2 * g, g as u64);
+        batch.push(&graph, &state, actor);
+    }
+    let target = Tensor::<TrainBackend, 2>::ones([8, 5], &device);
+    for config in configs() {
+        let mut net = config.init::<TrainBackend>(&device);
+        let g = GraphTensors::new(&batch, &device);
+        let loss = |net: &afg_learn::QNetwork<TrainBackend>| {
+            (net.forward(&g) - target.clone()).powi_scalar(2).mean()
+        };
+        let before = loss(&net);
+        let before_value: f32 = before.clone().into_scalar();
+        let mut optim = AdamConfig::new().init();
+        let grads = GradientsParams::from_grads(before.backward(), &net);
+        net = optim.step(1e-3, net, grads);
+        let after: f32 = loss(&net).into_scalar();
+        assert!(
+            after < before_value,
+            "{}: {before_value} -> {after}",
+            config.name()
+        );
+        // The inference view computes the same thing.
+        let valid: f32 = (net.valid().forward(&GraphTensors::new(&batch, &device))
+            - Tensor::ones([8, 5], &device))
+        .powi_scalar(2)
+        .mean()
+        .into_scalar();
+        assert!((valid - after).abs() < 1e-5);
+    }
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("afg-learn-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn weights_round_trip_and_drive_the_same_policy() {
+    let dir = temp_dir("roundtrip");
+    let inst = GeneratorConfig::paper(40, 5, 6).generate().unwrap();
+    for config in configs() {
+        let stem = dir.join(config.name());
+        let policy = LearnedPolicy::new(config.clone());
+        save_network(config.init::<B>(&Default::default()), &config, &stem).unwrap();
+        let loaded = LearnedPolicy::load(&stem).unwrap();
+        assert_eq!(loaded.config(), &config);
+        assert_eq!(
+            policy.allocate(&inst).unwrap().assignment,
+            loaded.allocate(&inst).unwrap().assignment
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn bad_weight_files_are_clear_errors() {
+    let dir = temp_dir("bad");
+    let config = NetworkConfig::afgnet(5, 1);
+    let stem = dir.join("net");
+    save_network(config.init::<B>(&Default::default()), &config, &stem).unwrap();
+    let mpk = dir.join("net.mpk");
+    let json = dir.join("net.json");
+
+    // Weights of another shape: an S2V record under an AFGNet manifest.
+    let other = dir.join("other");
+    let s2v = NetworkConfig::s2v(5, 1);
+    save_network(s2v.init::<B>(&Default::default()), &s2v, &other).unwrap();
+    std::fs::copy(dir.join("other.json"), &json).unwrap();
+    let err = load_network::<B>(&stem, &Default::default()).unwrap_err();
+    assert!(matches!(err, LearnError::Weights { .. }), "{err}");
+
+    // Another width: d = 32 manifest over d = 64 weights.
+    save_network(config.init::<B>(&Default::default()), &config, &stem).unwrap();
+    let text = std::fs::read_to_string(&json)
+        .unwrap()
+        .replace("\"hidden\": 64", "\"hidden\": 32");
+    std::fs::write(&json, text).unwrap();
+    let err = load_network::<B>(&stem, &Default::default()).unwrap_err();
+    assert!(err.to_string().contains("shapes differ"), "{err}");
+
+    // A truncated record.
+    save_network(config.init::<B>(&Default::default()), &config, &stem).unwrap();
+    let bytes = std::fs::read(&mpk).unwrap();
+    std::fs::write(&mpk, &bytes[..bytes.len() / 2]).unwrap();
+    let err = load_network::<B>(&stem, &Default::default()).unwrap_err();
+    assert!(err.to_string().contains("corrupt or truncated"), "{err}");
+
+    // A manifest of another version, and one that is not JSON.
+    std::fs::write(
+        &json,
+        "{\"format\":\"afg-weights\",\"version\":7,\"network\":{\"net\":\"s2v\",\"tasks\":5}}",
+    )
+    .unwrap();
+    assert!(load_network::<B>(&stem, &Default::default()).is_err());
+    std::fs::write(&json, "garbage").unwrap();
+    assert!(
+        load_network::<B>(&stem, &Default::default())
+            .unwrap_err()
+            .to_string()
+            .contains("not a weights manifest")
+    );
+
+    // A network for another M refuses the instance.
+    let inst = GeneratorConfig::paper(10, 3, 1).generate().unwrap();
+    assert!(
+        LearnedPolicy::new(NetworkConfig::afgnet(5, 0))
+            .allocate(&inst)
+            .is_err()
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn same_seed_same_weights() {
+    let device = Default::default();
+    let inst = GeneratorConfig::paper(20, 5, 1).generate().unwrap();
+    let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
+    let mut batch = GraphBatch::new(5);
+    let (state, actor) = midway(&inst, 5, 0);
+    batch.push(&graph, &state, actor);
+    let g = GraphTensors::<B>::new(&batch, &device);
+    let q = |c: NetworkConfig| -> Vec<f32> {
+        c.init::<B>(&device)
+            .forward(&g)
+            .into_data()
+            .to_vec()
+            .unwrap()
+    };
+    assert_eq!(
+        q(NetworkConfig::afgnet(5, 9)),
+        q(NetworkConfig::afgnet(5, 9))
+    );
+    assert_ne!(
+        q(NetworkConfig::afgnet(5, 9)),
+        q(NetworkConfig::afgnet(5, 10))
+    );
+}
