@@ -88,3 +88,101 @@ pub fn run(args: BenchArgs) -> Result<()> {
     }
     Ok(())
 }
+
+#[derive(Args)]
+pub struct ModelBenchArgs {
+    /// Robot counts for the batched forward pass and training step.
+    #[arg(long, value_delimiter = ',', default_values_t = [20, 60, 100])]
+    sizes: Vec<usize>,
+    /// States per batch.
+    #[arg(long, default_value_t = 256)]
+    batch: usize,
+    /// Robot count of the greedy rollout.
+    #[arg(long, default_value_t = 1_000)]
+    rollout: usize,
+    /// Repetitions per measurement (the median is reported).
+    #[arg(long, default_value_t = 5)]
+    repeats: usize,
+}
+
+/// A batch of `size` states from random partial episodes on fresh instances.
+fn random_batch(n: usize, size: usize) -> Result<afg_graph::GraphBatch> {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(n as u64);
+    let mut batch = afg_graph::GraphBatch::new(5);
+    for s in 0..size {
+        let inst = GeneratorConfig::paper(n, 5, s as u64).generate()?;
+        let graph = afg_graph::RobotGraph::build(inst.robots(), afg_graph::GraphKind::default())?;
+        let mut env = afg_learn::Env::reset(&inst);
+        for _ in 0..rng.random_range(0..n) {
+            env.step(afg_game::TaskId(rng.random_range(0..5)))?;
+        }
+        batch.push(&graph, env.state(), env.actor().expect("a robot is left"));
+    }
+    Ok(batch)
+}
+
+fn median<T>(repeats: usize, mut f: impl FnMut() -> Result<T>) -> Result<Duration> {
+    let mut times = Vec::with_capacity(repeats);
+    for _ in 0..repeats.max(1) {
+        let start = std::time::Instant::now();
+        f()?;
+        times.push(start.elapsed());
+    }
+    times.sort();
+    Ok(times[times.len() / 2])
+}
+
+pub fn run_models(args: ModelBenchArgs) -> Result<()> {
+    use afg_learn::{GraphTensors, InferBackend, NetworkConfig, TrainBackend};
+    use burn::optim::{AdamConfig, GradientsParams, Optimizer};
+    use burn::tensor::Tensor;
+    let device = Default::default();
+    println!(
+        "Median of {} runs; batch of {} states from random partial episodes (M = 5); CPU ndarray back end.\n",
+        args.repeats, args.batch
+    );
+    println!(
+        "| network | N | forward, batch {0} | train step, batch {0} (fwd + bwd + Adam) |",
+        args.batch
+    );
+    println!("|---|---|---|---|");
+    for &n in &args.sizes {
+        let batch = random_batch(n, args.batch)?;
+        for config in [NetworkConfig::afgnet(5, 0), NetworkConfig::s2v(5, 0)] {
+            let net = config.init::<InferBackend>(&device);
+            let fwd = median(args.repeats, || {
+                let g = GraphTensors::<InferBackend>::new(&batch, &device);
+                Ok(net.forward(&g).into_data())
+            })?;
+            let mut train = config.init::<TrainBackend>(&device);
+            let mut optim = AdamConfig::new().init();
+            let target = Tensor::<TrainBackend, 2>::zeros([args.batch, 5], &device);
+            let step = median(args.repeats, || {
+                let g = GraphTensors::<TrainBackend>::new(&batch, &device);
+                let loss = (train.forward(&g) - target.clone()).powi_scalar(2).mean();
+                let grads = GradientsParams::from_grads(loss.backward(), &train);
+                train = optim.step(1e-4, train.clone(), grads);
+                Ok(())
+            })?;
+            println!(
+                "| {} | {n} | {} | {} |",
+                config.name(),
+                fmt_time(fwd),
+                fmt_time(step)
+            );
+        }
+    }
+    let inst = GeneratorConfig::paper(args.rollout, 5, 7).generate()?;
+    println!(
+        "\n| network | greedy rollout, N = {} (one forward pass per robot) |",
+        args.rollout
+    );
+    println!("|---|---|");
+    for config in [NetworkConfig::afgnet(5, 0), NetworkConfig::s2v(5, 0)] {
+        let policy = afg_learn::LearnedPolicy::new(config.clone());
+        let t = median(1, || Ok(policy.allocate(&inst)?))?;
+        println!("| {} | {} |", config.name(), fmt_time(t));
+    }
+    Ok(())
+}

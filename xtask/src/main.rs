@@ -23,6 +23,8 @@ enum Command {
     Solve(solve::SolveArgs),
     /// Time the classical allocators over a sweep of N and print a Markdown table.
     BenchBaselines(bench::BenchArgs),
+    /// Time the networks: batched forward pass, training step, greedy rollout.
+    BenchModels(bench::ModelBenchArgs),
 }
 
 fn main() -> Result<()> {
@@ -30,6 +32,7 @@ fn main() -> Result<()> {
         Command::GenDatasets(args) => datasets::run(args),
         Command::Solve(args) => solve::run(args),
         Command::BenchBaselines(args) => bench::run(args),
+        Command::BenchModels(args) => bench::run_models(args),
     }
 }
 

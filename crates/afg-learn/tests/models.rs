@@ -201,7 +201,10 @@ fn full_tasks_are_refused() {
         env.step(TaskId(9)),
         Err(LearnError::InvalidAction(_))
     ));
-    assert!(env.step(TaskId(1)).unwrap().1, "the last robot ends the episode");
+    assert!(
+        env.step(TaskId(1)).unwrap().1,
+        "the last robot ends the episode"
+    );
 }
 
 #[test]
