@@ -11,16 +11,25 @@ mod env;
 mod layers;
 mod network;
 mod policy;
+mod rollout;
 mod s2v;
+mod targets;
 mod tensors;
+mod train;
 
 pub use afgnet::{AfgLayer, AfgNet, AfgNetConfig};
 pub use env::Env;
 pub use layers::{Activation, QHead};
 pub use network::{NetworkConfig, QNetwork};
 pub use policy::{LearnError, LearnedPolicy, load_network, save_network};
+pub use rollout::greedy_rollouts;
 pub use s2v::{S2v, S2vConfig};
+pub use targets::{double_dqn_target, dqn_target, masked_argmax};
 pub use tensors::GraphTensors;
+pub use train::{
+    Algo, TrainConfig, TrainEvent, Trainer, checkpoint_dir, training_instance_seed,
+    validation_instances,
+};
 
 /// The CPU inference back end.
 pub type InferBackend = burn::backend::NdArray<f32>;

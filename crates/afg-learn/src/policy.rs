@@ -8,8 +8,8 @@
 use std::path::{Path, PathBuf};
 
 use afg_baseline::{AllocError, AllocStats, Allocation, Allocator};
-use afg_game::{GameError, Instance, TaskId};
-use afg_graph::{GraphBatch, GraphError, GraphKind, RobotGraph};
+use afg_game::{GameError, Instance};
+use afg_graph::{GraphError, GraphKind};
 use burn::module::{Module, ModuleVisitor, Param};
 use burn::record::{FullPrecisionSettings, NamedMpkFileRecorder};
 use burn::tensor::Tensor;
@@ -17,7 +17,7 @@ use burn::tensor::backend::Backend;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::{Env, GraphTensors, InferBackend, NetworkConfig, QNetwork};
+use crate::{InferBackend, NetworkConfig, QNetwork};
 
 /// Errors of the learning crate.
 #[derive(Debug, Error)]
@@ -31,6 +31,26 @@ pub enum LearnError {
     /// An action that the environment does not allow.
     #[error("invalid action: {0}")]
     InvalidAction(String),
+    /// Training settings that cannot work.
+    #[error("invalid training configuration: {0}")]
+    InvalidConfig(String),
+    /// A training checkpoint that cannot be used.
+    #[error("{path}: {reason}")]
+    Checkpoint {
+        /// The file.
+        path: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// Reading or writing a file failed.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file or directory.
+        path: String,
+        /// The operating system's error.
+        #[source]
+        source: std::io::Error,
+    },
     /// A weight file that cannot be used.
     #[error("{path}: {reason}")]
     Weights {
@@ -230,41 +250,15 @@ impl LearnedPolicy {
     /// [`LearnError::InvalidAction`] if the instance's task count differs from the
     /// network's, and graph errors.
     pub fn rollout(&self, instance: &Instance) -> Result<afg_game::Assignment, LearnError> {
-        let m = instance.num_tasks();
-        if m != self.config.tasks() {
-            return Err(LearnError::InvalidAction(format!(
-                "the network was built for M = {} tasks, the instance has {m}",
-                self.config.tasks()
-            )));
-        }
-        let graph = RobotGraph::build(instance.robots(), self.graph)?;
-        let mut env = Env::reset(instance);
-        let device = Default::default();
-        while let Some(robot) = env.actor() {
-            let mut batch = GraphBatch::new(m);
-            batch.push(&graph, env.state(), robot);
-            let q: Vec<f32> = self
-                .network
-                .forward(&GraphTensors::<InferBackend>::new(&batch, &device))
-                .into_data()
-                .to_vec()
-                .expect("f32 Q values");
-            let task = best_action(&q, &batch.mask).expect("capacities leave a task with room");
-            env.step(TaskId(task as u32))?;
-        }
-        Ok(env.state().assignment().clone())
+        let mut out = crate::greedy_rollouts(
+            &self.network,
+            self.config.tasks(),
+            std::slice::from_ref(instance),
+            self.graph,
+            &Default::default(),
+        )?;
+        Ok(out.pop().expect("one rollout per instance"))
     }
-}
-
-/// Index of the largest value among allowed entries (ties to the lowest index).
-pub(crate) fn best_action(q: &[f32], mask: &[bool]) -> Option<usize> {
-    let mut best: Option<usize> = None;
-    for (j, (&v, &ok)) in q.iter().zip(mask).enumerate() {
-        if ok && best.is_none_or(|b| v > q[b]) {
-            best = Some(j);
-        }
-    }
-    best
 }
 
 impl Allocator for LearnedPolicy {
