@@ -143,33 +143,49 @@ pub fn run_models(args: ModelBenchArgs) -> Result<()> {
         args.repeats, args.batch
     );
     println!(
-        "| network | N | forward, batch {0} | train step, batch {0} (fwd + bwd + Adam) |",
-        args.batch
+        "| network | N | forward, edge lists | forward, dense | train step, edge lists | train step, dense | speed-up of the step |"
     );
-    println!("|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|");
     for &n in &args.sizes {
         let batch = random_batch(n, args.batch)?;
         for config in [NetworkConfig::afgnet(5, 0), NetworkConfig::s2v(5, 0)] {
-            let net = config.init::<InferBackend>(&device);
-            let fwd = median(args.repeats, || {
-                let g = GraphTensors::<InferBackend>::new(&batch, &device);
-                Ok(net.forward(&g).into_data())
-            })?;
-            let mut train = config.init::<TrainBackend>(&device);
-            let mut optim = AdamConfig::new().init();
-            let target = Tensor::<TrainBackend, 2>::zeros([args.batch, 5], &device);
-            let step = median(args.repeats, || {
-                let g = GraphTensors::<TrainBackend>::new(&batch, &device);
-                let loss = (train.forward(&g) - target.clone()).powi_scalar(2).mean();
-                let grads = GradientsParams::from_grads(loss.backward(), &train);
-                train = optim.step(1e-4, train.clone(), grads);
-                Ok(())
-            })?;
+            let mut forward = Vec::new();
+            let mut step = Vec::new();
+            for dense in [false, true] {
+                let upload = |b: &afg_graph::GraphBatch| {
+                    if dense {
+                        GraphTensors::<InferBackend>::new(b, &device)
+                    } else {
+                        GraphTensors::sparse(b, &device)
+                    }
+                };
+                let net = config.init::<InferBackend>(&device);
+                forward.push(median(args.repeats, || {
+                    Ok(net.forward(&upload(&batch)).into_data())
+                })?);
+                let mut train = config.init::<TrainBackend>(&device);
+                let mut optim = AdamConfig::new().init();
+                let target = Tensor::<TrainBackend, 2>::zeros([args.batch, 5], &device);
+                step.push(median(args.repeats, || {
+                    let g = if dense {
+                        GraphTensors::<TrainBackend>::new(&batch, &device)
+                    } else {
+                        GraphTensors::sparse(&batch, &device)
+                    };
+                    let loss = (train.forward(&g) - target.clone()).powi_scalar(2).mean();
+                    let grads = GradientsParams::from_grads(loss.backward(), &train);
+                    train = optim.step(1e-4, train.clone(), grads);
+                    Ok(())
+                })?);
+            }
             println!(
-                "| {} | {n} | {} | {} |",
+                "| {} | {n} | {} | {} | {} | {} | {:.1}× |",
                 config.name(),
-                fmt_time(fwd),
-                fmt_time(step)
+                fmt_time(forward[0]),
+                fmt_time(forward[1]),
+                fmt_time(step[0]),
+                fmt_time(step[1]),
+                step[0].as_secs_f64() / step[1].as_secs_f64()
             );
         }
     }

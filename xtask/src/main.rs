@@ -3,6 +3,7 @@
 mod bench;
 mod datasets;
 mod solve;
+mod train;
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
@@ -25,6 +26,10 @@ enum Command {
     BenchBaselines(bench::BenchArgs),
     /// Time the networks: batched forward pass, training step, greedy rollout.
     BenchModels(bench::ModelBenchArgs),
+    /// Train a Q network with DQN or Double DQN (resumable, seeded, with validation curves).
+    Train(train::TrainArgs),
+    /// Draw validation curves of training runs as an SVG (Fig. 1 style).
+    PlotCurves(train::PlotArgs),
 }
 
 fn main() -> Result<()> {
@@ -33,6 +38,8 @@ fn main() -> Result<()> {
         Command::Solve(args) => solve::run(args),
         Command::BenchBaselines(args) => bench::run(args),
         Command::BenchModels(args) => bench::run_models(args),
+        Command::Train(args) => train::run(args),
+        Command::PlotCurves(args) => train::run_plot(args),
     }
 }
 

@@ -115,7 +115,7 @@ impl<B: Backend> AfgNet<B> {
                     .forward(Tensor::cat(vec![messages, g.degree.clone()], 1)),
             );
             // eqs. 6–7: mean_k w_ik δ_k                               [V, d]
-            let weighted = g.neighbour_mean(d, || g.senders_of(delta.clone()) * g.weight.clone());
+            let weighted = g.weighted_neighbour_mean(delta.clone());
             let inner = s.apply(layer.theta6.forward(Tensor::cat(vec![weighted, eta], 1)));
             // eq. 8: δ'_i = σ(θ5 [δ_i || σ(θ6 [..])])                 [V, d]
             delta = s.apply(layer.theta5.forward(Tensor::cat(vec![delta, inner], 1)));

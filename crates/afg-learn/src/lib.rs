@@ -25,7 +25,7 @@ pub use policy::{LearnError, LearnedPolicy, load_network, save_network};
 pub use rollout::greedy_rollouts;
 pub use s2v::{S2v, S2vConfig};
 pub use targets::{double_dqn_target, dqn_target, masked_argmax};
-pub use tensors::GraphTensors;
+pub use tensors::{DENSE_MAX_NODES, DenseAdjacency, GraphTensors};
 pub use train::{
     Algo, TrainConfig, TrainEvent, Trainer, checkpoint_dir, training_instance_seed,
     validation_instances,

@@ -80,7 +80,7 @@ impl<B: Backend> S2v<B> {
         let base = own + edges;
         let mut mu = Tensor::zeros(base.dims(), &base.device());
         for _ in 0..self.iterations {
-            let neighbours = self.theta2.forward(g.neighbour_sum(p, || g.senders_of(mu)));
+            let neighbours = self.theta2.forward(g.neighbour_node_sum(mu));
             mu = relu(base.clone() + neighbours);
         }
         mu

@@ -31,6 +31,24 @@ pub struct GraphTensors<B: Backend> {
     pub inv_graph_size: Tensor<B, 2>,
     /// Global index of each graph's acting robot, `[G]`.
     pub actors: Tensor<B, 1, Int>,
+    /// Dense per-graph aggregation matrices, when every graph has the same N ≤
+    /// [`DENSE_MAX_NODES`]: a batched matrix product then replaces gather + scatter.
+    pub dense: Option<DenseAdjacency<B>>,
+}
+
+/// Largest N for which a batch of equal-sized graphs gets [`DenseAdjacency`] (its
+/// memory is 2 G N² floats).
+pub const DENSE_MAX_NODES: usize = 256;
+
+/// Neighbour aggregation of G graphs of N nodes each as dense matrices.
+#[derive(Clone, Debug)]
+pub struct DenseAdjacency<B: Backend> {
+    /// `[G, N, N]`, entry (i, k) = w_ik / |N_i| for neighbours, 0 otherwise.
+    pub weighted_mean: Tensor<B, 3>,
+    /// `[G, N, N]`, entry (i, k) = 1 for neighbours, 0 otherwise.
+    pub adjacency: Tensor<B, 3>,
+    /// Nodes per graph N.
+    pub nodes: usize,
 }
 
 fn float2<B: Backend>(values: &[f32], cols: usize, device: &B::Device) -> Tensor<B, 2> {
@@ -46,8 +64,15 @@ fn int1<B: Backend>(values: &[u32], device: &B::Device) -> Tensor<B, 1, Int> {
 }
 
 impl<B: Backend> GraphTensors<B> {
-    /// Uploads a batch.
+    /// Uploads a batch, with dense aggregation matrices where they apply.
     pub fn new(batch: &GraphBatch, device: &B::Device) -> Self {
+        let mut g = Self::sparse(batch, device);
+        g.dense = dense_adjacency(batch, device);
+        g
+    }
+
+    /// Uploads a batch using only the edge lists (gather + scatter aggregation).
+    pub fn sparse(batch: &GraphBatch, device: &B::Device) -> Self {
         let m = batch.num_tasks;
         let inv_degree: Vec<f32> = batch.degree.iter().map(|&d| 1.0 / d.max(1.0)).collect();
         let inv_size: Vec<f32> = batch.graph_size.iter().map(|&n| 1.0 / n).collect();
@@ -62,6 +87,7 @@ impl<B: Backend> GraphTensors<B> {
             node_graph: int1(&batch.node_graph, device),
             inv_graph_size: float2(&inv_size, 1, device),
             actors: int1(&batch.actors, device),
+            dense: None,
         }
     }
 
@@ -114,6 +140,44 @@ impl<B: Backend> GraphTensors<B> {
         zeros.select_assign(0, self.receiver.clone(), messages(), IndexingUpdateOp::Add)
     }
 
+    /// `mean_{k∈N_i} w_ik x_k` for every node.
+    ///
+    /// # Shapes
+    /// `x: [V, d]` → `[V, d]`
+    pub fn weighted_neighbour_mean(&self, x: Tensor<B, 2>) -> Tensor<B, 2> {
+        let [v, d] = x.dims();
+        match &self.dense {
+            Some(dense) => {
+                let g = v / dense.nodes;
+                dense
+                    .weighted_mean
+                    .clone()
+                    .matmul(x.reshape([g, dense.nodes, d]))
+                    .reshape([v, d])
+            }
+            None => self.neighbour_mean(d, || self.senders_of(x) * self.weight.clone()),
+        }
+    }
+
+    /// `sum_{k∈N_i} x_k` for every node.
+    ///
+    /// # Shapes
+    /// `x: [V, d]` → `[V, d]`
+    pub fn neighbour_node_sum(&self, x: Tensor<B, 2>) -> Tensor<B, 2> {
+        let [v, d] = x.dims();
+        match &self.dense {
+            Some(dense) => {
+                let g = v / dense.nodes;
+                dense
+                    .adjacency
+                    .clone()
+                    .matmul(x.reshape([g, dense.nodes, d]))
+                    .reshape([v, d])
+            }
+            None => self.neighbour_sum(d, || self.senders_of(x)),
+        }
+    }
+
     /// Mean over each graph's nodes.
     ///
     /// # Shapes
@@ -132,4 +196,33 @@ impl<B: Backend> GraphTensors<B> {
     pub fn actor_rows(&self, x: Tensor<B, 2>) -> Tensor<B, 2> {
         x.select(0, self.actors.clone())
     }
+}
+
+fn dense_adjacency<B: Backend>(
+    batch: &GraphBatch,
+    device: &B::Device,
+) -> Option<DenseAdjacency<B>> {
+    let n = *batch.graph_size.first()? as usize;
+    if n > DENSE_MAX_NODES || batch.graph_size.iter().any(|&s| s as usize != n) {
+        return None;
+    }
+    let g = batch.num_graphs();
+    let mut weighted = vec![0.0f32; g * n * n];
+    let mut adjacency = vec![0.0f32; g * n * n];
+    for e in 0..batch.num_edges() {
+        let (r, s) = (
+            batch.edge_receiver[e] as usize,
+            batch.edge_sender[e] as usize,
+        );
+        let (graph, i, k) = (r / n, r % n, s % n);
+        let at = (graph * n + i) * n + k;
+        weighted[at] = batch.edge_weight[e] / batch.degree[r];
+        adjacency[at] = 1.0;
+    }
+    let tensor = |v: Vec<f32>| Tensor::from_data(TensorData::new(v, [g, n, n]), device);
+    Some(DenseAdjacency {
+        weighted_mean: tensor(weighted),
+        adjacency: tensor(adjacency),
+        nodes: n,
+    })
 }

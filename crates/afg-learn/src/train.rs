@@ -596,7 +596,7 @@ impl Trainer {
             }
             let loss = self.learn();
             self.step += 1;
-            if self.step % self.config.target_sync == 0 {
+            if self.step.is_multiple_of(self.config.target_sync) {
                 self.target = self.online.valid();
             }
             on_event(&TrainEvent::Step {
@@ -604,7 +604,9 @@ impl Trainer {
                 loss,
                 epsilon,
             });
-            if self.step % self.config.validate_every == 0 || self.step == self.config.steps {
+            if self.step.is_multiple_of(self.config.validate_every)
+                || self.step == self.config.steps
+            {
                 let (welfare, percent_of_opt) = self.validate()?;
                 on_event(&TrainEvent::Validation {
                     step: self.step,

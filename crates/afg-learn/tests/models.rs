@@ -352,3 +352,33 @@ fn same_seed_same_weights() {
         q(NetworkConfig::afgnet(5, 10))
     );
 }
+
+#[test]
+fn dense_and_edge_list_aggregation_agree() {
+    let device = Default::default();
+    let mut batch = GraphBatch::new(5);
+    for s in 0..6u64 {
+        let inst = GeneratorConfig::paper(25, 5, s).generate().unwrap();
+        let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
+        let (state, actor) = midway(&inst, 3 * s as usize, s);
+        batch.push(&graph, &state, actor);
+    }
+    let dense = GraphTensors::<B>::new(&batch, &device);
+    assert!(
+        dense.dense.is_some(),
+        "equal-sized graphs get dense matrices"
+    );
+    let sparse = GraphTensors::<B>::sparse(&batch, &device);
+    for config in configs() {
+        let net = config.init::<B>(&device);
+        let a: Vec<f32> = net.forward(&dense).into_data().to_vec().unwrap();
+        let b: Vec<f32> = net.forward(&sparse).into_data().to_vec().unwrap();
+        for (x, y) in a.iter().zip(&b) {
+            assert!(
+                (x - y).abs() < 1e-5 * x.abs().max(1.0),
+                "{}: {a:?} vs {b:?}",
+                config.name()
+            );
+        }
+    }
+}

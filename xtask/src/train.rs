@@ -1,0 +1,440 @@
+//! `cargo xtask train` and `cargo xtask plot-curves`.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use afg_baseline::Method;
+use afg_learn::{
+    Algo, NetworkConfig, TrainConfig, TrainEvent, Trainer, save_network, validation_instances,
+};
+use anyhow::{Context, Result, bail};
+use clap::{Args, ValueEnum};
+use serde_json::json;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum AlgoArg {
+    Dqn,
+    Ddqn,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum NetArg {
+    Afgnet,
+    S2v,
+}
+
+#[derive(Args)]
+pub struct TrainArgs {
+    /// Robots per training instance N (defaults exist for 20, 60 and 100).
+    #[arg(long)]
+    scale: Option<usize>,
+    /// Bootstrap rule.
+    #[arg(long, value_enum)]
+    algo: Option<AlgoArg>,
+    /// Network.
+    #[arg(long, value_enum)]
+    net: Option<NetArg>,
+    /// Gradient steps (default: the per-scale budget of about an hour on 2 cores).
+    #[arg(long)]
+    steps: Option<u64>,
+    /// Seed of everything random in the run (initial weights, instances, exploration).
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Transitions per gradient step.
+    #[arg(long)]
+    batch: Option<usize>,
+    /// Adam learning rate.
+    #[arg(long)]
+    lr: Option<f64>,
+    /// The paper's settings where ours differ: squared loss, raw rewards, no clipping,
+    /// target sync every 1000 steps.
+    #[arg(long)]
+    paper: bool,
+    /// Run directory: config.json, log.jsonl, checkpoint/, and model.{json,mpk} at the end.
+    #[arg(long, conflicts_with = "resume")]
+    out: Option<PathBuf>,
+    /// Continue the run in this directory from its last checkpoint.
+    #[arg(long)]
+    resume: Option<PathBuf>,
+    /// Seconds between checkpoints.
+    #[arg(long, default_value_t = 300)]
+    checkpoint_secs: u64,
+}
+
+/// The default gradient-step budget at a scale: about an hour on the 2-core CI machine
+/// kind for AFGNet DDQN (see docs/training.md for the measured rates).
+pub fn default_steps(scale: usize) -> Option<u64> {
+    match scale {
+        20 => Some(6_000),
+        60 => Some(1_800),
+        100 => Some(900),
+        _ => None,
+    }
+}
+
+impl TrainArgs {
+    fn config(&self) -> Result<TrainConfig> {
+        let scale = self
+            .scale
+            .context("--scale is required for a new run (or pass --resume DIR)")?;
+        let steps = match self.steps {
+            Some(s) => s,
+            None => default_steps(scale).with_context(|| {
+                format!("no default budget for --scale {scale} (known: 20, 60, 100); pass --steps")
+            })?,
+        };
+        let seed = self.seed.unwrap_or(0);
+        let network = match self.net.unwrap_or(NetArg::Afgnet) {
+            NetArg::Afgnet => NetworkConfig::afgnet(5, seed),
+            NetArg::S2v => NetworkConfig::s2v(5, seed),
+        };
+        let algo = match self.algo.unwrap_or(AlgoArg::Ddqn) {
+            AlgoArg::Dqn => Algo::Dqn,
+            AlgoArg::Ddqn => Algo::Ddqn,
+        };
+        let mut c = TrainConfig::new(scale, algo, network, steps, seed);
+        if let Some(b) = self.batch {
+            c.batch = b;
+        }
+        if let Some(lr) = self.lr {
+            c.lr = lr;
+        }
+        if self.paper {
+            c.huber = false;
+            c.reward_scaling = false;
+            c.grad_clip = None;
+            c.target_sync = 1000;
+        }
+        c.check()?;
+        Ok(c)
+    }
+
+    fn any_setting_given(&self) -> bool {
+        self.scale.is_some()
+            || self.algo.is_some()
+            || self.net.is_some()
+            || self.steps.is_some()
+            || self.seed.is_some()
+            || self.batch.is_some()
+            || self.lr.is_some()
+            || self.paper
+    }
+}
+
+fn append_log(path: &Path, value: &serde_json::Value) -> Result<()> {
+    let mut f = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(path)?;
+    writeln!(f, "{value}")?;
+    Ok(())
+}
+
+/// Keeps the log lines of steps up to `step` (a resumed run repeats what came after).
+fn truncate_log(path: &Path, step: u64) -> Result<()> {
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    let kept: String = text
+        .lines()
+        .filter(|l| {
+            serde_json::from_str::<serde_json::Value>(l)
+                .ok()
+                .and_then(|v| v["step"].as_u64())
+                .is_none_or(|s| s <= step)
+        })
+        .map(|l| format!("{l}\n"))
+        .collect();
+    afg_game::io::write_atomic(path, kept.as_bytes())?;
+    Ok(())
+}
+
+pub fn run(args: TrainArgs) -> Result<()> {
+    let (dir, mut trainer) = match &args.resume {
+        Some(dir) => {
+            let stored: TrainConfig = serde_json::from_str(
+                &std::fs::read_to_string(dir.join("config.json")).with_context(|| {
+                    format!(
+                        "{} holds no training run (config.json missing)",
+                        dir.display()
+                    )
+                })?,
+            )
+            .with_context(|| {
+                format!(
+                    "{}/config.json is not a training configuration",
+                    dir.display()
+                )
+            })?;
+            if args.any_setting_given() && args.config()? != stored {
+                bail!(
+                    "{} holds a run with other settings; resume it without settings, or start a new run with --out",
+                    dir.display()
+                );
+            }
+            let trainer =
+                Trainer::resume(dir).with_context(|| format!("resuming {}", dir.display()))?;
+            truncate_log(&dir.join("log.jsonl"), trainer.step())?;
+            eprintln!("resuming {} at step {}", dir.display(), trainer.step());
+            (dir.clone(), trainer)
+        }
+        None => {
+            let config = args.config()?;
+            let dir = args
+                .out
+                .clone()
+                .context("pass --out DIR for a new run (or --resume DIR)")?;
+            if dir.join("config.json").exists() {
+                bail!(
+                    "{} already holds a training run; use --resume {0} or another --out",
+                    dir.display()
+                );
+            }
+            std::fs::create_dir_all(&dir)?;
+            afg_game::io::write_atomic(
+                &dir.join("config.json"),
+                serde_json::to_string_pretty(&config)?.as_bytes(),
+            )?;
+            let trainer = Trainer::new(config.clone())?;
+            append_log(
+                &dir.join("log.jsonl"),
+                &json!({"event": "start", "config": config, "baselines": baselines(&config)?}),
+            )?;
+            (dir, trainer)
+        }
+    };
+    let config = trainer.config().clone();
+    let log = dir.join("log.jsonl");
+    let bar = crate::progress(
+        config.steps,
+        &format!(
+            "{}_{} N={}",
+            config.network.name(),
+            config.algo.name(),
+            config.robots
+        ),
+    );
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{msg} [{bar:25}] {pos}/{len} {per_sec} eta {eta}")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    bar.set_position(trainer.step());
+    let started = Instant::now();
+    let mut last_checkpoint = Instant::now();
+    let mut last_val = f64::NAN;
+    let mut window = Vec::new();
+    let name = format!(
+        "{}_{} N={}",
+        config.network.name(),
+        config.algo.name(),
+        config.robots
+    );
+    while trainer.step() < config.steps {
+        let target = trainer.step() + 1;
+        let mut failure = None;
+        trainer.run_until(target, |event| {
+            let result = match event {
+                TrainEvent::Step { step, loss, epsilon } => {
+                    window.push(*loss);
+                    bar.set_position(*step);
+                    bar.set_message(format!("{name} ε {epsilon:.2} loss {loss:.4} val {last_val:.2}"));
+                    if step.is_multiple_of(10) {
+                        let mean = window.iter().sum::<f32>() / window.len() as f32;
+                        window.clear();
+                        append_log(&log, &json!({"event": "step", "step": step, "loss": mean, "epsilon": epsilon,
+                            "elapsed_s": started.elapsed().as_secs_f64()}))
+                    } else {
+                        Ok(())
+                    }
+                }
+                TrainEvent::Validation { step, welfare, percent_of_opt } => {
+                    last_val = *welfare;
+                    append_log(&log, &json!({"event": "validation", "step": step, "welfare": welfare,
+                        "percent_of_opt": percent_of_opt, "elapsed_s": started.elapsed().as_secs_f64()}))
+                }
+            };
+            if let Err(e) = result {
+                failure = Some(e);
+            }
+        })?;
+        if let Some(e) = failure {
+            return Err(e);
+        }
+        if last_checkpoint.elapsed() >= Duration::from_secs(args.checkpoint_secs) {
+            trainer.save_checkpoint(&dir)?;
+            last_checkpoint = Instant::now();
+        }
+    }
+    trainer.save_checkpoint(&dir)?;
+    save_network(trainer.network(), &config.network, &dir.join("model"))?;
+    append_log(
+        &log,
+        &json!({"event": "end", "step": trainer.step(), "elapsed_s": started.elapsed().as_secs_f64()}),
+    )?;
+    bar.finish_and_clear();
+    let (welfare, pct) = trainer.validate()?;
+    println!(
+        "{name}: {} steps; validation welfare {welfare:.3} ({pct:.2} % of OPT); model in {}",
+        trainer.step(),
+        dir.join("model.mpk").display()
+    );
+    Ok(())
+}
+
+/// Mean welfare of the classical methods on the validation set, for the log.
+fn baselines(config: &TrainConfig) -> Result<serde_json::Value> {
+    let insts = validation_instances(
+        config.robots,
+        config.network.tasks(),
+        config.validation_instances,
+    )?;
+    let mut out = serde_json::Map::new();
+    for m in [
+        Method::Opt,
+        Method::Da,
+        Method::DaBalanced,
+        Method::Greedy,
+        Method::Nearest,
+        Method::Random,
+    ] {
+        let alloc = m.allocator(0);
+        let mut total = 0.0;
+        for inst in &insts {
+            total += inst.welfare(&alloc.allocate(inst)?.assignment);
+        }
+        out.insert(m.name().into(), json!(total / insts.len() as f64));
+    }
+    Ok(serde_json::Value::Object(out))
+}
+
+#[derive(Args)]
+pub struct PlotArgs {
+    /// Run directories (each with a log.jsonl).
+    #[arg(required = true)]
+    dirs: Vec<PathBuf>,
+    /// Output SVG.
+    #[arg(long, default_value = "docs/figures/curves.svg")]
+    out: PathBuf,
+}
+
+/// The validation curve of one run.
+pub struct Curve {
+    /// "net_algo (N = n)".
+    pub label: String,
+    /// (gradient step, mean validation welfare).
+    pub points: Vec<(f64, f64)>,
+    /// Mean OPT welfare on the validation set, if logged.
+    pub opt: Option<f64>,
+}
+
+/// Reads the validation curve from `dir/log.jsonl`.
+pub fn read_curve(dir: &Path) -> Result<Curve> {
+    let path = dir.join("log.jsonl");
+    let text =
+        std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+    let (mut label, mut points, mut opt) = (dir.display().to_string(), Vec::new(), None);
+    for (i, line) in text.lines().enumerate() {
+        let v: serde_json::Value = serde_json::from_str(line)
+            .with_context(|| format!("{}:{}: not JSON", path.display(), i + 1))?;
+        match v["event"].as_str() {
+            Some("start") => {
+                let c = &v["config"];
+                label = format!(
+                    "{}_{} (N = {})",
+                    c["network"]["net"].as_str().unwrap_or("?"),
+                    c["algo"].as_str().unwrap_or("?"),
+                    c["robots"]
+                );
+                opt = v["baselines"]["opt"].as_f64();
+            }
+            Some("validation") => {
+                points.push((
+                    v["step"].as_f64().unwrap_or(0.0),
+                    v["welfare"].as_f64().unwrap_or(f64::NAN),
+                ));
+            }
+            _ => {}
+        }
+    }
+    Ok(Curve { label, points, opt })
+}
+
+/// Draws validation welfare against gradient steps, one line per run, OPT dashed.
+pub fn plot_curves(dirs: &[PathBuf], out: &Path, title: &str) -> Result<()> {
+    use plotters::prelude::*;
+    let curves = dirs
+        .iter()
+        .map(|d| read_curve(d))
+        .collect::<Result<Vec<_>>>()?;
+    let all = curves
+        .iter()
+        .flat_map(|c| c.points.iter().copied())
+        .chain(curves.iter().filter_map(|c| c.opt.map(|o| (0.0, o))));
+    let (mut x_max, mut y_min, mut y_max) = (1.0f64, f64::INFINITY, f64::NEG_INFINITY);
+    for (x, y) in all {
+        x_max = x_max.max(x);
+        y_min = y_min.min(y);
+        y_max = y_max.max(y);
+    }
+    if !y_min.is_finite() {
+        bail!("no validation points in {} run(s)", dirs.len());
+    }
+    let pad = ((y_max - y_min) * 0.05).max(1e-6);
+    if let Some(parent) = out.parent() {
+        std::fs::create_dir_all(parent)?;
+    }
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (800, 500)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 20))
+            .margin(15)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0.0..x_max, (y_min - pad)..(y_max + pad))?;
+        chart
+            .configure_mesh()
+            .x_desc("gradient step")
+            .y_desc("validation welfare (mean)")
+            .draw()?;
+        for (i, Curve { label, points, opt }) in curves.iter().enumerate() {
+            let color = Palette99::pick(i).to_rgba();
+            chart
+                .draw_series(LineSeries::new(
+                    points.iter().copied(),
+                    color.stroke_width(2),
+                ))?
+                .label(label.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                });
+            if let Some(o) = opt {
+                chart.draw_series(DashedLineSeries::new(
+                    vec![(0.0, *o), (x_max, *o)],
+                    6,
+                    4,
+                    color.stroke_width(1),
+                ))?;
+            }
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()?;
+        root.present()?;
+    }
+    afg_game::io::write_atomic(out, svg.as_bytes())?;
+    Ok(())
+}
+
+pub fn run_plot(args: PlotArgs) -> Result<()> {
+    plot_curves(
+        &args.dirs,
+        &args.out,
+        "Validation welfare during training (dashed: OPT)",
+    )?;
+    println!("wrote {}", args.out.display());
+    Ok(())
+}
