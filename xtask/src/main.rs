@@ -11,13 +11,13 @@ use clap::{Parser, Subcommand};
 /// afg project tasks. Run `cargo xtask <command> --help` for each command's options.
 #[derive(Parser)]
 #[command(name = "cargo xtask", version, about)]
-struct Cli {
+pub struct Cli {
     #[command(subcommand)]
-    command: Command,
+    pub command: Command,
 }
 
 #[derive(Subcommand)]
-enum Command {
+pub enum Command {
     /// Write the fixed test datasets under datasets/ (or verify them with --check).
     GenDatasets(datasets::GenArgs),
     /// Solve an instance or a dataset with one allocator and print welfare, % of OPT, NS_rate.
@@ -30,6 +30,8 @@ enum Command {
     Train(train::TrainArgs),
     /// Draw validation curves of training runs as an SVG (Fig. 1 style).
     PlotCurves(train::PlotArgs),
+    /// Summarise finished training runs against the classical methods (Markdown).
+    TrainingReport(train::ReportArgs),
 }
 
 fn main() -> Result<()> {
@@ -40,6 +42,7 @@ fn main() -> Result<()> {
         Command::BenchModels(args) => bench::run_models(args),
         Command::Train(args) => train::run(args),
         Command::PlotCurves(args) => train::run_plot(args),
+        Command::TrainingReport(args) => train::run_report(args),
     }
 }
 

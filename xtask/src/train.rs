@@ -438,3 +438,177 @@ pub fn run_plot(args: PlotArgs) -> Result<()> {
     println!("wrote {}", args.out.display());
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use clap::Parser;
+
+    use super::*;
+
+    fn xtask(args: &[&str]) -> Result<()> {
+        let mut argv = vec!["cargo xtask"];
+        argv.extend_from_slice(args);
+        match crate::Cli::try_parse_from(argv)?.command {
+            crate::Command::Train(a) => run(a),
+            crate::Command::PlotCurves(a) => run_plot(a),
+            _ => unreachable!("only train and plot-curves here"),
+        }
+    }
+
+    #[test]
+    fn train_writes_log_checkpoint_model_and_a_plottable_curve() {
+        let dir = std::env::temp_dir().join(format!("afg-xtask-train-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let run_dir = dir.join("run");
+        let out = run_dir.to_str().unwrap();
+        xtask(&[
+            "train", "--scale", "10", "--steps", "120", "--batch", "32", "--net", "s2v", "--out",
+            out,
+        ])
+        .unwrap();
+        for f in [
+            "config.json",
+            "log.jsonl",
+            "model.json",
+            "model.mpk",
+            "checkpoint/state.json",
+        ] {
+            assert!(run_dir.join(f).exists(), "{f} missing");
+        }
+        let log = std::fs::read_to_string(run_dir.join("log.jsonl")).unwrap();
+        let events: Vec<serde_json::Value> = log
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect();
+        assert_eq!(events[0]["event"], "start");
+        assert!(
+            events
+                .iter()
+                .filter(|e| e["event"] == "step")
+                .all(|e| e["loss"].as_f64().unwrap().is_finite())
+        );
+        assert!(events.iter().any(|e| e["event"] == "validation"));
+        assert_eq!(events.last().unwrap()["event"], "end");
+        afg_learn::LearnedPolicy::load(&run_dir.join("model")).unwrap();
+
+        let svg = dir.join("curves.svg");
+        xtask(&["plot-curves", out, "--out", svg.to_str().unwrap()]).unwrap();
+        let text = std::fs::read_to_string(&svg).unwrap();
+        assert!(text.starts_with("<svg") && text.trim_end().ends_with("</svg>"));
+        assert!(text.contains("s2v_ddqn (N = 10)"));
+
+        // A second run into the same directory is refused; nothing is overwritten.
+        let before = std::fs::read(run_dir.join("model.mpk")).unwrap();
+        let err = xtask(&["train", "--scale", "10", "--steps", "5", "--out", out]).unwrap_err();
+        assert!(
+            err.to_string().contains("already holds a training run"),
+            "{err}"
+        );
+        // Resuming with other settings is refused too.
+        let err = xtask(&["train", "--resume", out, "--scale", "20", "--steps", "5"]).unwrap_err();
+        assert!(err.to_string().contains("other settings"), "{err}");
+        // A truncated checkpoint is a clear error.
+        let state = run_dir.join("checkpoint/state.json");
+        let text = std::fs::read_to_string(&state).unwrap();
+        std::fs::write(&state, &text[..text.len() / 2]).unwrap();
+        let err = xtask(&["train", "--resume", out]).unwrap_err();
+        assert!(
+            format!("{err:#}").contains("corrupt or truncated"),
+            "{err:#}"
+        );
+        assert_eq!(std::fs::read(run_dir.join("model.mpk")).unwrap(), before);
+        // Unknown values are refused by the parser.
+        assert!(xtask(&["train", "--scale", "20", "--net", "gcn", "--out", out]).is_err());
+        assert!(xtask(&["train", "--scale", "20", "--algo", "ppo", "--out", out]).is_err());
+        let err = xtask(&[
+            "train",
+            "--scale",
+            "33",
+            "--out",
+            dir.join("x").to_str().unwrap(),
+        ])
+        .unwrap_err();
+        assert!(err.to_string().contains("no default budget"), "{err}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
+
+#[derive(Args)]
+pub struct ReportArgs {
+    /// Run directories (each with a log.jsonl).
+    #[arg(required = true)]
+    dirs: Vec<PathBuf>,
+}
+
+/// A Markdown table of finished runs: final and best validation welfare against the
+/// classical methods on the same validation set (all read from the runs' logs).
+pub fn run_report(args: ReportArgs) -> Result<()> {
+    println!("| run | N | steps | wall time | final validation welfare | % of OPT | best (step) |");
+    println!("|---|---|---|---|---|---|---|");
+    let mut baseline_rows = Vec::new();
+    for dir in &args.dirs {
+        let text = std::fs::read_to_string(dir.join("log.jsonl"))
+            .with_context(|| format!("{}", dir.display()))?;
+        let events: Vec<serde_json::Value> = text
+            .lines()
+            .map(serde_json::from_str)
+            .collect::<Result<_, _>>()?;
+        let start = events
+            .iter()
+            .find(|e| e["event"] == "start")
+            .context("log has no start event")?;
+        let vals: Vec<&serde_json::Value> = events
+            .iter()
+            .filter(|e| e["event"] == "validation")
+            .collect();
+        let last = vals.last().context("log has no validation")?;
+        let best = vals
+            .iter()
+            .max_by(|a, b| {
+                a["welfare"]
+                    .as_f64()
+                    .unwrap_or(f64::MIN)
+                    .total_cmp(&b["welfare"].as_f64().unwrap_or(f64::MIN))
+            })
+            .expect("non-empty");
+        let wall = events
+            .iter()
+            .rev()
+            .find_map(|e| e["elapsed_s"].as_f64())
+            .unwrap_or(0.0);
+        let c = &start["config"];
+        let n = c["robots"].as_u64().unwrap_or(0);
+        let name = dir
+            .file_name()
+            .map(|f| f.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        println!(
+            "| {name} | {n} | {} | {:.0} min | {:.3} | {:.2} % | {:.3} ({}) |",
+            last["step"],
+            wall / 60.0,
+            last["welfare"].as_f64().unwrap_or(f64::NAN),
+            last["percent_of_opt"].as_f64().unwrap_or(f64::NAN),
+            best["welfare"].as_f64().unwrap_or(f64::NAN),
+            best["step"]
+        );
+        if !baseline_rows.iter().any(|(m, _)| *m == n) {
+            baseline_rows.push((n, start["baselines"].clone()));
+        }
+    }
+    println!("\nClassical methods on the same validation sets (mean welfare):\n");
+    println!("| N | OPT | DA (GRAPE) | balanced DA | greedy | nearest | random |");
+    println!("|---|---|---|---|---|---|---|");
+    for (n, b) in baseline_rows {
+        let f = |k: &str| b[k].as_f64().map_or("–".into(), |v| format!("{v:.3}"));
+        println!(
+            "| {n} | {} | {} | {} | {} | {} | {} |",
+            f("opt"),
+            f("da"),
+            f("da-balanced"),
+            f("greedy"),
+            f("nearest"),
+            f("random")
+        );
+    }
+    Ok(())
+}
