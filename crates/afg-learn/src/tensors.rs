@@ -145,17 +145,9 @@ impl<B: Backend> GraphTensors<B> {
     /// # Shapes
     /// `x: [V, d]` → `[V, d]`
     pub fn weighted_neighbour_mean(&self, x: Tensor<B, 2>) -> Tensor<B, 2> {
-        let [v, d] = x.dims();
         match &self.dense {
-            Some(dense) => {
-                let g = v / dense.nodes;
-                dense
-                    .weighted_mean
-                    .clone()
-                    .matmul(x.reshape([g, dense.nodes, d]))
-                    .reshape([v, d])
-            }
-            None => self.neighbour_mean(d, || self.senders_of(x) * self.weight.clone()),
+            Some(dense) => dense.apply(&dense.weighted_mean, x),
+            None => self.neighbour_mean(x.dims()[1], || self.senders_of(x) * self.weight.clone()),
         }
     }
 
@@ -164,17 +156,9 @@ impl<B: Backend> GraphTensors<B> {
     /// # Shapes
     /// `x: [V, d]` → `[V, d]`
     pub fn neighbour_node_sum(&self, x: Tensor<B, 2>) -> Tensor<B, 2> {
-        let [v, d] = x.dims();
         match &self.dense {
-            Some(dense) => {
-                let g = v / dense.nodes;
-                dense
-                    .adjacency
-                    .clone()
-                    .matmul(x.reshape([g, dense.nodes, d]))
-                    .reshape([v, d])
-            }
-            None => self.neighbour_sum(d, || self.senders_of(x)),
+            Some(dense) => dense.apply(&dense.adjacency, x),
+            None => self.neighbour_sum(x.dims()[1], || self.senders_of(x)),
         }
     }
 
@@ -195,6 +179,20 @@ impl<B: Backend> GraphTensors<B> {
     /// `x: [V, D]` → `[G, D]`
     pub fn actor_rows(&self, x: Tensor<B, 2>) -> Tensor<B, 2> {
         x.select(0, self.actors.clone())
+    }
+}
+
+impl<B: Backend> DenseAdjacency<B> {
+    /// Multiplies each graph's rows of `x` by its matrix in `matrix`.
+    ///
+    /// # Shapes
+    /// `matrix: [G, N, N]`, `x: [G N, d]` → `[G N, d]`
+    fn apply(&self, matrix: &Tensor<B, 3>, x: Tensor<B, 2>) -> Tensor<B, 2> {
+        let [v, d] = x.dims();
+        matrix
+            .clone()
+            .matmul(x.reshape([v / self.nodes, self.nodes, d]))
+            .reshape([v, d])
     }
 }
 

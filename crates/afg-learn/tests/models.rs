@@ -22,20 +22,25 @@ fn configs() -> [NetworkConfig; 2] {
     [NetworkConfig::afgnet(5, 3), NetworkConfig::s2v(5, 3)]
 }
 
+/// One uniformly random allowed action: (reward, done).
+fn random_step(env: &mut Env<'_>, rng: &mut ChaCha8Rng) -> (f64, bool) {
+    let open: Vec<usize> = env
+        .action_mask()
+        .iter()
+        .enumerate()
+        .filter(|(_, ok)| **ok)
+        .map(|(j, _)| j)
+        .collect();
+    env.step(TaskId(open[rng.random_range(0..open.len())] as u32))
+        .unwrap()
+}
+
 /// An instance after `steps` random actions, with the next robot to act.
 fn midway(inst: &Instance, steps: usize, seed: u64) -> (AllocationState<'_>, RobotId) {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut env = Env::reset(inst);
     for _ in 0..steps.min(inst.num_robots() - 1) {
-        let open: Vec<usize> = env
-            .action_mask()
-            .iter()
-            .enumerate()
-            .filter(|(_, ok)| **ok)
-            .map(|(j, _)| j)
-            .collect();
-        env.step(TaskId(open[rng.random_range(0..open.len())] as u32))
-            .unwrap();
+        random_step(&mut env, &mut rng);
     }
     let actor = env.actor().unwrap();
     (env.state().clone(), actor)
@@ -150,16 +155,7 @@ fn episode_return_equals_final_welfare_on_every_dataset_instance() {
             let mut ret = 0.0;
             let mut done = false;
             while !done {
-                let open: Vec<usize> = env
-                    .action_mask()
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, ok)| **ok)
-                    .map(|(j, _)| j)
-                    .collect();
-                let (r, d) = env
-                    .step(TaskId(open[rng.random_range(0..open.len())] as u32))
-                    .unwrap();
+                let (r, d) = random_step(&mut env, &mut rng);
                 ret += r;
                 done = d;
             }
