@@ -42,7 +42,7 @@ fn median_time(
     Ok((times[times.len() / 2], welfare))
 }
 
-fn fmt_time(d: Duration) -> String {
+pub fn fmt_time(d: Duration) -> String {
     let s = d.as_secs_f64();
     if s < 1e-3 {
         format!("{:.1} µs", s * 1e6)

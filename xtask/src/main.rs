@@ -3,6 +3,7 @@
 mod bench;
 mod datasets;
 mod solve;
+mod tables;
 mod train;
 
 use anyhow::Result;
@@ -18,6 +19,8 @@ pub struct Cli {
 
 #[derive(Subcommand)]
 pub enum Command {
+    /// The main job: Tables I and II, Fig. 1 and docs/RESULTS.md from committed datasets and weights.
+    ReproduceTables(tables::TablesArgs),
     /// Write the fixed test datasets under datasets/ (or verify them with --check).
     GenDatasets(datasets::GenArgs),
     /// Solve an instance or a dataset with one allocator and print welfare, % of OPT, NS_rate.
@@ -32,10 +35,15 @@ pub enum Command {
     PlotCurves(train::PlotArgs),
     /// Summarise finished training runs against the classical methods (Markdown).
     TrainingReport(train::ReportArgs),
+    /// Train every model the tables use (AFGNet DDQN/DQN and S2V DDQN at N = 20, 60, 100).
+    TrainAll(train::TrainAllArgs),
+    /// (Re)write manifest.json of finished training runs from their config and log.
+    Manifest(train::ManifestArgs),
 }
 
 fn main() -> Result<()> {
     match Cli::parse().command {
+        Command::ReproduceTables(args) => tables::run(args),
         Command::GenDatasets(args) => datasets::run(args),
         Command::Solve(args) => solve::run(args),
         Command::BenchBaselines(args) => bench::run(args),
@@ -43,6 +51,8 @@ fn main() -> Result<()> {
         Command::Train(args) => train::run(args),
         Command::PlotCurves(args) => train::run_plot(args),
         Command::TrainingReport(args) => train::run_report(args),
+        Command::TrainAll(args) => train::run_all(args),
+        Command::Manifest(args) => train::run_manifest(args),
     }
 }
 

@@ -339,8 +339,12 @@ pub fn read_curve(dir: &Path) -> Result<Curve> {
         match v["event"].as_str() {
             Some("start") => {
                 let c = &v["config"];
+                let name = dir
+                    .file_name()
+                    .map(|f| f.to_string_lossy().into_owned())
+                    .unwrap_or_default();
                 label = format!(
-                    "{}_{} (N = {})",
+                    "{name} ({}_{}, N = {})",
                     c["network"]["net"].as_str().unwrap_or("?"),
                     c["algo"].as_str().unwrap_or("?"),
                     c["robots"]
@@ -495,7 +499,7 @@ mod tests {
         xtask(&["plot-curves", out, "--out", svg.to_str().unwrap()]).unwrap();
         let text = std::fs::read_to_string(&svg).unwrap();
         assert!(text.starts_with("<svg") && text.trim_end().ends_with("</svg>"));
-        assert!(text.contains("s2v_ddqn (N = 10)"));
+        assert!(text.contains("run (s2v_ddqn, N = 10)"));
 
         // A second run into the same directory is refused; nothing is overwritten.
         let before = std::fs::read(run_dir.join("model.mpk")).unwrap();
@@ -609,6 +613,134 @@ pub fn run_report(args: ReportArgs) -> Result<()> {
             f("nearest"),
             f("random")
         );
+    }
+    Ok(())
+}
+
+/// The `cargo xtask train` command line that reproduces a configuration.
+pub fn command_line(c: &TrainConfig, dir: &Path) -> String {
+    let default = TrainConfig::new(c.robots, c.algo, c.network.clone(), c.steps, c.seed);
+    let mut cmd = format!(
+        "cargo xtask train --scale {} --algo {} --net {} --steps {} --seed {}",
+        c.robots,
+        c.algo.name(),
+        c.network.name(),
+        c.steps,
+        c.seed
+    );
+    if c.batch != default.batch {
+        cmd += &format!(" --batch {}", c.batch);
+    }
+    if c.lr != default.lr {
+        cmd += &format!(" --lr {}", c.lr);
+    }
+    if !c.huber {
+        cmd += " --paper";
+    }
+    cmd + &format!(" --out {}", dir.display())
+}
+
+/// Writes `dir/manifest.json` from the run's config and log: the command, seed, steps,
+/// wall time, git revision and final validation welfare.
+pub fn write_manifest(dir: &Path) -> Result<()> {
+    let config: TrainConfig =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("config.json"))?)?;
+    let log = std::fs::read_to_string(dir.join("log.jsonl"))?;
+    let events: Vec<serde_json::Value> = log
+        .lines()
+        .map(serde_json::from_str)
+        .collect::<Result<_, _>>()?;
+    let last_validation = events
+        .iter()
+        .rev()
+        .find(|e| e["event"] == "validation")
+        .cloned();
+    let wall = events.iter().rev().find_map(|e| e["elapsed_s"].as_f64());
+    let revision = std::process::Command::new("git")
+        .args(["rev-parse", "HEAD"])
+        .current_dir(crate::repo_root())
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_owned());
+    let relative = dir.strip_prefix(crate::repo_root()).unwrap_or(dir);
+    let manifest = json!({
+        "command": command_line(&config, relative),
+        "seed": config.seed,
+        "steps": config.steps,
+        "wall_time_s": wall,
+        "git_revision": revision,
+        "final_validation": last_validation,
+        "weights": ["model.json", "model.mpk"],
+    });
+    afg_game::io::write_atomic(
+        &dir.join("manifest.json"),
+        serde_json::to_string_pretty(&manifest)?.as_bytes(),
+    )?;
+    Ok(())
+}
+
+#[derive(Args)]
+pub struct TrainAllArgs {
+    /// Scales to train.
+    #[arg(long, value_delimiter = ',', default_values_t = [20, 60, 100])]
+    scales: Vec<usize>,
+    /// Retrain models that already exist (their directories are replaced).
+    #[arg(long)]
+    force: bool,
+}
+
+/// Trains every model the tables use, one after the other, with the default budgets.
+pub fn run_all(args: TrainAllArgs) -> Result<()> {
+    for scale in &args.scales {
+        for (net, algo) in [
+            (NetArg::Afgnet, AlgoArg::Ddqn),
+            (NetArg::Afgnet, AlgoArg::Dqn),
+            (NetArg::S2v, AlgoArg::Ddqn),
+        ] {
+            let name = format!(
+                "{}_{}_n{scale}",
+                net.to_possible_value().expect("named").get_name(),
+                algo.to_possible_value().expect("named").get_name()
+            );
+            let dir = crate::repo_root().join("models").join(&name);
+            if dir.join("model.mpk").exists() && !args.force {
+                eprintln!("{name}: exists, skipped (--force retrains)");
+                continue;
+            }
+            if dir.exists() {
+                std::fs::remove_dir_all(&dir)?;
+            }
+            run(TrainArgs {
+                scale: Some(*scale),
+                algo: Some(algo),
+                net: Some(net),
+                steps: None,
+                seed: Some(0),
+                batch: None,
+                lr: None,
+                paper: false,
+                out: Some(dir),
+                resume: None,
+                checkpoint_secs: 300,
+            })?;
+        }
+    }
+    Ok(())
+}
+
+#[derive(Args)]
+pub struct ManifestArgs {
+    /// Finished run directories.
+    #[arg(required = true)]
+    dirs: Vec<PathBuf>,
+}
+
+/// Rewrites the manifests of finished runs.
+pub fn run_manifest(args: ManifestArgs) -> Result<()> {
+    for d in &args.dirs {
+        write_manifest(d)?;
+        println!("wrote {}", d.join("manifest.json").display());
     }
     Ok(())
 }
