@@ -47,6 +47,9 @@ pub struct TrainArgs {
     /// Adam learning rate.
     #[arg(long)]
     lr: Option<f64>,
+    /// n-step returns (1 = the paper's one-step target).
+    #[arg(long)]
+    n_step: Option<usize>,
     /// The paper's settings where ours differ: squared loss, raw rewards, no clipping,
     /// target sync every 1000 steps.
     #[arg(long)]
@@ -100,6 +103,9 @@ impl TrainArgs {
         if let Some(lr) = self.lr {
             c.lr = lr;
         }
+        if let Some(k) = self.n_step {
+            c.n_step = k;
+        }
         if self.paper {
             c.huber = false;
             c.reward_scaling = false;
@@ -118,6 +124,7 @@ impl TrainArgs {
             || self.seed.is_some()
             || self.batch.is_some()
             || self.lr.is_some()
+            || self.n_step.is_some()
             || self.paper
     }
 }
@@ -634,6 +641,9 @@ pub fn command_line(c: &TrainConfig, dir: &Path) -> String {
     if c.lr != default.lr {
         cmd += &format!(" --lr {}", c.lr);
     }
+    if c.n_step != default.n_step {
+        cmd += &format!(" --n-step {}", c.n_step);
+    }
     if !c.huber {
         cmd += " --paper";
     }
@@ -719,6 +729,7 @@ pub fn run_all(args: TrainAllArgs) -> Result<()> {
                 seed: Some(0),
                 batch: None,
                 lr: None,
+                n_step: None,
                 paper: false,
                 out: Some(dir),
                 resume: None,

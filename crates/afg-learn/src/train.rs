@@ -84,6 +84,10 @@ pub struct TrainConfig {
     pub replay_capacity: usize,
     /// Transitions collected before the first gradient step.
     pub warmup: usize,
+    /// Steps of reward summed before bootstrapping (1: the paper's one-step target;
+    /// with γ = 1 an n-step target is `r_t + … + r_{t+n-1} + Q(s_{t+n}, ·)`).
+    #[serde(default = "one")]
+    pub n_step: usize,
     /// Huber loss (δ = 1) instead of the squared error.
     pub huber: bool,
     /// Rewards in units of the instance's mean initial reward (the task-feature unit).
@@ -116,6 +120,7 @@ impl TrainConfig {
             eps_end: 0.05,
             eps_fraction: 0.1,
             parallel_envs: 16,
+            n_step: 1,
             replay_capacity: 50_000,
             warmup: 2_048,
             huber: true,
@@ -149,8 +154,8 @@ impl TrainConfig {
         if !(unit(self.eps_start) && unit(self.eps_end) && unit(self.eps_fraction)) {
             return bad("eps_start, eps_end and eps_fraction must lie in [0, 1]");
         }
-        if self.parallel_envs == 0 || self.validation_instances == 0 {
-            return bad("parallel_envs and validation_instances must be positive");
+        if self.parallel_envs == 0 || self.validation_instances == 0 || self.n_step == 0 {
+            return bad("parallel_envs, validation_instances and n_step must be positive");
         }
         if self.replay_capacity < self.robots || self.warmup > self.replay_capacity {
             return bad("replay_capacity must hold an episode and the warmup");
@@ -174,6 +179,10 @@ impl TrainConfig {
             .generate()
             .expect("checked configuration generates valid instances")
     }
+}
+
+fn one() -> usize {
+    1
 }
 
 /// Seed of training episode `episode` of a run seeded `run_seed`. Datasets use seeds
@@ -469,21 +478,26 @@ impl Trainer {
             let (ep, t) = (&self.replay[k / n], k % n);
             let (robot, task) = (RobotId(t as u32), TaskId(u32::from(ep.record.actions[t])));
             let mut a = ep.assignment_after(t);
-            let reward = ep.instance.score(&a, robot, task, Preference::Balanced)
-                / self.reward_unit(&ep.instance);
             now.push(
                 &ep.graph,
                 &AllocationState::from_assignment(&ep.instance, a.clone()),
                 robot,
             );
             actions.push(i64::from(task.0));
-            rewards.push(reward as f32);
-            next_row.push((t + 1 < n).then(|| {
-                a.set(robot, Some(task));
+            // n-step return: the rewards of steps t..end, then bootstrap from s_end.
+            let end = (t + self.config.n_step).min(n);
+            let mut reward = 0.0;
+            for k in t..end {
+                let (i, j) = (RobotId(k as u32), TaskId(u32::from(ep.record.actions[k])));
+                reward += ep.instance.score(&a, i, j, Preference::Balanced);
+                a.set(i, Some(j));
+            }
+            rewards.push((reward / self.reward_unit(&ep.instance)) as f32);
+            next_row.push((end < n).then(|| {
                 next.push(
                     &ep.graph,
                     &AllocationState::from_assignment(&ep.instance, a),
-                    RobotId(t as u32 + 1),
+                    RobotId(end as u32),
                 );
                 next.num_graphs() - 1
             }));

@@ -149,9 +149,12 @@ fn bad_settings_are_refused() {
     let mut c = base.clone();
     c.eps_end = 1.5;
     assert!(matches!(Trainer::new(c), Err(LearnError::InvalidConfig(_))));
-    let mut c = base;
+    let mut c = base.clone();
     c.lr = 0.0;
     assert!(Trainer::new(c).is_err());
+    let mut c = base;
+    c.n_step = 0;
+    assert!(matches!(Trainer::new(c), Err(LearnError::InvalidConfig(_))));
 }
 
 #[test]
