@@ -204,7 +204,7 @@ pub fn run(args: TrainArgs) -> Result<()> {
             let trainer = Trainer::new(config.clone())?;
             append_log(
                 &dir.join("log.jsonl"),
-                &json!({"event": "start", "config": config, "baselines": baselines(&config)?}),
+                &json!({"event": "start", "config": config, "git_revision": git_revision(), "baselines": baselines(&config)?}),
             )?;
             (dir, trainer)
         }
@@ -624,6 +624,17 @@ pub fn run_report(args: ReportArgs) -> Result<()> {
     Ok(())
 }
 
+/// The checked-out git revision, if there is one.
+fn git_revision() -> Option<String> {
+    std::process::Command::new("git")
+        .args(["rev-parse", "HEAD"])
+        .current_dir(crate::repo_root())
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_owned())
+}
+
 /// The `cargo xtask train` command line that reproduces a configuration.
 pub fn command_line(c: &TrainConfig, dir: &Path) -> String {
     let default = TrainConfig::new(c.robots, c.algo, c.network.clone(), c.steps, c.seed);
@@ -666,13 +677,11 @@ pub fn write_manifest(dir: &Path) -> Result<()> {
         .find(|e| e["event"] == "validation")
         .cloned();
     let wall = events.iter().rev().find_map(|e| e["elapsed_s"].as_f64());
-    let revision = std::process::Command::new("git")
-        .args(["rev-parse", "HEAD"])
-        .current_dir(crate::repo_root())
-        .output()
-        .ok()
-        .filter(|o| o.status.success())
-        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_owned());
+    // The revision the run started from, as its log recorded it.
+    let revision = events
+        .iter()
+        .find(|e| e["event"] == "start")
+        .and_then(|e| e["git_revision"].as_str().map(str::to_owned));
     let relative = dir.strip_prefix(crate::repo_root()).unwrap_or(dir);
     let manifest = json!({
         "command": command_line(&config, relative),
