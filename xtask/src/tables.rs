@@ -314,7 +314,7 @@ fn write_outputs(root: &Path, res: &Results, tables: &str, quick: bool) -> Resul
             crate::train::plot_curves(
                 &dirs,
                 &docs.join("figures").join(format!("fig1_n{n}.svg")),
-                &format!("Fig. 1 — N = {n}: validation welfare (dashed: OPT)"),
+                &format!("Fig. 1 — N = {n}: validation welfare (dashed: classical methods)"),
             )?;
         }
     }

@@ -330,8 +330,8 @@ pub struct Curve {
     pub label: String,
     /// (gradient step, mean validation welfare).
     pub points: Vec<(f64, f64)>,
-    /// Mean OPT welfare on the validation set, if logged.
-    pub opt: Option<f64>,
+    /// Mean welfare of the classical methods on the validation set, as logged.
+    pub baselines: Vec<(String, f64)>,
 }
 
 /// Reads the validation curve from `dir/log.jsonl`.
@@ -339,7 +339,8 @@ pub fn read_curve(dir: &Path) -> Result<Curve> {
     let path = dir.join("log.jsonl");
     let text =
         std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
-    let (mut label, mut points, mut opt) = (dir.display().to_string(), Vec::new(), None);
+    let (mut label, mut points, mut baselines) =
+        (dir.display().to_string(), Vec::new(), Vec::new());
     for (i, line) in text.lines().enumerate() {
         let v: serde_json::Value = serde_json::from_str(line)
             .with_context(|| format!("{}:{}: not JSON", path.display(), i + 1))?;
@@ -356,7 +357,11 @@ pub fn read_curve(dir: &Path) -> Result<Curve> {
                     c["algo"].as_str().unwrap_or("?"),
                     c["robots"]
                 );
-                opt = v["baselines"]["opt"].as_f64();
+                for name in ["opt", "greedy", "nearest", "random"] {
+                    if let Some(w) = v["baselines"][name].as_f64() {
+                        baselines.push((name.to_owned(), w));
+                    }
+                }
             }
             Some("validation") => {
                 points.push((
@@ -367,7 +372,11 @@ pub fn read_curve(dir: &Path) -> Result<Curve> {
             _ => {}
         }
     }
-    Ok(Curve { label, points, opt })
+    Ok(Curve {
+        label,
+        points,
+        baselines,
+    })
 }
 
 /// Draws validation welfare against gradient steps, one line per run, OPT dashed.
@@ -377,10 +386,11 @@ pub fn plot_curves(dirs: &[PathBuf], out: &Path, title: &str) -> Result<()> {
         .iter()
         .map(|d| read_curve(d))
         .collect::<Result<Vec<_>>>()?;
-    let all = curves
-        .iter()
-        .flat_map(|c| c.points.iter().copied())
-        .chain(curves.iter().filter_map(|c| c.opt.map(|o| (0.0, o))));
+    let all = curves.iter().flat_map(|c| c.points.iter().copied()).chain(
+        curves
+            .iter()
+            .flat_map(|c| c.baselines.iter().map(|b| (0.0, b.1))),
+    );
     let (mut x_max, mut y_min, mut y_max) = (1.0f64, f64::INFINITY, f64::NEG_INFINITY);
     for (x, y) in all {
         x_max = x_max.max(x);
@@ -409,7 +419,7 @@ pub fn plot_curves(dirs: &[PathBuf], out: &Path, title: &str) -> Result<()> {
             .x_desc("gradient step")
             .y_desc("validation welfare (mean)")
             .draw()?;
-        for (i, Curve { label, points, opt }) in curves.iter().enumerate() {
+        for (i, Curve { label, points, .. }) in curves.iter().enumerate() {
             let color = Palette99::pick(i).to_rgba();
             chart
                 .draw_series(LineSeries::new(
@@ -420,13 +430,31 @@ pub fn plot_curves(dirs: &[PathBuf], out: &Path, title: &str) -> Result<()> {
                 .legend(move |(x, y)| {
                     PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
                 });
-            if let Some(o) = opt {
-                chart.draw_series(DashedLineSeries::new(
-                    vec![(0.0, *o), (x_max, *o)],
-                    6,
-                    4,
-                    color.stroke_width(1),
-                ))?;
+        }
+        // The classical methods on each distinct validation set, dashed, in greys.
+        let mut drawn: Vec<(String, f64)> = Vec::new();
+        for c in &curves {
+            for (name, w) in &c.baselines {
+                if drawn
+                    .iter()
+                    .any(|(n, v)| n == name && (v - w).abs() < 1e-12)
+                {
+                    continue;
+                }
+                drawn.push((name.clone(), *w));
+                let grey = 40 + 45 * (drawn.len() % 4) as u8;
+                let shade = RGBColor(grey, grey, grey);
+                chart
+                    .draw_series(DashedLineSeries::new(
+                        vec![(0.0, *w), (x_max, *w)],
+                        6,
+                        4,
+                        shade.stroke_width(1),
+                    ))?
+                    .label(format!("{name}, {w:.2}"))
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], shade.stroke_width(1))
+                    });
             }
         }
         chart
@@ -444,7 +472,7 @@ pub fn run_plot(args: PlotArgs) -> Result<()> {
     plot_curves(
         &args.dirs,
         &args.out,
-        "Validation welfare during training (dashed: OPT)",
+        "Validation welfare during training (dashed: classical methods)",
     )?;
     println!("wrote {}", args.out.display());
     Ok(())
