@@ -26,6 +26,54 @@ pub fn feature_scale(instance: &Instance) -> f64 {
     if mean > 0.0 { mean } else { 1.0 }
 }
 
+/// Writes column `task` of the task features μ (row-major `[N, M]`, see the module
+/// docs) for `assignment`, in the unit `scale` (normally [`feature_scale`]). O(N): the
+/// value part F_j(m+1)/(m+1) takes only two values, m = n_j for robots outside j and
+/// m = n_j - 1 for its members.
+///
+/// [`AllocationState`] keeps μ up to date with this; a caller that keeps only an
+/// [`Assignment`] can rebuild μ whenever it needs it.
+///
+/// # Panics
+/// If `mu` is shorter than N·M or `task` is out of range.
+///
+/// # Examples
+/// ```
+/// use afg_game::GeneratorConfig;
+/// use afg_graph::{AllocationState, feature_scale, write_task_column};
+/// let inst = GeneratorConfig::paper(8, 3, 1).generate()?;
+/// let state = AllocationState::new(&inst);
+/// let mut mu = vec![0.0; 8 * 3];
+/// for j in inst.task_ids() {
+///     write_task_column(&inst, state.assignment(), feature_scale(&inst), j, &mut mu);
+/// }
+/// assert_eq!(mu, state.mu_matrix());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn write_task_column(
+    instance: &Instance,
+    assignment: &Assignment,
+    scale: f64,
+    task: TaskId,
+    mu: &mut [f32],
+) {
+    let m = instance.num_tasks();
+    let n_j = assignment.size(task);
+    let cap = instance.capacity(task);
+    let share = |others: usize| instance.coalition_value(task, others + 1) / (others + 1) as f64;
+    let (outside, inside) = (share(n_j), if n_j > 0 { share(n_j - 1) } else { 0.0 });
+    for i in instance.robot_ids() {
+        let member = assignment.task_of(i) == Some(task);
+        let others = n_j - usize::from(member);
+        mu[i.index() * m + task.index()] = if others >= cap {
+            FULL_TASK_FEATURE
+        } else {
+            let value = if member { inside } else { outside };
+            ((value - instance.cost(i, task)) / scale) as f32
+        };
+    }
+}
+
 /// An assignment in progress with its μ features kept up to date.
 ///
 /// # Examples
@@ -137,23 +185,13 @@ impl<'a> AllocationState<'a> {
         &self.mu
     }
 
-    /// Recomputes column j of μ. The value part F_j(m+1)/(m+1) takes only two values:
-    /// m = n_j for robots outside j and m = n_j - 1 for its members.
     fn refresh_column(&mut self, task: TaskId) {
-        let (inst, m) = (self.instance, self.instance.num_tasks());
-        let n_j = self.assignment.size(task);
-        let cap = inst.capacity(task);
-        let share = |others: usize| inst.coalition_value(task, others + 1) / (others + 1) as f64;
-        let (outside, inside) = (share(n_j), if n_j > 0 { share(n_j - 1) } else { 0.0 });
-        for i in inst.robot_ids() {
-            let member = self.assignment.task_of(i) == Some(task);
-            let others = n_j - usize::from(member);
-            self.mu[i.index() * m + task.index()] = if others >= cap {
-                FULL_TASK_FEATURE
-            } else {
-                let value = if member { inside } else { outside };
-                ((value - inst.cost(i, task)) / self.scale) as f32
-            };
-        }
+        write_task_column(
+            self.instance,
+            &self.assignment,
+            self.scale,
+            task,
+            &mut self.mu,
+        );
     }
 }

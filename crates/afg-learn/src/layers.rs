@@ -32,6 +32,30 @@ impl Activation {
             Activation::Tanh => tanh(x),
         }
     }
+
+    /// σ on one value, as [`Activation::apply`] computes it element-wise.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_learn::Activation;
+    /// assert_eq!(Activation::Relu.scalar(-2.0), 0.0);
+    /// assert_eq!(Activation::LeakyRelu.scalar(-2.0), -0.02);
+    /// assert_eq!(Activation::Tanh.scalar(0.0), 0.0);
+    /// ```
+    #[inline]
+    pub fn scalar(self, x: f32) -> f32 {
+        match self {
+            Activation::Relu => x.max(0.0),
+            Activation::LeakyRelu => {
+                if x >= 0.0 {
+                    x
+                } else {
+                    0.01 * x
+                }
+            }
+            Activation::Tanh => x.tanh(),
+        }
+    }
 }
 
 /// A linear layer `[.., d_in] → [.., d_out]` with weights and bias drawn uniformly from

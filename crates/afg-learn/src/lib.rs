@@ -8,6 +8,7 @@
 
 mod afgnet;
 mod env;
+mod fast;
 mod layers;
 mod network;
 mod policy;
@@ -19,6 +20,7 @@ mod train;
 
 pub use afgnet::{AfgLayer, AfgNet, AfgNetConfig};
 pub use env::Env;
+pub use fast::{FastPolicy, FastRollout, FastRolloutOutcome};
 pub use layers::{Activation, QHead};
 pub use network::{NetworkConfig, QNetwork};
 pub use policy::{LearnError, LearnedPolicy, load_network, save_network};

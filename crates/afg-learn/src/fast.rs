@@ -1,0 +1,717 @@
+//! The fast inference path: a trained AFGNet or S2V network exported from Burn into
+//! plain row-major matrices, and greedy rollouts that do the per-step work with large
+//! matrix products (faer) and keep everything that a step does not change.
+//!
+//! The Burn network stays the source of truth: [`FastPolicy::from_network`] copies its
+//! weights, and the parity tests check that both paths give the same Q values and the
+//! same actions on every step of full rollouts.
+//!
+//! # What one evaluation costs (AFGNet, N robots, width d, L layers)
+//!
+//! A robot's move changes its own ν (so the neighbour messages η of the robots around
+//! it) and one column of μ for *every* robot, so every δ changes and a full pass is
+//! needed for exact Q values. The pass does, per layer, one `[N, d] × [d, 2d]` product
+//! (`δ [θ6a | θ5a]`, the weighted neighbour mean applied after the product) and one
+//! `[N, d] × [d, d]` product (`σ(θ6 …) θ5b`): O(N·d²). Cached between passes:
+//! - `σ(θ1 ν + b1)` as a table over the M + 1 possible ν;
+//! - per layer, `θ6b η_i + b6`, recomputed only for the neighbours of robots that moved
+//!   (η depends on the neighbours' ν and the edge weights only);
+//! - for S2V, the edge term `θ3 Σ_k relu(θ4 w_ik) + b3`, which never changes.
+//!
+//! μ is rebuilt from the assignment at each pass (O(N·M), negligible next to the
+//! products), and the θ2 pre-activations are recomputed from it rather than shifted by
+//! the rank-1 update `Δμ_ij θ2[j]`: the shift would save O(N·M·d) of an O(N·d²) pass
+//! (under 3 % at M = 5, d = 64) while accumulating rounding drift over N steps.
+//!
+//! **Block rollout.** With block size B, one pass serves B consecutive robots: each
+//! takes its greedy action on the Q values of the block's start state, while the
+//! action mask (capacities) and the assignment stay exact. B = 1 is the exact rollout;
+//! N/B passes replace N.
+//!
+//! Nothing inside the step loop allocates; memory is O(N·(d + M) + edges).
+
+use std::ops::Range;
+use std::time::{Duration, Instant};
+
+use afg_game::{Assignment, Instance, RobotId, TaskId};
+use afg_graph::{RobotGraph, feature_scale, write_task_column};
+use burn::nn::Linear;
+use burn::tensor::backend::Backend;
+use faer::linalg::matmul::matmul;
+use faer::{Accum, MatMut, MatRef, Par};
+
+use crate::layers::QHead;
+use crate::{Activation, LearnError, NetworkConfig, QNetwork, masked_argmax};
+
+/// A linear layer as a row-major `[inputs, outputs]` matrix and a bias (`x W + b`,
+/// Burn's convention).
+#[derive(Clone, Debug, PartialEq)]
+struct Dense {
+    weight: Vec<f32>,
+    bias: Vec<f32>,
+    inputs: usize,
+    outputs: usize,
+}
+
+fn to_vec<B: Backend, const D: usize>(t: burn::tensor::Tensor<B, D>) -> Vec<f32> {
+    t.into_data()
+        .convert::<f32>()
+        .to_vec()
+        .expect("float parameters convert to f32")
+}
+
+impl Dense {
+    fn from_burn<B: Backend>(linear: &Linear<B>) -> Self {
+        let [inputs, outputs] = linear.weight.val().dims();
+        let bias = linear
+            .bias
+            .as_ref()
+            .map_or_else(|| vec![0.0; outputs], |b| to_vec(b.val()));
+        Dense {
+            weight: to_vec(linear.weight.val()),
+            bias,
+            inputs,
+            outputs,
+        }
+    }
+
+    /// The rows `rows` of the weight (the part of the layer that reads those inputs),
+    /// with a zero bias.
+    fn rows(&self, rows: Range<usize>) -> Dense {
+        Dense {
+            weight: self.weight[rows.start * self.outputs..rows.end * self.outputs].to_vec(),
+            bias: vec![0.0; self.outputs],
+            inputs: rows.len(),
+            outputs: self.outputs,
+        }
+    }
+
+    /// Row `r` of the weight: the layer's response to input `r`.
+    fn row(&self, r: usize) -> &[f32] {
+        &self.weight[r * self.outputs..(r + 1) * self.outputs]
+    }
+
+    /// `out = x W` for a row-major `[rows, inputs]` x, into `out` (`[rows, outputs]`,
+    /// any row stride via `MatMut`), replacing or adding.
+    fn product_into(&self, x: MatRef<'_, f32>, out: MatMut<'_, f32>, accum: Accum) {
+        let w = MatRef::from_row_major_slice(&self.weight, self.inputs, self.outputs);
+        matmul(out, accum, x, w, 1.0, Par::Seq);
+    }
+
+    /// `out = b + x W` for one input row (a vector–matrix product).
+    fn apply_row(&self, x: &[f32], out: &mut [f32]) {
+        out.copy_from_slice(&self.bias);
+        for (&xi, w) in x.iter().zip(self.weight.chunks_exact(self.outputs)) {
+            if xi != 0.0 {
+                for (o, &wi) in out.iter_mut().zip(w) {
+                    *o += xi * wi;
+                }
+            }
+        }
+    }
+}
+
+/// Two weight matrices side by side: `[A | B]`, `[inputs, a + b]`.
+fn side_by_side(a: &Dense, b: &Dense) -> Dense {
+    assert_eq!(a.inputs, b.inputs);
+    let mut weight = Vec::with_capacity(a.inputs * (a.outputs + b.outputs));
+    for r in 0..a.inputs {
+        weight.extend_from_slice(a.row(r));
+        weight.extend_from_slice(b.row(r));
+    }
+    Dense {
+        weight,
+        bias: vec![0.0; a.outputs + b.outputs],
+        inputs: a.inputs,
+        outputs: a.outputs + b.outputs,
+    }
+}
+
+/// The Q head: `Q = out(σ(hidden [σ(θ7 pooled) || δ_actor]))`.
+#[derive(Clone, Debug, PartialEq)]
+struct Head {
+    theta7: Dense,
+    /// `hidden` rows for `σ(θ7 pooled)`, with hidden's bias.
+    hidden_pooled: Dense,
+    /// `hidden` rows for the actor's embedding.
+    hidden_actor: Dense,
+    output: Dense,
+    activation: Activation,
+}
+
+impl Head {
+    fn from_burn<B: Backend>(head: &QHead<B>, activation: Activation) -> Self {
+        let hidden = Dense::from_burn(&head.hidden);
+        let d = hidden.outputs;
+        let mut hidden_pooled = hidden.rows(0..d);
+        hidden_pooled.bias = hidden.bias.clone();
+        Head {
+            theta7: Dense::from_burn(&head.theta7),
+            hidden_pooled,
+            hidden_actor: hidden.rows(d..2 * d),
+            output: Dense::from_burn(&head.output),
+            activation,
+        }
+    }
+}
+
+/// AFGNet's layer ℓ, split by the inputs each part reads.
+#[derive(Clone, Debug, PartialEq)]
+struct FastAfgLayer {
+    /// θ4's row for the edge weight w_ik.
+    edge_weight: Vec<f32>,
+    /// θ4's rows for ν_k, with θ4's bias.
+    edge_task: Dense,
+    /// θ3's rows for the mean message, with θ3's bias.
+    eta_message: Dense,
+    /// θ3's row for |N_i|.
+    eta_degree: Vec<f32>,
+    /// θ6's rows for η, with θ6's bias: the cached term `θ6b η_i + b6`.
+    eta_term: Dense,
+    /// `[θ6a | θ5a]`: θ6's rows for the weighted neighbour mean, θ5's rows for δ.
+    mix: Dense,
+    /// θ5's rows for `σ(θ6 …)`.
+    inner: Dense,
+    /// θ5's bias.
+    next_bias: Vec<f32>,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+struct FastAfgNet {
+    /// `σ(θ1 ν + b1)` for ν = 0 (row 0) and ν = e_j (row 1 + j).
+    robot_table: Vec<f32>,
+    /// θ2 with its bias.
+    theta2: Dense,
+    layers: Vec<FastAfgLayer>,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+struct FastS2v {
+    /// `θ1 ν + b1` for ν = 0 (row 0) and ν = e_j (row 1 + j).
+    robot_table: Vec<f32>,
+    theta2: Dense,
+    theta3: Dense,
+    theta4: Dense,
+    iterations: usize,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+enum FastNet {
+    AfgNet(FastAfgNet),
+    S2v(FastS2v),
+}
+
+/// `table[0] = f(b)`, `table[1 + j] = f(b + W[j])`: a layer's output for every one-hot
+/// input.
+fn one_hot_table(layer: &Dense, f: impl Fn(f32) -> f32) -> Vec<f32> {
+    let mut table: Vec<f32> = layer.bias.iter().map(|&b| f(b)).collect();
+    for j in 0..layer.inputs {
+        table.extend(
+            layer
+                .row(j)
+                .iter()
+                .zip(&layer.bias)
+                .map(|(&w, &b)| f(b + w)),
+        );
+    }
+    table
+}
+
+/// A trained Q network in the form the fast rollout uses (see the module docs).
+///
+/// # Examples
+/// ```
+/// use afg_game::GeneratorConfig;
+/// use afg_graph::{GraphKind, RobotGraph};
+/// use afg_learn::{FastPolicy, NetworkConfig};
+/// let config = NetworkConfig::afgnet(5, 0);
+/// let network = config.init::<afg_learn::InferBackend>(&Default::default());
+/// let fast = FastPolicy::from_network(&config, &network);
+/// let inst = GeneratorConfig::paper(200, 5, 1).generate()?;
+/// let graph = RobotGraph::build(inst.robots(), GraphKind::default())?;
+/// let exact = fast.rollout(&inst, &graph, 1)?;
+/// let blocked = fast.rollout(&inst, &graph, 20)?; // 10 passes instead of 200
+/// assert!(exact.assignment.is_complete() && blocked.assignment.is_complete());
+/// assert_eq!(blocked.passes, 10);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct FastPolicy {
+    net: FastNet,
+    head: Head,
+    tasks: usize,
+    hidden: usize,
+}
+
+/// What a fast rollout returns.
+#[derive(Clone, Debug)]
+pub struct FastRolloutOutcome {
+    /// The complete assignment.
+    pub assignment: Assignment,
+    /// Full network evaluations (⌈N / B⌉).
+    pub passes: usize,
+    /// Time spent in the network passes.
+    pub network_time: Duration,
+}
+
+impl FastPolicy {
+    /// Copies the weights of `network`, built from `config`.
+    ///
+    /// # Panics
+    /// If `network` is not the kind of network `config` describes.
+    pub fn from_network<B: Backend>(config: &NetworkConfig, network: &QNetwork<B>) -> Self {
+        match (config, network) {
+            (NetworkConfig::AfgNet(c), QNetwork::AfgNet(n)) => {
+                let s = c.activation;
+                let d = c.hidden;
+                let layers = n
+                    .layers
+                    .iter()
+                    .map(|l| {
+                        let theta4 = Dense::from_burn(&l.theta4);
+                        let theta3 = Dense::from_burn(&l.theta3);
+                        let theta6 = Dense::from_burn(&l.theta6);
+                        let theta5 = Dense::from_burn(&l.theta5);
+                        let mut edge_task = theta4.rows(1..theta4.inputs);
+                        edge_task.bias = theta4.bias.clone();
+                        let mut eta_message = theta3.rows(0..d);
+                        eta_message.bias = theta3.bias.clone();
+                        let mut eta_term = theta6.rows(d..2 * d);
+                        eta_term.bias = theta6.bias.clone();
+                        FastAfgLayer {
+                            edge_weight: theta4.row(0).to_vec(),
+                            edge_task,
+                            eta_message,
+                            eta_degree: theta3.row(d).to_vec(),
+                            eta_term,
+                            mix: side_by_side(&theta6.rows(0..d), &theta5.rows(0..d)),
+                            inner: theta5.rows(d..2 * d),
+                            next_bias: theta5.bias.clone(),
+                        }
+                    })
+                    .collect();
+                FastPolicy {
+                    net: FastNet::AfgNet(FastAfgNet {
+                        robot_table: one_hot_table(&Dense::from_burn(&n.theta1), |x| s.scalar(x)),
+                        theta2: Dense::from_burn(&n.theta2),
+                        layers,
+                    }),
+                    head: Head::from_burn(&n.head, s),
+                    tasks: c.tasks,
+                    hidden: d,
+                }
+            }
+            (NetworkConfig::S2v(c), QNetwork::S2v(n)) => FastPolicy {
+                net: FastNet::S2v(FastS2v {
+                    robot_table: one_hot_table(&Dense::from_burn(&n.theta1), |x| x),
+                    theta2: Dense::from_burn(&n.theta2),
+                    theta3: Dense::from_burn(&n.theta3),
+                    theta4: Dense::from_burn(&n.theta4),
+                    iterations: c.iterations,
+                }),
+                head: Head::from_burn(&n.head, c.activation),
+                tasks: c.tasks,
+                hidden: c.hidden,
+            },
+            _ => panic!("the network is not the kind its configuration describes"),
+        }
+    }
+
+    /// Number of tasks M the network was built for.
+    pub fn tasks(&self) -> usize {
+        self.tasks
+    }
+
+    /// Greedy rollout in index order with one network pass per block of `block`
+    /// robots (`block = 1`: exact, one pass per robot).
+    ///
+    /// # Errors
+    /// [`LearnError::InvalidAction`] if the instance's M differs from the network's or
+    /// the graph belongs to another instance; [`LearnError::InvalidConfig`] for
+    /// `block = 0`.
+    pub fn rollout(
+        &self,
+        instance: &Instance,
+        graph: &RobotGraph,
+        block: usize,
+    ) -> Result<FastRolloutOutcome, LearnError> {
+        if block == 0 {
+            return Err(LearnError::InvalidConfig(
+                "block size must be at least 1".into(),
+            ));
+        }
+        let mut run = FastRollout::new(self, instance, graph)?;
+        let n = instance.num_robots();
+        let mut q = vec![0.0f32; self.tasks];
+        let mut mask = vec![false; self.tasks];
+        let mut passes = 0;
+        let mut network_time = Duration::ZERO;
+        for start in (0..n).step_by(block) {
+            let t = Instant::now();
+            run.evaluate();
+            network_time += t.elapsed();
+            passes += 1;
+            for robot in (start..(start + block).min(n)).map(|r| RobotId(r as u32)) {
+                run.q_values(robot, &mut q);
+                run.action_mask(robot, &mut mask);
+                let task = masked_argmax(&q, &mask).ok_or_else(|| {
+                    LearnError::InvalidAction(format!("no task has room for robot {robot}"))
+                })?;
+                run.assign(robot, TaskId(task as u32));
+            }
+        }
+        Ok(FastRolloutOutcome {
+            assignment: run.assignment,
+            passes,
+            network_time,
+        })
+    }
+}
+
+/// A rollout in progress on the fast path: the assignment, the cached terms and the
+/// buffers of one pass. Drive it with [`FastRollout::evaluate`],
+/// [`FastRollout::q_values`] and [`FastRollout::assign`], or let
+/// [`FastPolicy::rollout`] do it.
+#[derive(Debug)]
+pub struct FastRollout<'a> {
+    policy: &'a FastPolicy,
+    instance: &'a Instance,
+    graph: &'a RobotGraph,
+    assignment: Assignment,
+    scale: f64,
+    /// Task features μ, `[N, M]`.
+    mu: Vec<f32>,
+    /// Node embeddings of the last pass, `[N, d]`.
+    delta: Vec<f32>,
+    /// `[N, 2d]` products.
+    wide: Vec<f32>,
+    /// `[N, d]` scratch.
+    scratch: Vec<f32>,
+    /// AFGNet: per layer, `θ6b η_i + b6` (`[N, d]` each). S2V: the edge term `[N, d]`.
+    cached: Vec<Vec<f32>>,
+    /// Robots whose ν changed since the last pass.
+    moved: Vec<RobotId>,
+    /// Per robot, the pass at which its cache was last refreshed (dedupes `moved`).
+    refreshed_at: Vec<usize>,
+    passes: usize,
+    /// `b_hidden + σ(θ7 pooled) W_hidden,pooled` of the last pass, `[d]`.
+    head_state: Vec<f32>,
+    /// `[d]` scratch vectors.
+    vec_a: Vec<f32>,
+    vec_b: Vec<f32>,
+}
+
+impl<'a> FastRollout<'a> {
+    /// Starts a rollout on `instance` with every robot unassigned.
+    ///
+    /// # Errors
+    /// [`LearnError::InvalidAction`] if M differs from the network's or the graph has
+    /// another number of nodes.
+    pub fn new(
+        policy: &'a FastPolicy,
+        instance: &'a Instance,
+        graph: &'a RobotGraph,
+    ) -> Result<Self, LearnError> {
+        let (n, m, d) = (instance.num_robots(), instance.num_tasks(), policy.hidden);
+        if m != policy.tasks {
+            return Err(LearnError::InvalidAction(format!(
+                "the network was built for M = {} tasks, the instance has {m}",
+                policy.tasks
+            )));
+        }
+        if graph.num_nodes() != n {
+            return Err(LearnError::InvalidAction(format!(
+                "the graph has {} nodes, the instance {n} robots",
+                graph.num_nodes()
+            )));
+        }
+        let mut run = FastRollout {
+            policy,
+            instance,
+            graph,
+            assignment: Assignment::unassigned(n, m),
+            scale: feature_scale(instance),
+            mu: vec![0.0; n * m],
+            delta: vec![0.0; n * d],
+            wide: vec![0.0; n * 2 * d],
+            scratch: vec![0.0; n * d],
+            cached: Vec::new(),
+            moved: Vec::new(),
+            refreshed_at: vec![0; n],
+            passes: 0,
+            head_state: vec![0.0; d],
+            vec_a: vec![0.0; d],
+            vec_b: vec![0.0; d],
+        };
+        run.cached = match &policy.net {
+            FastNet::AfgNet(net) => {
+                let mut cached = vec![vec![0.0; n * d]; net.layers.len()];
+                for i in instance.robot_ids() {
+                    run.eta_terms(net, i, &mut cached);
+                }
+                cached
+            }
+            FastNet::S2v(net) => vec![run.s2v_edge_term(net)],
+        };
+        Ok(run)
+    }
+
+    /// The assignment so far.
+    pub fn assignment(&self) -> &Assignment {
+        &self.assignment
+    }
+
+    /// Puts `robot` in `task` (the network is not re-evaluated until
+    /// [`FastRollout::evaluate`]).
+    ///
+    /// # Panics
+    /// If the task has no room for the robot.
+    pub fn assign(&mut self, robot: RobotId, task: TaskId) {
+        assert!(
+            self.assignment.has_room(self.instance, robot, task),
+            "task {task} is full for robot {robot}"
+        );
+        self.assignment.set(robot, Some(task));
+        self.moved.push(robot);
+    }
+
+    /// Which tasks have room for `robot`, into `mask` (length M).
+    pub fn action_mask(&self, robot: RobotId, mask: &mut [bool]) {
+        for (j, ok) in mask.iter_mut().enumerate() {
+            *ok = self
+                .assignment
+                .has_room(self.instance, robot, TaskId(j as u32));
+        }
+    }
+
+    /// Evaluates the network on the current assignment (one full pass; see the module
+    /// docs for what is cached).
+    pub fn evaluate(&mut self) {
+        self.passes += 1;
+        let (n, m, d) = (
+            self.instance.num_robots(),
+            self.instance.num_tasks(),
+            self.policy.hidden,
+        );
+        let policy = self.policy;
+        match &policy.net {
+            FastNet::AfgNet(net) => {
+                let mut cached = std::mem::take(&mut self.cached);
+                let mut moved = std::mem::take(&mut self.moved);
+                for &a in &moved {
+                    for &k in self.graph.neighbours(a) {
+                        if self.refreshed_at[k as usize] != self.passes {
+                            self.refreshed_at[k as usize] = self.passes;
+                            self.eta_terms(net, RobotId(k), &mut cached);
+                        }
+                    }
+                }
+                moved.clear();
+                self.moved = moved;
+                self.cached = cached;
+                for j in self.instance.task_ids() {
+                    write_task_column(self.instance, &self.assignment, self.scale, j, &mut self.mu);
+                }
+                self.afgnet_pass(net, n, m, d);
+            }
+            FastNet::S2v(net) => {
+                self.moved.clear();
+                self.s2v_pass(net, n, d);
+            }
+        }
+        self.head_pass(n, d);
+    }
+
+    /// Q values of `robot` acting in the state of the last [`FastRollout::evaluate`],
+    /// into `q` (length M).
+    pub fn q_values(&mut self, robot: RobotId, q: &mut [f32]) {
+        let head = &self.policy.head;
+        let d = self.policy.hidden;
+        let s = head.activation;
+        let row = &self.delta[robot.index() * d..(robot.index() + 1) * d];
+        head.hidden_actor.apply_row(row, &mut self.vec_a);
+        for (h, &g) in self.vec_a.iter_mut().zip(&self.head_state) {
+            *h = s.scalar(*h + g);
+        }
+        head.output.apply_row(&self.vec_a, q);
+    }
+
+    fn task_index(&self, robot: usize) -> usize {
+        self.assignment
+            .task_of(RobotId(robot as u32))
+            .map_or(0, |j| 1 + j.index())
+    }
+
+    /// Refreshes `θ6b η_i + b6` of robot `i` in every layer (eq. 5).
+    fn eta_terms(&mut self, net: &FastAfgNet, i: RobotId, cached: &mut [Vec<f32>]) {
+        let d = self.policy.hidden;
+        let s = self.policy.head.activation;
+        let neighbours = self.graph.neighbours(i);
+        let weights = self.graph.weights(i);
+        let degree = neighbours.len();
+        let inv_degree = 1.0 / degree.max(1) as f32;
+        for (layer, cache) in net.layers.iter().zip(cached.iter_mut()) {
+            // mean_k σ(θ4 [w_ik || ν_k])
+            let message = &mut self.vec_a;
+            message.fill(0.0);
+            for (&k, &w) in neighbours.iter().zip(weights) {
+                let task = self.assignment.task_of(RobotId(k));
+                let w = w as f32;
+                let base = &layer.edge_task.bias;
+                match task {
+                    Some(j) => {
+                        let row = layer.edge_task.row(j.index());
+                        for c in 0..d {
+                            message[c] += s.scalar(w * layer.edge_weight[c] + row[c] + base[c]);
+                        }
+                    }
+                    None => {
+                        for c in 0..d {
+                            message[c] += s.scalar(w * layer.edge_weight[c] + base[c]);
+                        }
+                    }
+                }
+            }
+            for x in message.iter_mut() {
+                *x *= inv_degree;
+            }
+            // η = σ(θ3 [message || |N_i|])
+            layer.eta_message.apply_row(message, &mut self.vec_b);
+            for (e, &wd) in self.vec_b.iter_mut().zip(&layer.eta_degree) {
+                *e = s.scalar(*e + degree as f32 * wd);
+            }
+            layer
+                .eta_term
+                .apply_row(&self.vec_b, &mut cache[i.index() * d..(i.index() + 1) * d]);
+        }
+    }
+
+    fn afgnet_pass(&mut self, net: &FastAfgNet, n: usize, m: usize, d: usize) {
+        let s = self.policy.head.activation;
+        // eq. 4: δ_i = σ(θ1 ν_i) + σ(θ2 μ_i)
+        for i in 0..n {
+            let t = self.task_index(i);
+            let own = &net.robot_table[t * d..(t + 1) * d];
+            let out = &mut self.delta[i * d..(i + 1) * d];
+            net.theta2.apply_row(&self.mu[i * m..(i + 1) * m], out);
+            for (o, &r) in out.iter_mut().zip(own) {
+                *o = s.scalar(*o) + r;
+            }
+        }
+        for (layer, cache) in net.layers.iter().zip(&self.cached) {
+            // wide = δ [θ6a | θ5a]
+            layer.mix.product_into(
+                MatRef::from_row_major_slice(&self.delta, n, d),
+                MatMut::from_row_major_slice_mut(&mut self.wide, n, 2 * d),
+                Accum::Replace,
+            );
+            // inner_i = σ(mean_k w_ik (δ_k θ6a) + θ6b η_i + b6)    (eqs. 6–7)
+            for i in 0..n {
+                let robot = RobotId(i as u32);
+                let neighbours = self.graph.neighbours(robot);
+                let inv_degree = 1.0 / neighbours.len().max(1) as f32;
+                let acc = &mut self.scratch[i * d..(i + 1) * d];
+                acc.fill(0.0);
+                for (&k, &w) in neighbours.iter().zip(self.graph.weights(robot)) {
+                    let w = w as f32;
+                    let row = &self.wide[k as usize * 2 * d..k as usize * 2 * d + d];
+                    for (a, &x) in acc.iter_mut().zip(row) {
+                        *a += x * w;
+                    }
+                }
+                for (a, &e) in acc.iter_mut().zip(&cache[i * d..(i + 1) * d]) {
+                    *a = s.scalar(*a * inv_degree + e);
+                }
+            }
+            // wide[:, d..] += inner θ5b;  δ' = σ(wide[:, d..] + b5)     (eq. 8)
+            layer.inner.product_into(
+                MatRef::from_row_major_slice(&self.scratch, n, d),
+                MatMut::from_row_major_slice_mut(&mut self.wide, n, 2 * d).subcols_mut(d, d),
+                Accum::Add,
+            );
+            for i in 0..n {
+                let pre = &self.wide[i * 2 * d + d..(i + 1) * 2 * d];
+                for ((o, &p), &b) in self.delta[i * d..(i + 1) * d]
+                    .iter_mut()
+                    .zip(pre)
+                    .zip(&layer.next_bias)
+                {
+                    *o = s.scalar(p + b);
+                }
+            }
+        }
+    }
+
+    /// S2V's state-independent edge term `θ3 Σ_k relu(θ4 w_ik) + b3`, `[N, d]`.
+    fn s2v_edge_term(&mut self, net: &FastS2v) -> Vec<f32> {
+        let d = self.policy.hidden;
+        let n = self.instance.num_robots();
+        let mut out = vec![0.0; n * d];
+        for i in self.instance.robot_ids() {
+            self.vec_a.fill(0.0);
+            for &w in self.graph.weights(i) {
+                for c in 0..d {
+                    self.vec_a[c] +=
+                        (w as f32 * net.theta4.weight[c] + net.theta4.bias[c]).max(0.0);
+                }
+            }
+            net.theta3
+                .apply_row(&self.vec_a, &mut out[i.index() * d..(i.index() + 1) * d]);
+        }
+        out
+    }
+
+    fn s2v_pass(&mut self, net: &FastS2v, n: usize, d: usize) {
+        // μ⁰ = 0;  μ^{t+1}_i = relu(θ1 ν_i + edge_i + θ2 Σ_{k ∈ N(i)} μ^t_k + b2)
+        self.delta.fill(0.0);
+        for _ in 0..net.iterations {
+            for i in 0..n {
+                let acc = &mut self.scratch[i * d..(i + 1) * d];
+                acc.fill(0.0);
+                for &k in self.graph.neighbours(RobotId(i as u32)) {
+                    let row = &self.delta[k as usize * d..(k as usize + 1) * d];
+                    for (a, &x) in acc.iter_mut().zip(row) {
+                        *a += x;
+                    }
+                }
+            }
+            let wide = &mut self.wide[..n * d];
+            net.theta2.product_into(
+                MatRef::from_row_major_slice(&self.scratch, n, d),
+                MatMut::from_row_major_slice_mut(wide, n, d),
+                Accum::Replace,
+            );
+            for i in 0..n {
+                let t = self.task_index(i);
+                let own = &net.robot_table[t * d..(t + 1) * d];
+                let edge = &self.cached[0][i * d..(i + 1) * d];
+                for c in 0..d {
+                    self.delta[i * d + c] =
+                        (own[c] + edge[c] + self.wide[i * d + c] + net.theta2.bias[c]).max(0.0);
+                }
+            }
+        }
+    }
+
+    /// Mean pooling and the pooled half of the head (eq. 9).
+    fn head_pass(&mut self, n: usize, d: usize) {
+        let head = &self.policy.head;
+        let s = head.activation;
+        self.vec_b.fill(0.0);
+        for row in self.delta.chunks_exact(d) {
+            for (p, &x) in self.vec_b.iter_mut().zip(row) {
+                *p += x;
+            }
+        }
+        let inv_n = 1.0 / n as f32;
+        for p in &mut self.vec_b {
+            *p *= inv_n;
+        }
+        head.theta7.apply_row(&self.vec_b, &mut self.vec_a);
+        for x in &mut self.vec_a {
+            *x = s.scalar(*x);
+        }
+        head.hidden_pooled
+            .apply_row(&self.vec_a, &mut self.head_state);
+    }
+}

@@ -1,0 +1,183 @@
+//! The fast inference path against the Burn network: same Q values, same actions.
+
+use std::path::{Path, PathBuf};
+
+use afg_game::io::read_dataset;
+use afg_game::{GeneratorConfig, Instance, TaskId};
+use afg_graph::{AllocationState, GraphBatch, GraphKind, RobotGraph};
+use afg_learn::{
+    Activation, FastPolicy, FastRollout, GraphTensors, InferBackend, LearnError, NetworkConfig,
+    QNetwork, greedy_rollouts, load_network, masked_argmax,
+};
+
+type B = InferBackend;
+
+fn repo(path: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .join(path)
+}
+
+fn dataset(n: usize) -> Vec<Instance> {
+    read_dataset(&repo(&format!("datasets/n{n}.jsonl"))).unwrap()
+}
+
+/// Steps both paths through a full exact rollout: at every step the Burn Q values
+/// and the fast ones agree within 1e-4 and both choose the same task. Returns the
+/// largest difference seen.
+fn assert_parity(config: &NetworkConfig, network: &QNetwork<B>, inst: &Instance) -> f32 {
+    let device = Default::default();
+    let m = inst.num_tasks();
+    let fast = FastPolicy::from_network(config, network);
+    let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
+    let mut run = FastRollout::new(&fast, inst, &graph).unwrap();
+    let mut state = AllocationState::new(inst);
+    let (mut q_fast, mut mask) = (vec![0.0; m], vec![false; m]);
+    let mut worst = 0.0f32;
+    for robot in inst.robot_ids() {
+        let mut batch = GraphBatch::new(m);
+        batch.push(&graph, &state, robot);
+        let q_burn: Vec<f32> = network
+            .forward(&GraphTensors::new(&batch, &device))
+            .into_data()
+            .to_vec()
+            .unwrap();
+        run.evaluate();
+        run.q_values(robot, &mut q_fast);
+        run.action_mask(robot, &mut mask);
+        assert_eq!(mask, batch.mask, "robot {robot}");
+        for (a, b) in q_burn.iter().zip(&q_fast) {
+            let diff = (a - b).abs();
+            assert!(
+                diff <= 1e-4 * a.abs().max(1.0),
+                "robot {robot}: Burn {q_burn:?}, fast {q_fast:?}"
+            );
+            worst = worst.max(diff);
+        }
+        let chosen = masked_argmax(&q_burn, &batch.mask).unwrap();
+        assert_eq!(
+            masked_argmax(&q_fast, &mask),
+            Some(chosen),
+            "robot {robot}: Burn {q_burn:?}, fast {q_fast:?}"
+        );
+        state.assign(robot, TaskId(chosen as u32));
+        run.assign(robot, TaskId(chosen as u32));
+    }
+    assert_eq!(run.assignment(), state.assignment());
+    worst
+}
+
+#[test]
+fn fast_path_matches_burn_with_random_weights_on_the_datasets() {
+    let device = Default::default();
+    let configs = [
+        NetworkConfig::afgnet(5, 11),
+        NetworkConfig::s2v(5, 11),
+        // Other activations and depths go through the same code.
+        NetworkConfig::AfgNet(
+            afg_learn::AfgNetConfig::new(5)
+                .with_activation(Activation::Tanh)
+                .with_layers(2)
+                .with_hidden(16)
+                .with_seed(4),
+        ),
+    ];
+    for config in &configs {
+        let network = config.init::<B>(&device);
+        for (n, count) in [(20, 100), (60, 10), (100, 10)] {
+            for inst in dataset(n).iter().take(count) {
+                let worst = assert_parity(config, &network, inst);
+                assert!(worst.is_finite());
+            }
+        }
+    }
+}
+
+#[test]
+fn fast_path_matches_burn_with_the_committed_weights() {
+    let device = Default::default();
+    let mut tried = 0;
+    for name in ["afgnet_ddqn_n20", "s2v_ddqn_n20"] {
+        let stem = repo(&format!("models/{name}/model"));
+        if !stem.with_extension("json").exists() {
+            continue;
+        }
+        let (config, network) = load_network::<B>(&stem, &device).unwrap();
+        for n in [20, 60, 100] {
+            for inst in dataset(n).iter().take(5) {
+                assert_parity(&config, &network, inst);
+            }
+        }
+        tried += 1;
+    }
+    assert!(tried > 0, "no committed weights under models/");
+}
+
+#[test]
+fn fast_rollout_equals_the_batched_burn_rollout() {
+    let device = Default::default();
+    let config = NetworkConfig::afgnet(5, 2);
+    let network = config.init::<B>(&device);
+    let fast = FastPolicy::from_network(&config, &network);
+    let insts: Vec<Instance> = (0..4)
+        .map(|s| {
+            GeneratorConfig::paper(30 + 7 * s as usize, 5, s)
+                .generate()
+                .unwrap()
+        })
+        .collect();
+    let burn = greedy_rollouts(&network, 5, &insts, GraphKind::default(), &device).unwrap();
+    for (inst, expected) in insts.iter().zip(&burn) {
+        let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
+        let out = fast.rollout(inst, &graph, 1).unwrap();
+        assert_eq!(&out.assignment, expected);
+        assert_eq!(out.passes, inst.num_robots());
+    }
+}
+
+#[test]
+fn blocks_cut_the_passes_and_respect_capacities() {
+    let config = NetworkConfig::afgnet(5, 1);
+    let network = config.init::<B>(&Default::default());
+    let fast = FastPolicy::from_network(&config, &network);
+    // Tight capacities: 21 per task, 105 places for 103 robots.
+    let inst = GeneratorConfig::paper(103, 5, 9)
+        .with_capacity_slack(1.0)
+        .generate()
+        .unwrap();
+    let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
+    for block in [1, 2, 10, 64, 103, 1000] {
+        let out = fast.rollout(&inst, &graph, block).unwrap();
+        assert_eq!(out.passes, 103usize.div_ceil(block), "block {block}");
+        assert!(out.assignment.is_complete());
+        for j in inst.task_ids() {
+            assert!(out.assignment.size(j) <= inst.capacity(j), "block {block}");
+        }
+    }
+    // Block 1 is the exact rollout; the same block gives the same result.
+    let a = fast.rollout(&inst, &graph, 10).unwrap().assignment;
+    assert_eq!(a, fast.rollout(&inst, &graph, 10).unwrap().assignment);
+}
+
+#[test]
+fn bad_rollout_inputs_are_errors() {
+    let config = NetworkConfig::s2v(5, 1);
+    let network = config.init::<B>(&Default::default());
+    let fast = FastPolicy::from_network(&config, &network);
+    let inst = GeneratorConfig::paper(20, 5, 1).generate().unwrap();
+    let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
+    assert!(matches!(
+        fast.rollout(&inst, &graph, 0),
+        Err(LearnError::InvalidConfig(_))
+    ));
+    let other = GeneratorConfig::paper(20, 4, 1).generate().unwrap();
+    assert!(matches!(
+        fast.rollout(&other, &graph, 1),
+        Err(LearnError::InvalidAction(_))
+    ));
+    let bigger = GeneratorConfig::paper(21, 5, 1).generate().unwrap();
+    assert!(matches!(
+        fast.rollout(&bigger, &graph, 1),
+        Err(LearnError::InvalidAction(_))
+    ));
+}
