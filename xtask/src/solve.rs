@@ -10,10 +10,24 @@ use serde::Serialize;
 
 #[derive(Args)]
 #[command(group = clap::ArgGroup::new("source").required(true))]
+#[command(group = clap::ArgGroup::new("allocator").required(true))]
 pub struct SolveArgs {
     /// Allocator: opt, da (GRAPE, centralised), da-decentralised, da-balanced, greedy, nearest, random.
-    #[arg(long, short)]
-    method: Method,
+    #[arg(long, short, group = "allocator")]
+    method: Option<Method>,
+    /// A learned policy instead: a trained run directory (holding model.json and
+    /// model.mpk), e.g. models/afgnet_ddqn_n20.
+    #[arg(long, group = "allocator")]
+    model: Option<PathBuf>,
+    /// Learned policy: robots per network evaluation (1 = exact greedy rollout).
+    #[arg(long, default_value_t = 1, requires = "model")]
+    block: usize,
+    /// Learned policy: balanced best-response sweeps after the rollout (Def. 3 stable result).
+    #[arg(long, requires = "model")]
+    repair: bool,
+    /// Learned policy: roll out with the Burn network (the slow reference path).
+    #[arg(long, requires = "model")]
+    exact_burn: bool,
     /// An instance JSON file (format "afg-instance").
     #[arg(long, group = "source")]
     input: Option<PathBuf>,
@@ -61,7 +75,7 @@ impl Row {
 
 #[derive(Serialize)]
 struct Report {
-    method: Method,
+    method: String,
     source: String,
     instances: usize,
     mean: Mean,
@@ -93,11 +107,19 @@ pub fn run(args: SolveArgs) -> Result<()> {
     if let Some(k) = args.limit {
         instances.truncate(k);
     }
-    let method = args.method.allocator(args.seed);
-    let bar = crate::progress(
-        instances.len() as u64,
-        &format!("{} on {source}", args.method),
-    );
+    let (name, method): (String, Box<dyn Allocator>) = match (&args.method, &args.model) {
+        (Some(m), _) => (m.to_string(), m.allocator(args.seed)),
+        (None, Some(dir)) => {
+            let mut policy = afg_learn::LearnedPolicy::load(&dir.join("model"))
+                .with_context(|| format!("loading the policy in {}", dir.display()))?;
+            policy.block = args.block;
+            policy.repair = args.repair;
+            policy.exact_burn = args.exact_burn;
+            (dir.display().to_string(), Box::new(policy))
+        }
+        (None, None) => unreachable!("clap requires an allocator"),
+    };
+    let bar = crate::progress(instances.len() as u64, &format!("{name} on {source}"));
     let rows = instances
         .iter()
         .map(|inst| {
@@ -121,7 +143,7 @@ pub fn run(args: SolveArgs) -> Result<()> {
         seconds: mean(&|r| r.stats.wall_time.as_secs_f64()),
     };
     let report = Report {
-        method: args.method,
+        method: name,
         source,
         instances: rows.len(),
         mean: m,

@@ -60,6 +60,53 @@ impl CentralisedDa {
     }
 }
 
+impl CentralisedDa {
+    /// One turn: `robot` moves to its best response if that is strictly better.
+    fn turn(&self, instance: &Instance, a: &mut Assignment, robot: RobotId) -> bool {
+        match instance.best_response(a, robot, self.preference) {
+            Some(j) => {
+                a.set(robot, Some(j));
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Index-order sweeps from `assignment` (complete or partial) until a sweep makes
+    /// no change: afterwards every robot is satisfied under the preference (Def. 3 for
+    /// [`Preference::Balanced`]). Returns (changes, sweeps). This is the repair step
+    /// that makes any allocation stable; the schedule is not used.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::{Allocator, CentralisedDa, Nearest};
+    /// use afg_game::{GeneratorConfig, Preference};
+    /// let inst = GeneratorConfig::paper(40, 5, 2).generate()?;
+    /// let mut a = Nearest.allocate(&inst)?.assignment;
+    /// let before = inst.welfare(&a);
+    /// let (changes, _sweeps) = CentralisedDa::new(Preference::Balanced).improve(&inst, &mut a);
+    /// assert!(inst.is_stable(&a, Preference::Balanced));
+    /// assert!(changes == 0 || inst.welfare(&a) > before);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn improve(&self, instance: &Instance, assignment: &mut Assignment) -> (u64, u64) {
+        let (mut changes, mut sweeps) = (0u64, 0u64);
+        loop {
+            sweeps += 1;
+            let mut changed = false;
+            for i in instance.robot_ids() {
+                if self.turn(instance, assignment, i) {
+                    changes += 1;
+                    changed = true;
+                }
+            }
+            if !changed {
+                return (changes, sweeps);
+            }
+        }
+    }
+}
+
 impl Allocator for CentralisedDa {
     fn name(&self) -> String {
         match self.preference {
@@ -71,40 +118,18 @@ impl Allocator for CentralisedDa {
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
         let (result, wall_time) = timed(|| {
             let n = instance.num_robots();
+            if let Some(i) = self.schedule.iter().find(|i| i.index() >= n) {
+                return Err(AllocError::InvalidParameter(format!(
+                    "schedule names robot {i}, N = {n}"
+                )));
+            }
             let mut a = Assignment::unassigned(n, instance.num_tasks());
             let mut changes = 0u64;
-            let mut turn = |a: &mut Assignment, i: RobotId| match instance.best_response(
-                a,
-                i,
-                self.preference,
-            ) {
-                Some(j) => {
-                    a.set(i, Some(j));
-                    changes += 1;
-                    true
-                }
-                None => false,
-            };
             for &i in &self.schedule {
-                if i.index() >= n {
-                    return Err(AllocError::InvalidParameter(format!(
-                        "schedule names robot {i}, N = {n}"
-                    )));
-                }
-                turn(&mut a, i);
+                changes += u64::from(self.turn(instance, &mut a, i));
             }
-            let mut sweeps = 0u64;
-            loop {
-                sweeps += 1;
-                let mut changed = false;
-                for i in instance.robot_ids() {
-                    changed |= turn(&mut a, i);
-                }
-                if !changed {
-                    break;
-                }
-            }
-            Ok((a, changes, sweeps))
+            let (more, sweeps) = self.improve(instance, &mut a);
+            Ok((a, changes + more, sweeps))
         });
         let (assignment, iterations, rounds) = result?;
         Ok(Allocation {

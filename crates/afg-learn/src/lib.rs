@@ -23,7 +23,7 @@ pub use env::Env;
 pub use fast::{FastPolicy, FastRollout, FastRolloutOutcome};
 pub use layers::{Activation, QHead};
 pub use network::{NetworkConfig, QNetwork};
-pub use policy::{LearnError, LearnedPolicy, load_network, save_network};
+pub use policy::{LearnError, LearnedPolicy, LearnedRun, load_network, save_network};
 pub use rollout::greedy_rollouts;
 pub use s2v::{S2v, S2vConfig};
 pub use targets::{double_dqn_target, dqn_target, masked_argmax};

@@ -6,10 +6,11 @@
 //! manifest and then every parameter's shape against the configured network.
 
 use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
 
-use afg_baseline::{AllocError, AllocStats, Allocation, Allocator};
-use afg_game::{GameError, Instance};
-use afg_graph::{GraphError, GraphKind};
+use afg_baseline::{AllocError, AllocStats, Allocation, Allocator, CentralisedDa};
+use afg_game::{Assignment, GameError, Instance, Preference};
+use afg_graph::{GraphError, GraphKind, RobotGraph};
 use burn::module::{Module, ModuleVisitor, Param};
 use burn::record::{FullPrecisionSettings, NamedMpkFileRecorder};
 use burn::tensor::Tensor;
@@ -17,7 +18,7 @@ use burn::tensor::backend::Backend;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::{InferBackend, NetworkConfig, QNetwork};
+use crate::{FastPolicy, InferBackend, NetworkConfig, QNetwork};
 
 /// Errors of the learning crate.
 #[derive(Debug, Error)]
@@ -191,34 +192,73 @@ pub fn load_network<B: Backend>(
 /// A trained network used greedily: each robot in index order takes the task with the
 /// highest Q value among those with room.
 ///
+/// By default the rollout runs on the fast path ([`FastPolicy`], the same actions as
+/// the Burn network, several times faster); [`LearnedPolicy::exact_burn`] switches to
+/// the Burn reference path. [`LearnedPolicy::block`] evaluates the network once per
+/// block of robots, and [`LearnedPolicy::repair`] finishes with balanced best-response
+/// sweeps so that the result is Def. 3 stable.
+///
 /// # Examples
 /// ```
 /// use afg_baseline::Allocator;
-/// use afg_game::GeneratorConfig;
+/// use afg_game::{GeneratorConfig, Preference};
 /// use afg_learn::{LearnedPolicy, NetworkConfig};
 /// let inst = GeneratorConfig::paper(20, 5, 1).generate()?;
-/// let policy = LearnedPolicy::new(NetworkConfig::afgnet(5, 0)); // untrained weights
+/// let mut policy = LearnedPolicy::new(NetworkConfig::afgnet(5, 0)); // untrained weights
 /// let out = policy.allocate(&inst)?;
 /// assert!(out.assignment.is_complete());
+/// (policy.block, policy.repair) = (4, true);
+/// let repaired = policy.allocate(&inst)?;
+/// assert!(inst.is_stable(&repaired.assignment, Preference::Balanced));
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 #[derive(Debug)]
 pub struct LearnedPolicy {
     config: NetworkConfig,
     network: QNetwork<InferBackend>,
+    fast: FastPolicy,
     /// The robot graph the network reads (kNN, k = 10 by default).
     pub graph: GraphKind,
+    /// Robots per network evaluation (1 = the exact greedy rollout).
+    pub block: usize,
+    /// Balanced best-response sweeps after the rollout.
+    pub repair: bool,
+    /// Roll out with the Burn network instead of the fast path (reference; B = 1 only).
+    pub exact_burn: bool,
+}
+
+/// A learned allocation with its cost broken down.
+#[derive(Clone, Debug)]
+pub struct LearnedRun {
+    /// The final assignment (after repair, if asked).
+    pub assignment: Assignment,
+    /// Network evaluations.
+    pub passes: usize,
+    /// Time of the rollout (graph, features, network, bookkeeping).
+    pub rollout_time: Duration,
+    /// Robot moves made by the repair.
+    pub repair_moves: u64,
+    /// Time of the repair.
+    pub repair_time: Duration,
 }
 
 impl LearnedPolicy {
-    /// A policy with freshly initialised weights from `config`.
-    pub fn new(config: NetworkConfig) -> Self {
-        let network = config.init(&Default::default());
+    fn with_network(config: NetworkConfig, network: QNetwork<InferBackend>) -> Self {
         LearnedPolicy {
+            fast: FastPolicy::from_network(&config, &network),
             config,
             network,
             graph: GraphKind::default(),
+            block: 1,
+            repair: false,
+            exact_burn: false,
         }
+    }
+
+    /// A policy with freshly initialised weights from `config`.
+    pub fn new(config: NetworkConfig) -> Self {
+        let network = config.init(&Default::default());
+        Self::with_network(config, network)
     }
 
     /// A policy from saved weights (see [`load_network`]).
@@ -227,11 +267,7 @@ impl LearnedPolicy {
     /// As [`load_network`].
     pub fn load(stem: &Path) -> Result<Self, LearnError> {
         let (config, network) = load_network(stem, &Default::default())?;
-        Ok(LearnedPolicy {
-            config,
-            network,
-            graph: GraphKind::default(),
-        })
+        Ok(Self::with_network(config, network))
     }
 
     /// The network's configuration.
@@ -244,20 +280,67 @@ impl LearnedPolicy {
         &self.network
     }
 
-    /// Greedy rollout: one forward pass per robot.
+    /// The rollout (and repair) with its cost.
     ///
     /// # Errors
     /// [`LearnError::InvalidAction`] if the instance's task count differs from the
-    /// network's, and graph errors.
-    pub fn rollout(&self, instance: &Instance) -> Result<afg_game::Assignment, LearnError> {
-        let mut out = crate::greedy_rollouts(
-            &self.network,
-            self.config.tasks(),
-            std::slice::from_ref(instance),
-            self.graph,
-            &Default::default(),
-        )?;
-        Ok(out.pop().expect("one rollout per instance"))
+    /// network's, [`LearnError::InvalidConfig`] for block 0 or a block above 1 with
+    /// `exact_burn`, and graph errors.
+    pub fn run(&self, instance: &Instance) -> Result<LearnedRun, LearnError> {
+        let start = Instant::now();
+        let (mut assignment, passes) = if self.exact_burn {
+            if self.block != 1 {
+                return Err(LearnError::InvalidConfig(
+                    "the Burn reference path rolls out one robot at a time (block 1)".into(),
+                ));
+            }
+            let mut out = crate::greedy_rollouts(
+                &self.network,
+                self.config.tasks(),
+                std::slice::from_ref(instance),
+                self.graph,
+                &Default::default(),
+            )?;
+            (
+                out.pop().expect("one rollout per instance"),
+                instance.num_robots(),
+            )
+        } else {
+            if instance.num_tasks() != self.config.tasks() {
+                return Err(LearnError::InvalidAction(format!(
+                    "the network was built for M = {} tasks, the instance has {}",
+                    self.config.tasks(),
+                    instance.num_tasks()
+                )));
+            }
+            let graph = RobotGraph::build(instance.robots(), self.graph)?;
+            let out = self.fast.rollout(instance, &graph, self.block)?;
+            (out.assignment, out.passes)
+        };
+        let rollout_time = start.elapsed();
+        let start = Instant::now();
+        let repair_moves = if self.repair {
+            CentralisedDa::new(Preference::Balanced)
+                .improve(instance, &mut assignment)
+                .0
+        } else {
+            0
+        };
+        Ok(LearnedRun {
+            assignment,
+            passes,
+            rollout_time,
+            repair_moves,
+            repair_time: start.elapsed(),
+        })
+    }
+
+    /// The final assignment of [`LearnedPolicy::run`].
+    ///
+    /// # Errors
+    /// As [`LearnedPolicy::run`].
+    pub fn rollout(&self, instance: &Instance) -> Result<Assignment, LearnError> {
+        Ok(self.run(instance)?.assignment)
     }
 }
 
@@ -266,18 +349,22 @@ impl Allocator for LearnedPolicy {
         self.config.name().into()
     }
 
+    /// Stats: `iterations` = robots placed + repair moves, `rounds` = network passes.
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
-        let start = std::time::Instant::now();
-        let assignment = self.rollout(instance).map_err(|e| AllocError::Failed {
+        let start = Instant::now();
+        let run = self.run(instance).map_err(|e| AllocError::Failed {
             method: self.name(),
             message: e.to_string(),
         })?;
         let stats = AllocStats {
-            iterations: instance.num_robots() as u64,
-            rounds: instance.num_robots() as u64,
+            iterations: instance.num_robots() as u64 + run.repair_moves,
+            rounds: run.passes as u64,
             wall_time: start.elapsed(),
             ..AllocStats::default()
         };
-        Ok(Allocation { assignment, stats })
+        Ok(Allocation {
+            assignment: run.assignment,
+            stats,
+        })
     }
 }
