@@ -2,6 +2,7 @@
 
 mod bench;
 mod datasets;
+mod scale;
 mod solve;
 mod tables;
 mod train;
@@ -29,6 +30,8 @@ pub enum Command {
     BenchBaselines(bench::BenchArgs),
     /// Time the networks: batched forward pass, training step, greedy rollout.
     BenchModels(bench::ModelBenchArgs),
+    /// The learned policy (fast path, blocks, repair) against OPT, DA and greedy up to N = 100 000.
+    BenchScale(scale::ScaleArgs),
     /// Train a Q network with DQN or Double DQN (resumable, seeded, with validation curves).
     Train(train::TrainArgs),
     /// Draw validation curves of training runs as an SVG (Fig. 1 style).
@@ -48,6 +51,7 @@ fn main() -> Result<()> {
         Command::Solve(args) => solve::run(args),
         Command::BenchBaselines(args) => bench::run(args),
         Command::BenchModels(args) => bench::run_models(args),
+        Command::BenchScale(args) => scale::run(args),
         Command::Train(args) => train::run(args),
         Command::PlotCurves(args) => train::run_plot(args),
         Command::TrainingReport(args) => train::run_report(args),

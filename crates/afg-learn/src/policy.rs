@@ -232,6 +232,8 @@ pub struct LearnedPolicy {
 pub struct LearnedRun {
     /// The final assignment (after repair, if asked).
     pub assignment: Assignment,
+    /// Welfare of the rollout's assignment, before any repair.
+    pub rollout_welfare: f64,
     /// Network evaluations.
     pub passes: usize,
     /// Time of the rollout (graph, features, network, bookkeeping).
@@ -318,6 +320,7 @@ impl LearnedPolicy {
             (out.assignment, out.passes)
         };
         let rollout_time = start.elapsed();
+        let rollout_welfare = instance.welfare(&assignment);
         let start = Instant::now();
         let repair_moves = if self.repair {
             CentralisedDa::new(Preference::Balanced)
@@ -328,6 +331,7 @@ impl LearnedPolicy {
         };
         Ok(LearnedRun {
             assignment,
+            rollout_welfare,
             passes,
             rollout_time,
             repair_moves,

@@ -1,0 +1,269 @@
+//! `cargo xtask bench-scale`: the learned policy (fast path, block rollout, repair)
+//! against OPT, GRAPE DA and greedy from N = 100 to 100 000, with the peak memory of
+//! each run. Every case runs in its own child process (this binary with `--case`), so
+//! the peak resident set size it reports belongs to that case alone.
+
+use std::path::PathBuf;
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use afg_baseline::Method;
+use afg_game::{GeneratorConfig, Instance};
+use afg_learn::{LearnedPolicy, NetworkConfig};
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use serde::{Deserialize, Serialize};
+
+use crate::bench::fmt_time;
+
+#[derive(Args)]
+pub struct ScaleArgs {
+    /// Robot counts N.
+    #[arg(long, value_delimiter = ',', default_value = "100,1000,10000,100000")]
+    sizes: Vec<usize>,
+    /// Task counts M.
+    #[arg(long, value_delimiter = ',', default_value = "5,50")]
+    tasks: Vec<usize>,
+    /// Numbers of network passes to try per rollout (block B = ⌈N / passes⌉), besides
+    /// the exact rollout (B = 1).
+    #[arg(long, value_delimiter = ',', default_value = "1000,100,10")]
+    passes: Vec<usize>,
+    /// Skip learned runs with more than this many robot-passes (N × passes), e.g. the
+    /// exact rollout above N = 1000.
+    #[arg(long, default_value_t = 20_000_000)]
+    max_work: usize,
+    /// Run the Burn reference path up to this N (M = 5 only).
+    #[arg(long, default_value_t = 1000)]
+    burn_up_to: usize,
+    /// Trained run directory used for M = 5; other M use untrained weights (timing only).
+    #[arg(long, default_value = "models/afgnet_ddqn_n20")]
+    model: PathBuf,
+    /// Seed of the instances (one per N and M).
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Print the results as JSON instead of a Markdown table.
+    #[arg(long)]
+    json: bool,
+    /// Internal: run one case (JSON) and print its result.
+    #[arg(long, hide = true)]
+    case: Option<String>,
+}
+
+/// One measurement, run in a child process.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Case {
+    robots: usize,
+    tasks: usize,
+    seed: u64,
+    /// A classical method, or None for the learned policy.
+    method: Option<Method>,
+    #[serde(default)]
+    block: usize,
+    #[serde(default)]
+    exact_burn: bool,
+    #[serde(default)]
+    model: Option<PathBuf>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Outcome {
+    case: Case,
+    /// Whole run: graph, rollout and repair for the learned policy.
+    seconds: f64,
+    welfare: f64,
+    /// Learned policy: welfare before the repair, passes, repair cost.
+    rollout_welfare: Option<f64>,
+    passes: Option<usize>,
+    repair_moves: Option<u64>,
+    repair_seconds: Option<f64>,
+    /// Peak resident set size of the child process (instance and graph included).
+    peak_rss_mib: Option<f64>,
+}
+
+fn instance(case: &Case) -> Result<Instance> {
+    Ok(GeneratorConfig::paper(case.robots, case.tasks, case.seed).generate()?)
+}
+
+fn peak_rss_mib() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib / 1024.0)
+}
+
+fn run_case(case: Case) -> Result<Outcome> {
+    let inst = instance(&case)?;
+    let mut out = Outcome {
+        case: case.clone(),
+        seconds: 0.0,
+        welfare: 0.0,
+        rollout_welfare: None,
+        passes: None,
+        repair_moves: None,
+        repair_seconds: None,
+        peak_rss_mib: None,
+    };
+    match case.method {
+        Some(method) => {
+            let alloc = method.allocator(case.seed).allocate(&inst)?;
+            out.seconds = alloc.stats.wall_time.as_secs_f64();
+            out.welfare = inst.welfare(&alloc.assignment);
+        }
+        None => {
+            let mut policy = match &case.model {
+                Some(dir) => LearnedPolicy::load(&dir.join("model"))
+                    .with_context(|| format!("loading {}", dir.display()))?,
+                None => LearnedPolicy::new(NetworkConfig::afgnet(case.tasks, 0)),
+            };
+            policy.block = case.block;
+            policy.exact_burn = case.exact_burn;
+            policy.repair = !case.exact_burn;
+            let start = Instant::now();
+            let run = policy.run(&inst)?;
+            out.seconds = start.elapsed().as_secs_f64();
+            out.welfare = inst.welfare(&run.assignment);
+            out.rollout_welfare = Some(run.rollout_welfare);
+            out.passes = Some(run.passes);
+            if policy.repair {
+                out.repair_moves = Some(run.repair_moves);
+                out.repair_seconds = Some(run.repair_time.as_secs_f64());
+            }
+        }
+    }
+    out.peak_rss_mib = peak_rss_mib();
+    Ok(out)
+}
+
+fn spawn(case: &Case) -> Result<Outcome> {
+    let exe = std::env::current_exe()?;
+    let output = Command::new(exe)
+        .args(["bench-scale", "--case", &serde_json::to_string(case)?])
+        .output()
+        .context("running a benchmark case")?;
+    if !output.status.success() {
+        bail!(
+            "case {} failed: {}",
+            serde_json::to_string(case)?,
+            String::from_utf8_lossy(&output.stderr)
+        );
+    }
+    Ok(serde_json::from_slice(&output.stdout)?)
+}
+
+fn cases(args: &ScaleArgs) -> Vec<Case> {
+    let mut cases = Vec::new();
+    for &tasks in &args.tasks {
+        for &robots in &args.sizes {
+            let base = Case {
+                robots,
+                tasks,
+                seed: args.seed,
+                method: None,
+                block: 1,
+                exact_burn: false,
+                model: (tasks == 5).then(|| args.model.clone()),
+            };
+            for method in [Method::Opt, Method::Da, Method::DaBalanced, Method::Greedy] {
+                cases.push(Case {
+                    method: Some(method),
+                    ..base.clone()
+                });
+            }
+            if tasks == 5 && robots <= args.burn_up_to {
+                cases.push(Case {
+                    exact_burn: true,
+                    ..base.clone()
+                });
+            }
+            let mut blocks: Vec<usize> = std::iter::once(1)
+                .chain(args.passes.iter().map(|&p| robots.div_ceil(p.max(1))))
+                .filter(|&b| robots.div_ceil(b) * robots <= args.max_work)
+                .collect();
+            blocks.dedup();
+            for block in blocks {
+                cases.push(Case {
+                    block,
+                    ..base.clone()
+                });
+            }
+        }
+    }
+    cases
+}
+
+fn label(case: &Case) -> String {
+    match (case.method, case.exact_burn) {
+        (Some(m), _) => m.to_string(),
+        (None, true) => "learned, Burn path".into(),
+        (None, false) => format!("learned, fast, B = {} + repair", case.block),
+    }
+}
+
+pub fn run(args: ScaleArgs) -> Result<()> {
+    if let Some(case) = &args.case {
+        let case: Case = serde_json::from_str(case).context("--case is JSON")?;
+        println!("{}", serde_json::to_string(&run_case(case)?)?);
+        return Ok(());
+    }
+    if args.tasks.contains(&5) && !args.model.join("model.json").exists() {
+        bail!(
+            "{} holds no trained model (model.json); pass --model DIR",
+            args.model.display()
+        );
+    }
+    let cases = cases(&args);
+    let bar = crate::progress(cases.len() as u64, "bench-scale");
+    let mut outcomes = Vec::new();
+    for case in &cases {
+        bar.set_message(format!(
+            "N = {}, M = {}: {}",
+            case.robots,
+            case.tasks,
+            label(case)
+        ));
+        outcomes.push(spawn(case)?);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&outcomes)?);
+        return Ok(());
+    }
+    println!(
+        "| N | M | method | passes | time | % of OPT | rollout alone, % of OPT | repair moves | repair time | peak RSS |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    for o in &outcomes {
+        let opt = outcomes
+            .iter()
+            .find(|p| {
+                p.case.method == Some(Method::Opt)
+                    && (p.case.robots, p.case.tasks) == (o.case.robots, o.case.tasks)
+            })
+            .map_or(f64::NAN, |p| p.welfare);
+        let percent = |w: f64| format!("{:.2} %", 100.0 * w / opt);
+        let trained = if o.case.method.is_none() && o.case.model.is_none() {
+            " (untrained)"
+        } else {
+            ""
+        };
+        println!(
+            "| {} | {} | {}{} | {} | {} | {} | {} | {} | {} | {} |",
+            o.case.robots,
+            o.case.tasks,
+            label(&o.case),
+            trained,
+            o.passes.map_or("–".into(), |p| p.to_string()),
+            fmt_time(Duration::from_secs_f64(o.seconds)),
+            percent(o.welfare),
+            o.rollout_welfare
+                .filter(|_| o.repair_moves.is_some())
+                .map_or("–".into(), percent),
+            o.repair_moves.map_or("–".into(), |m| m.to_string()),
+            o.repair_seconds
+                .map_or("–".into(), |s| fmt_time(Duration::from_secs_f64(s))),
+            o.peak_rss_mib.map_or("–".into(), |m| format!("{m:.0} MiB")),
+        );
+    }
+    Ok(())
+}
