@@ -191,14 +191,23 @@ pub fn run_models(args: ModelBenchArgs) -> Result<()> {
     }
     let inst = GeneratorConfig::paper(args.rollout, 5, 7).generate()?;
     println!(
-        "\n| network | greedy rollout, N = {} (one forward pass per robot) |",
+        "\n| network | greedy rollout, N = {}, Burn path | fast path (B = 1) | speed-up |",
         args.rollout
     );
-    println!("|---|---|");
+    println!("|---|---|---|---|");
     for config in [NetworkConfig::afgnet(5, 0), NetworkConfig::s2v(5, 0)] {
-        let policy = afg_learn::LearnedPolicy::new(config.clone());
-        let t = median(1, || Ok(policy.allocate(&inst)?))?;
-        println!("| {} | {} |", config.name(), fmt_time(t));
+        let mut policy = afg_learn::LearnedPolicy::new(config.clone());
+        policy.exact_burn = true;
+        let burn = median(1, || Ok(policy.allocate(&inst)?))?;
+        policy.exact_burn = false;
+        let fast = median(3, || Ok(policy.allocate(&inst)?))?;
+        println!(
+            "| {} | {} | {} | {:.1}× |",
+            config.name(),
+            fmt_time(burn),
+            fmt_time(fast),
+            burn.as_secs_f64() / fast.as_secs_f64()
+        );
     }
     Ok(())
 }

@@ -181,3 +181,38 @@ fn bad_rollout_inputs_are_errors() {
         Err(LearnError::InvalidAction(_))
     ));
 }
+
+#[test]
+fn repair_ends_balanced_stable_and_never_lowers_welfare() {
+    use afg_baseline::Allocator;
+    use afg_game::Preference;
+    use afg_learn::LearnedPolicy;
+    for (seed, net) in [NetworkConfig::afgnet(5, 5), NetworkConfig::s2v(5, 5)]
+        .into_iter()
+        .enumerate()
+    {
+        let mut policy = LearnedPolicy::new(net);
+        for (k, n) in [1, 2, 7, 20, 60, 150].into_iter().enumerate() {
+            let inst = GeneratorConfig::paper(n, 5, 100 * seed as u64 + k as u64)
+                .with_capacity_slack(1.3)
+                .generate()
+                .unwrap();
+            for block in [1, 3, n] {
+                (policy.block, policy.repair) = (block, true);
+                let run = policy.run(&inst).unwrap();
+                assert!(
+                    inst.is_stable(&run.assignment, Preference::Balanced),
+                    "N = {n}, block {block}"
+                );
+                assert!(inst.welfare(&run.assignment) >= run.rollout_welfare - 1e-9);
+                (policy.block, policy.repair) = (block, false);
+                let plain = policy.allocate(&inst).unwrap();
+                assert!(
+                    (inst.welfare(&plain.assignment) - run.rollout_welfare).abs() < 1e-9,
+                    "the repair starts from the rollout"
+                );
+                assert_eq!(run.repair_moves == 0, plain.assignment == run.assignment);
+            }
+        }
+    }
+}
