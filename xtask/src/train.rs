@@ -50,6 +50,10 @@ pub struct TrainArgs {
     /// n-step returns (1 = the paper's one-step target).
     #[arg(long)]
     n_step: Option<usize>,
+    /// AFGNet only: add each action's immediate reward (the actor's join gain) to the
+    /// Q values, so the network learns only the value of what follows (not in the paper).
+    #[arg(long)]
+    gain_residual: bool,
     /// The paper's settings where ours differ: squared loss, raw rewards, no clipping,
     /// target sync every 1000 steps.
     #[arg(long)]
@@ -89,7 +93,14 @@ impl TrainArgs {
         };
         let seed = self.seed.unwrap_or(0);
         let network = match self.net.unwrap_or(NetArg::Afgnet) {
-            NetArg::Afgnet => NetworkConfig::afgnet(5, seed),
+            NetArg::Afgnet => NetworkConfig::AfgNet(
+                afg_learn::AfgNetConfig::new(5)
+                    .with_seed(seed)
+                    .with_gain_residual(self.gain_residual.then_some(true)),
+            ),
+            NetArg::S2v if self.gain_residual => {
+                anyhow::bail!("--gain-residual exists for AFGNet only")
+            }
             NetArg::S2v => NetworkConfig::s2v(5, seed),
         };
         let algo = match self.algo.unwrap_or(AlgoArg::Ddqn) {
@@ -125,6 +136,7 @@ impl TrainArgs {
             || self.batch.is_some()
             || self.lr.is_some()
             || self.n_step.is_some()
+            || self.gain_residual
             || self.paper
     }
 }
@@ -767,6 +779,7 @@ pub fn run_all(args: TrainAllArgs) -> Result<()> {
                 batch: None,
                 lr: None,
                 n_step: None,
+                gain_residual: false,
                 paper: false,
                 out: Some(dir),
                 resume: None,

@@ -46,6 +46,8 @@ pub struct GraphBatch {
     pub actors: Vec<u32>,
     /// Action mask of each graph's acting robot, `[graphs, M]`.
     pub mask: Vec<bool>,
+    /// Per graph, the actor's [`join_gain`](crate::join_gain) for each task, `[G × M]`.
+    pub gain: Vec<f32>,
 }
 
 impl GraphBatch {
@@ -105,5 +107,6 @@ impl GraphBatch {
         self.graph_size.push(inst.num_robots() as f32);
         self.actors.push(offset + actor.0);
         self.mask.extend(state.action_mask(actor));
+        self.gain.extend(state.gains(actor));
     }
 }

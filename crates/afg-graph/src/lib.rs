@@ -10,7 +10,7 @@ mod state;
 
 pub use batch::GraphBatch;
 pub use neighbours::{GraphKind, RobotGraph};
-pub use state::{AllocationState, FULL_TASK_FEATURE, feature_scale, write_task_column};
+pub use state::{AllocationState, FULL_TASK_FEATURE, feature_scale, join_gain, write_task_column};
 
 use thiserror::Error;
 

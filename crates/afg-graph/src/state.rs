@@ -11,7 +11,7 @@
 //! mover, so exactly column j of μ changes (and the column of the task it left, if
 //! any): O(N) per move, never a rebuild.
 
-use afg_game::{Assignment, Instance, RobotId, TaskId};
+use afg_game::{Assignment, Instance, Preference, RobotId, TaskId};
 
 /// μ of a task that has no room for the robot (in feature units, below any real utility
 /// on instances where beta·√2 < the mean reward, such as the paper's).
@@ -71,6 +71,36 @@ pub fn write_task_column(
             let value = if member { inside } else { outside };
             ((value - instance.cost(i, task)) / scale) as f32
         };
+    }
+}
+
+/// The welfare gain of `robot` joining `task` (its balanced score: the change in total
+/// welfare when an unassigned robot joins), in the unit `scale`; 0 where the task is
+/// full for it. AFGNet's optional gain residual adds this to its Q values.
+///
+/// # Examples
+/// ```
+/// use afg_game::{Assignment, GeneratorConfig, RobotId, TaskId};
+/// use afg_graph::join_gain;
+/// let inst = GeneratorConfig::paper(4, 2, 1).generate()?;
+/// let mut a = Assignment::unassigned(4, 2);
+/// let gain = join_gain(&inst, &a, RobotId(0), TaskId(1), 1.0);
+/// let before = inst.welfare(&a);
+/// a.set(RobotId(0), Some(TaskId(1)));
+/// assert!((f64::from(gain) - (inst.welfare(&a) - before)).abs() < 1e-4);
+/// # Ok::<(), afg_game::GameError>(())
+/// ```
+pub fn join_gain(
+    instance: &Instance,
+    assignment: &Assignment,
+    robot: RobotId,
+    task: TaskId,
+    scale: f64,
+) -> f32 {
+    if assignment.has_room(instance, robot, task) {
+        (instance.score(assignment, robot, task, Preference::Balanced) / scale) as f32
+    } else {
+        0.0
     }
 }
 
@@ -155,6 +185,14 @@ impl<'a> AllocationState<'a> {
     #[inline]
     pub fn is_available(&self, robot: RobotId, task: TaskId) -> bool {
         self.assignment.has_room(self.instance, robot, task)
+    }
+
+    /// [`join_gain`] of `robot` for every task, in the features' unit.
+    pub fn gains(&self, robot: RobotId) -> Vec<f32> {
+        self.instance
+            .task_ids()
+            .map(|j| join_gain(self.instance, &self.assignment, robot, j, self.scale))
+            .collect()
     }
 
     /// The action mask of `robot`: `true` where the task has room.

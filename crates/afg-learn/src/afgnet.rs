@@ -29,6 +29,13 @@ pub struct AfgNetConfig {
     /// Seed of the weight initialisation.
     #[config(default = 0)]
     pub seed: u64,
+    /// Add the actor's join gain (the immediate reward of each action, in the task
+    /// features' unit) to the Q values, so the network learns only what comes after
+    /// the action: the untrained policy starts close to one-pass greedy. Off in the
+    /// paper's model. Optional so that files written before it existed still load
+    /// (`None` = off).
+    #[config(default = "None")]
+    pub gain_residual: Option<bool>,
 }
 
 impl AfgNetConfig {
@@ -53,6 +60,7 @@ impl AfgNetConfig {
             layers,
             head,
             activation: self.activation,
+            gain_residual: self.gain_residual.unwrap_or(false),
         }
     }
 }
@@ -84,6 +92,8 @@ pub struct AfgNet<B: Backend> {
     pub head: QHead<B>,
     #[module(skip)]
     activation: Activation,
+    #[module(skip)]
+    gain_residual: bool,
 }
 
 impl<B: Backend> AfgNet<B> {
@@ -129,7 +139,13 @@ impl<B: Backend> AfgNet<B> {
     /// output: `[G, M]`
     pub fn forward(&self, g: &GraphTensors<B>) -> Tensor<B, 2> {
         let delta = self.embed(g);
-        self.head
-            .forward(g.graph_mean(delta.clone()), g.actor_rows(delta))
+        let q = self
+            .head
+            .forward(g.graph_mean(delta.clone()), g.actor_rows(delta));
+        if self.gain_residual {
+            q + g.gain.clone()
+        } else {
+            q
+        }
     }
 }

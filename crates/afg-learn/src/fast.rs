@@ -34,7 +34,7 @@ use std::ops::Range;
 use std::time::{Duration, Instant};
 
 use afg_game::{Assignment, Instance, RobotId, TaskId};
-use afg_graph::{RobotGraph, feature_scale, write_task_column};
+use afg_graph::{RobotGraph, feature_scale, join_gain, write_task_column};
 use burn::nn::Linear;
 use burn::tensor::backend::Backend;
 use faer::linalg::matmul::matmul;
@@ -241,6 +241,8 @@ pub struct FastPolicy {
     head: Head,
     tasks: usize,
     hidden: usize,
+    /// Add the actor's join gain to the Q values (AFGNet's `gain_residual`).
+    gain_residual: bool,
 }
 
 /// What a fast rollout returns.
@@ -299,6 +301,7 @@ impl FastPolicy {
                     head: Head::from_burn(&n.head, s),
                     tasks: c.tasks,
                     hidden: d,
+                    gain_residual: c.gain_residual.unwrap_or(false),
                 }
             }
             (NetworkConfig::S2v(c), QNetwork::S2v(n)) => FastPolicy {
@@ -312,6 +315,7 @@ impl FastPolicy {
                 head: Head::from_burn(&n.head, c.activation),
                 tasks: c.tasks,
                 hidden: c.hidden,
+                gain_residual: false,
             },
             _ => panic!("the network is not the kind its configuration describes"),
         }
@@ -534,6 +538,17 @@ impl<'a> FastRollout<'a> {
             *h = s.scalar(*h + g);
         }
         head.output.apply_row(&self.vec_a, q);
+        if self.policy.gain_residual {
+            for (j, q) in q.iter_mut().enumerate() {
+                *q += join_gain(
+                    self.instance,
+                    &self.assignment,
+                    robot,
+                    TaskId(j as u32),
+                    self.scale,
+                );
+            }
+        }
     }
 
     fn task_index(&self, robot: usize) -> usize {

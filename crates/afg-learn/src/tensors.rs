@@ -31,6 +31,8 @@ pub struct GraphTensors<B: Backend> {
     pub inv_graph_size: Tensor<B, 2>,
     /// Global index of each graph's acting robot, `[G]`.
     pub actors: Tensor<B, 1, Int>,
+    /// The actor's join gain per task (`GraphBatch::gain`), `[G, M]`.
+    pub gain: Tensor<B, 2>,
     /// Dense per-graph aggregation matrices, when every graph has the same N ≤
     /// [`DENSE_MAX_NODES`]: a batched matrix product then replaces gather + scatter.
     pub dense: Option<DenseAdjacency<B>>,
@@ -87,6 +89,7 @@ impl<B: Backend> GraphTensors<B> {
             node_graph: int1(&batch.node_graph, device),
             inv_graph_size: float2(&inv_size, 1, device),
             actors: int1(&batch.actors, device),
+            gain: float2(&batch.gain, m, device),
             dense: None,
         }
     }

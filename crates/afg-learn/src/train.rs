@@ -160,6 +160,11 @@ impl TrainConfig {
         if self.replay_capacity < self.robots || self.warmup > self.replay_capacity {
             return bad("replay_capacity must hold an episode and the warmup");
         }
+        if matches!(&self.network, NetworkConfig::AfgNet(c) if c.gain_residual == Some(true))
+            && !self.reward_scaling
+        {
+            return bad("the gain residual is in the features' unit: it needs reward scaling");
+        }
         Ok(())
     }
 

@@ -81,6 +81,11 @@ fn fast_path_matches_burn_with_random_weights_on_the_datasets() {
                 .with_hidden(16)
                 .with_seed(4),
         ),
+        NetworkConfig::AfgNet(
+            afg_learn::AfgNetConfig::new(5)
+                .with_gain_residual(Some(true))
+                .with_seed(6),
+        ),
     ];
     for config in &configs {
         let network = config.init::<B>(&device);
