@@ -19,14 +19,14 @@ pub struct SolveArgs {
     /// model.mpk), e.g. models/afgnet_ddqn_n20.
     #[arg(long, group = "allocator")]
     model: Option<PathBuf>,
-    /// Learned policy: robots per network evaluation (1 = exact greedy rollout).
-    #[arg(long, default_value_t = 1, requires = "model")]
-    block: usize,
+    /// Learned policy: robots per network evaluation [default: 1, the exact greedy rollout].
+    #[arg(long)]
+    block: Option<usize>,
     /// Learned policy: balanced best-response sweeps after the rollout (Def. 3 stable result).
-    #[arg(long, requires = "model")]
+    #[arg(long)]
     repair: bool,
     /// Learned policy: roll out with the Burn network (the slow reference path).
-    #[arg(long, requires = "model")]
+    #[arg(long)]
     exact_burn: bool,
     /// An instance JSON file (format "afg-instance").
     #[arg(long, group = "source")]
@@ -96,6 +96,9 @@ struct Mean {
 }
 
 pub fn run(args: SolveArgs) -> Result<()> {
+    if args.model.is_none() && (args.block.is_some() || args.repair || args.exact_burn) {
+        anyhow::bail!("--block, --repair and --exact-burn apply to a learned policy (--model DIR)");
+    }
     let (source, mut instances) = match (&args.input, args.dataset) {
         (Some(p), _) => (
             p.display().to_string(),
@@ -112,7 +115,7 @@ pub fn run(args: SolveArgs) -> Result<()> {
         (None, Some(dir)) => {
             let mut policy = afg_learn::LearnedPolicy::load(&dir.join("model"))
                 .with_context(|| format!("loading the policy in {}", dir.display()))?;
-            policy.block = args.block;
+            policy.block = args.block.unwrap_or(1);
             policy.repair = args.repair;
             policy.exact_burn = args.exact_burn;
             (dir.display().to_string(), Box::new(policy))
@@ -178,4 +181,62 @@ pub fn run(args: SolveArgs) -> Result<()> {
         println!("  (means over instances; --json for each one)");
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::Parser;
+
+    fn solve(args: &[&str]) -> anyhow::Result<()> {
+        let mut argv = vec!["cargo xtask", "solve"];
+        argv.extend_from_slice(args);
+        match crate::Cli::try_parse_from(argv)?.command {
+            crate::Command::Solve(a) => super::run(a),
+            _ => unreachable!("only solve here"),
+        }
+    }
+
+    #[test]
+    fn learned_policies_solve_and_bad_options_are_refused() {
+        let model = crate::repo_root().join("models/afgnet_ddqn_n20");
+        let model = model.to_str().unwrap();
+        solve(&[
+            "--model",
+            model,
+            "--dataset",
+            "20",
+            "--limit",
+            "2",
+            "--json",
+        ])
+        .unwrap();
+        solve(&[
+            "--model",
+            model,
+            "--dataset",
+            "100",
+            "--limit",
+            "1",
+            "--block",
+            "7",
+            "--repair",
+        ])
+        .unwrap();
+        let err = solve(&[
+            "--model",
+            model,
+            "--dataset",
+            "20",
+            "--exact-burn",
+            "--block",
+            "3",
+        ])
+        .unwrap_err();
+        assert!(format!("{err:#}").contains("block 1"), "{err:#}");
+        let err = solve(&["--model", "/nonexistent", "--dataset", "20"]).unwrap_err();
+        assert!(format!("{err:#}").contains("/nonexistent"), "{err:#}");
+        // A method and a model at once, or --block without a model: usage errors.
+        assert!(solve(&["--method", "opt", "--model", model, "--dataset", "20"]).is_err());
+        assert!(solve(&["--method", "opt", "--block", "2", "--dataset", "20"]).is_err());
+    }
 }
