@@ -4,7 +4,9 @@ use std::time::Duration;
 
 use afg_baseline::{Allocator, Method, Optimum};
 use afg_game::GeneratorConfig;
-use anyhow::Result;
+use afg_learn::{QNetwork, TrainBackend};
+use anyhow::{Result, bail};
+use burn::tensor::Tensor;
 use clap::Args;
 
 #[derive(Args)]
@@ -133,10 +135,30 @@ fn median<T>(repeats: usize, mut f: impl FnMut() -> Result<T>) -> Result<Duratio
     Ok(times[times.len() / 2])
 }
 
-pub fn run_models(args: ModelBenchArgs) -> Result<()> {
-    use afg_learn::{GraphTensors, InferBackend, NetworkConfig, TrainBackend};
+/// Median time of one training step (forward, backward, Adam) on a fixed batch, with
+/// `forward` computing the `[rows, M]` Q values; the loss is the MSE to zero.
+fn step_time(
+    repeats: usize,
+    config: &afg_learn::NetworkConfig,
+    rows: usize,
+    forward: impl Fn(&QNetwork<TrainBackend>) -> Tensor<TrainBackend, 2>,
+) -> Result<Duration> {
     use burn::optim::{AdamConfig, GradientsParams, Optimizer};
-    use burn::tensor::Tensor;
+    let device = Default::default();
+    let mut train = config.init::<TrainBackend>(&device);
+    let mut optim = AdamConfig::new().init();
+    let target = Tensor::<TrainBackend, 2>::zeros([rows, config.tasks()], &device);
+    median(repeats, || {
+        let loss = (forward(&train) - target.clone()).powi_scalar(2).mean();
+        let grads = GradientsParams::from_grads(loss.backward(), &train);
+        train = optim.step(1e-4, train.clone(), grads);
+        Ok(())
+    })
+}
+
+pub fn run_models(args: ModelBenchArgs) -> Result<()> {
+    use crate::plain::PaddedGraph;
+    use afg_learn::{Activation, GraphTensors, InferBackend, NetworkConfig};
     let device = Default::default();
     println!(
         "Median of {} runs; batch of {} states from random partial episodes (M = 5); CPU ndarray back end.\n",
@@ -163,19 +185,12 @@ pub fn run_models(args: ModelBenchArgs) -> Result<()> {
                 forward.push(median(args.repeats, || {
                     Ok(net.forward(&upload(&batch)).into_data())
                 })?);
-                let mut train = config.init::<TrainBackend>(&device);
-                let mut optim = AdamConfig::new().init();
-                let target = Tensor::<TrainBackend, 2>::zeros([args.batch, 5], &device);
-                step.push(median(args.repeats, || {
-                    let g = if dense {
+                step.push(step_time(args.repeats, &config, args.batch, |net| {
+                    net.forward(&if dense {
                         GraphTensors::<TrainBackend>::new(&batch, &device)
                     } else {
                         GraphTensors::sparse(&batch, &device)
-                    };
-                    let loss = (train.forward(&g) - target.clone()).powi_scalar(2).mean();
-                    let grads = GradientsParams::from_grads(loss.backward(), &train);
-                    train = optim.step(1e-4, train.clone(), grads);
-                    Ok(())
+                    })
                 })?);
             }
             println!(
@@ -188,6 +203,50 @@ pub fn run_models(args: ModelBenchArgs) -> Result<()> {
                 step[0].as_secs_f64() / step[1].as_secs_f64()
             );
         }
+    }
+    println!(
+        "\nAFGNet's training step against the plain model of shared/BURN-NOTES.md \
+         (neighbours padded to the largest degree, gather + reshape + sum; same parameters, \
+         same Q values), in the same run:\n"
+    );
+    println!("| N | train step, plain (padded gather) | train step, ours (dense) | speed-up |");
+    println!("|---|---|---|---|");
+    let config = NetworkConfig::afgnet(5, 0);
+    let plain_q = |net: &QNetwork<TrainBackend>, batch: &afg_graph::GraphBatch| match net {
+        QNetwork::AfgNet(a) => {
+            crate::plain::forward(a, Activation::Relu, &PaddedGraph::new(batch, &device))
+        }
+        QNetwork::S2v(_) => unreachable!("an AFGNet configuration"),
+    };
+    for &n in &args.sizes {
+        let batch = random_batch(n, args.batch)?;
+        let net = config.init::<TrainBackend>(&device);
+        let ours: Vec<f32> = net
+            .forward(&GraphTensors::new(&batch, &device))
+            .into_data()
+            .to_vec()
+            .expect("f32");
+        let plain: Vec<f32> = plain_q(&net, &batch).into_data().to_vec().expect("f32");
+        let gap = ours
+            .iter()
+            .zip(&plain)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f32::max);
+        if gap > 1e-4 {
+            bail!("the plain model's Q values differ from ours by {gap} at N = {n}");
+        }
+        let plain = step_time(args.repeats, &config, args.batch, |net| {
+            plain_q(net, &batch)
+        })?;
+        let ours = step_time(args.repeats, &config, args.batch, |net| {
+            net.forward(&GraphTensors::new(&batch, &device))
+        })?;
+        println!(
+            "| {n} | {} | {} | {:.1}× |",
+            fmt_time(plain),
+            fmt_time(ours),
+            plain.as_secs_f64() / ours.as_secs_f64()
+        );
     }
     let inst = GeneratorConfig::paper(args.rollout, 5, 7).generate()?;
     println!(

@@ -2,6 +2,7 @@
 
 mod bench;
 mod datasets;
+mod plain;
 mod scale;
 mod solve;
 mod tables;
