@@ -150,8 +150,9 @@ fn append_log(path: &Path, value: &serde_json::Value) -> Result<()> {
     Ok(())
 }
 
-/// Keeps the log lines of steps up to `step` (a resumed run repeats what came after).
-fn truncate_log(path: &Path, step: u64) -> Result<()> {
+/// Keeps the log lines of steps up to `step` (a resumed run repeats what came after)
+/// and returns the last kept `elapsed_s`, from which the resumed run's clock goes on.
+fn truncate_log(path: &Path, step: u64) -> Result<f64> {
     let text = std::fs::read_to_string(path).unwrap_or_default();
     let kept: String = text
         .lines()
@@ -164,11 +165,15 @@ fn truncate_log(path: &Path, step: u64) -> Result<()> {
         .map(|l| format!("{l}\n"))
         .collect();
     afg_game::io::write_atomic(path, kept.as_bytes())?;
-    Ok(())
+    Ok(kept
+        .lines()
+        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+        .filter_map(|v| v["elapsed_s"].as_f64())
+        .fold(0.0, f64::max))
 }
 
 pub fn run(args: TrainArgs) -> Result<()> {
-    let (dir, mut trainer) = match &args.resume {
+    let (dir, mut trainer, elapsed_before) = match &args.resume {
         Some(dir) => {
             let stored: TrainConfig = serde_json::from_str(
                 &std::fs::read_to_string(dir.join("config.json")).with_context(|| {
@@ -192,9 +197,9 @@ pub fn run(args: TrainArgs) -> Result<()> {
             }
             let trainer =
                 Trainer::resume(dir).with_context(|| format!("resuming {}", dir.display()))?;
-            truncate_log(&dir.join("log.jsonl"), trainer.step())?;
+            let elapsed_before = truncate_log(&dir.join("log.jsonl"), trainer.step())?;
             eprintln!("resuming {} at step {}", dir.display(), trainer.step());
-            (dir.clone(), trainer)
+            (dir.clone(), trainer, elapsed_before)
         }
         None => {
             let config = args.config()?;
@@ -218,7 +223,7 @@ pub fn run(args: TrainArgs) -> Result<()> {
                 &dir.join("log.jsonl"),
                 &json!({"event": "start", "config": config, "git_revision": git_revision(), "baselines": baselines(&config)?}),
             )?;
-            (dir, trainer)
+            (dir, trainer, 0.0)
         }
     };
     let config = trainer.config().clone();
@@ -239,6 +244,9 @@ pub fn run(args: TrainArgs) -> Result<()> {
     );
     bar.set_position(trainer.step());
     let started = Instant::now();
+    // Seconds of training so far, across resumes (time lost after a run's last
+    // checkpoint is not counted).
+    let elapsed = || elapsed_before + started.elapsed().as_secs_f64();
     let mut last_checkpoint = Instant::now();
     let mut last_val = f64::NAN;
     let mut window = Vec::new();
@@ -253,23 +261,39 @@ pub fn run(args: TrainArgs) -> Result<()> {
         let mut failure = None;
         trainer.run_until(target, |event| {
             let result = match event {
-                TrainEvent::Step { step, loss, epsilon } => {
+                TrainEvent::Step {
+                    step,
+                    loss,
+                    epsilon,
+                } => {
                     window.push(*loss);
                     bar.set_position(*step);
-                    bar.set_message(format!("{name} ε {epsilon:.2} loss {loss:.4} val {last_val:.2}"));
+                    bar.set_message(format!(
+                        "{name} ε {epsilon:.2} loss {loss:.4} val {last_val:.2}"
+                    ));
                     if step.is_multiple_of(10) {
                         let mean = window.iter().sum::<f32>() / window.len() as f32;
                         window.clear();
-                        append_log(&log, &json!({"event": "step", "step": step, "loss": mean, "epsilon": epsilon,
-                            "elapsed_s": started.elapsed().as_secs_f64()}))
+                        append_log(
+                            &log,
+                            &json!({"event": "step", "step": step, "loss": mean, "epsilon": epsilon,
+                            "elapsed_s": elapsed()}),
+                        )
                     } else {
                         Ok(())
                     }
                 }
-                TrainEvent::Validation { step, welfare, percent_of_opt } => {
+                TrainEvent::Validation {
+                    step,
+                    welfare,
+                    percent_of_opt,
+                } => {
                     last_val = *welfare;
-                    append_log(&log, &json!({"event": "validation", "step": step, "welfare": welfare,
-                        "percent_of_opt": percent_of_opt, "elapsed_s": started.elapsed().as_secs_f64()}))
+                    append_log(
+                        &log,
+                        &json!({"event": "validation", "step": step, "welfare": welfare,
+                        "percent_of_opt": percent_of_opt, "elapsed_s": elapsed()}),
+                    )
                 }
             };
             if let Err(e) = result {
@@ -288,7 +312,7 @@ pub fn run(args: TrainArgs) -> Result<()> {
     save_network(trainer.network(), &config.network, &dir.join("model"))?;
     append_log(
         &log,
-        &json!({"event": "end", "step": trainer.step(), "elapsed_s": started.elapsed().as_secs_f64()}),
+        &json!({"event": "end", "step": trainer.step(), "elapsed_s": elapsed()}),
     )?;
     bar.finish_and_clear();
     let (welfare, pct) = trainer.validate()?;
@@ -504,6 +528,24 @@ mod tests {
             crate::Command::PlotCurves(a) => run_plot(a),
             _ => unreachable!("only train and plot-curves here"),
         }
+    }
+
+    #[test]
+    fn truncating_a_log_keeps_earlier_steps_and_their_clock() {
+        let path = std::env::temp_dir().join(format!("afg-truncate-{}.jsonl", std::process::id()));
+        let lines = [
+            r#"{"event":"start"}"#,
+            r#"{"event":"step","step":10,"elapsed_s":1.0}"#,
+            r#"{"event":"validation","step":20,"elapsed_s":2.5}"#,
+            r#"{"event":"step","step":30,"elapsed_s":4.0}"#,
+        ];
+        std::fs::write(&path, lines.join("\n") + "\n").unwrap();
+        assert_eq!(truncate_log(&path, 20).unwrap(), 2.5);
+        let kept = std::fs::read_to_string(&path).unwrap();
+        assert_eq!(kept, lines[..3].join("\n") + "\n");
+        std::fs::write(&path, lines[0]).unwrap();
+        assert_eq!(truncate_log(&path, 0).unwrap(), 0.0);
+        std::fs::remove_file(&path).unwrap();
     }
 
     #[test]
