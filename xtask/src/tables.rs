@@ -184,18 +184,25 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
             rows.push(evaluate(label, method.allocator(0).as_ref(), &insts, &opt)?);
         }
         let few = t2_learned.min(insts.len());
-        for trained in [20, 60, 100] {
-            let stem = model_stem(root, "afgnet_ddqn", trained);
-            if !stem.with_extension("mpk").exists() {
-                continue;
+        for (name, dir) in [
+            ("AFGNet_DDQN", "afgnet_ddqn"),
+            ("AFGNet_DDQN + gain residual (ours)", "afgnet_ddqn_gain"),
+        ] {
+            for trained in [20, 60, 100] {
+                let stem = model_stem(root, dir, trained);
+                if !stem.with_extension("mpk").exists() {
+                    continue;
+                }
+                let mut policy = LearnedPolicy::load(&stem)?;
+                let label = format!("{name} trained at N = {trained}");
+                rows.push(evaluate(&label, &policy, &insts[..few], &opt[..few])?);
+                if dir == "afgnet_ddqn" {
+                    // The fast variant: one pass per N/100 robots, then balanced repair.
+                    (policy.block, policy.repair) = (n / 100, true);
+                    let label = format!("{label}, block {}, + repair", policy.block);
+                    rows.push(evaluate(&label, &policy, &insts, &opt)?);
+                }
             }
-            let mut policy = LearnedPolicy::load(&stem)?;
-            let label = format!("AFGNet_DDQN trained at N = {trained}");
-            rows.push(evaluate(&label, &policy, &insts[..few], &opt[..few])?);
-            // The fast variant: one network pass per N/100 robots, then balanced repair.
-            (policy.block, policy.repair) = (n / 100, true);
-            let label = format!("{label}, block {}, + repair", policy.block);
-            rows.push(evaluate(&label, &policy, &insts, &opt)?);
         }
         bar.inc(1);
         table2.push((n, rows));
