@@ -58,9 +58,7 @@ impl CentralisedDa {
             schedule: Vec::new(),
         }
     }
-}
 
-impl CentralisedDa {
     /// One turn: `robot` moves to its best response if that is strictly better.
     fn turn(&self, instance: &Instance, a: &mut Assignment, robot: RobotId) -> bool {
         match instance.best_response(a, robot, self.preference) {

@@ -86,6 +86,15 @@ impl Dense {
         }
     }
 
+    /// The rows `rows` of the weight with the layer's own bias: the part that reads
+    /// those inputs, plus the constant term.
+    fn rows_with_bias(&self, rows: Range<usize>) -> Dense {
+        Dense {
+            bias: self.bias.clone(),
+            ..self.rows(rows)
+        }
+    }
+
     /// Row `r` of the weight: the layer's response to input `r`.
     fn row(&self, r: usize) -> &[f32] {
         &self.weight[r * self.outputs..(r + 1) * self.outputs]
@@ -143,11 +152,9 @@ impl Head {
     fn from_burn<B: Backend>(head: &QHead<B>, activation: Activation) -> Self {
         let hidden = Dense::from_burn(&head.hidden);
         let d = hidden.outputs;
-        let mut hidden_pooled = hidden.rows(0..d);
-        hidden_pooled.bias = hidden.bias.clone();
         Head {
             theta7: Dense::from_burn(&head.theta7),
-            hidden_pooled,
+            hidden_pooled: hidden.rows_with_bias(0..d),
             hidden_actor: hidden.rows(d..2 * d),
             output: Dense::from_burn(&head.output),
             activation,
@@ -274,18 +281,12 @@ impl FastPolicy {
                         let theta3 = Dense::from_burn(&l.theta3);
                         let theta6 = Dense::from_burn(&l.theta6);
                         let theta5 = Dense::from_burn(&l.theta5);
-                        let mut edge_task = theta4.rows(1..theta4.inputs);
-                        edge_task.bias = theta4.bias.clone();
-                        let mut eta_message = theta3.rows(0..d);
-                        eta_message.bias = theta3.bias.clone();
-                        let mut eta_term = theta6.rows(d..2 * d);
-                        eta_term.bias = theta6.bias.clone();
                         FastAfgLayer {
                             edge_weight: theta4.row(0).to_vec(),
-                            edge_task,
-                            eta_message,
+                            edge_task: theta4.rows_with_bias(1..theta4.inputs),
+                            eta_message: theta3.rows_with_bias(0..d),
                             eta_degree: theta3.row(d).to_vec(),
-                            eta_term,
+                            eta_term: theta6.rows_with_bias(d..2 * d),
                             mix: side_by_side(&theta6.rows(0..d), &theta5.rows(0..d)),
                             inner: theta5.rows(d..2 * d),
                             next_bias: theta5.bias.clone(),

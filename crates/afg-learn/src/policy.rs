@@ -308,13 +308,6 @@ impl LearnedPolicy {
                 instance.num_robots(),
             )
         } else {
-            if instance.num_tasks() != self.config.tasks() {
-                return Err(LearnError::InvalidAction(format!(
-                    "the network was built for M = {} tasks, the instance has {}",
-                    self.config.tasks(),
-                    instance.num_tasks()
-                )));
-            }
             let graph = RobotGraph::build(instance.robots(), self.graph)?;
             let out = self.fast.rollout(instance, &graph, self.block)?;
             (out.assignment, out.passes)
