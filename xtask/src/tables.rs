@@ -232,6 +232,15 @@ fn row_line(r: &Row, paper: &str) -> String {
     )
 }
 
+/// The paper's numbers for N = `n` in one of its tables.
+fn paper_row<const K: usize>(table: &[(usize, [f64; K])], n: usize) -> [f64; K] {
+    table
+        .iter()
+        .find(|(m, _)| *m == n)
+        .map(|(_, p)| *p)
+        .expect("the paper reports every N we tabulate")
+}
+
 fn markdown_tables(res: &Results) -> String {
     let mut s = String::new();
     let _ = writeln!(
@@ -240,11 +249,7 @@ fn markdown_tables(res: &Results) -> String {
         res.table1[0].1[0].instances
     );
     for (n, rows) in &res.table1 {
-        let paper = PAPER_TABLE1
-            .iter()
-            .find(|(m, _)| m == n)
-            .map(|(_, p)| *p)
-            .expect("paper row");
+        let paper = paper_row(&PAPER_TABLE1, *n);
         let _ = writeln!(
             s,
             "**N = {n}** (paper: S2V_DDQN {}, AFGNet_DQN {}, AFGNet_DDQN {}, NS_rate {} %)\n",
@@ -272,11 +277,7 @@ fn markdown_tables(res: &Results) -> String {
         res.table2[0].1[0].instances
     );
     for (n, rows) in &res.table2 {
-        let paper = PAPER_TABLE2
-            .iter()
-            .find(|(m, _)| m == n)
-            .map(|(_, p)| *p)
-            .expect("paper row");
+        let paper = paper_row(&PAPER_TABLE2, *n);
         let _ = writeln!(
             s,
             "**N = {n}** (paper: DA {} in {} s, NS {} %; Pretrain_60 {} in {} s, NS {} %)\n",

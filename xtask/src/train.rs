@@ -154,22 +154,24 @@ fn append_log(path: &Path, value: &serde_json::Value) -> Result<()> {
 /// and returns the last kept `elapsed_s`, from which the resumed run's clock goes on.
 fn truncate_log(path: &Path, step: u64) -> Result<f64> {
     let text = std::fs::read_to_string(path).unwrap_or_default();
-    let kept: String = text
-        .lines()
-        .filter(|l| {
-            serde_json::from_str::<serde_json::Value>(l)
-                .ok()
-                .and_then(|v| v["step"].as_u64())
-                .is_none_or(|s| s <= step)
-        })
-        .map(|l| format!("{l}\n"))
-        .collect();
+    let (mut kept, mut elapsed) = (String::new(), 0.0f64);
+    for line in text.lines() {
+        let event = serde_json::from_str::<serde_json::Value>(line).ok();
+        let event = event.as_ref();
+        if event
+            .and_then(|v| v["step"].as_u64())
+            .is_some_and(|s| s > step)
+        {
+            continue;
+        }
+        if let Some(e) = event.and_then(|v| v["elapsed_s"].as_f64()) {
+            elapsed = elapsed.max(e);
+        }
+        kept.push_str(line);
+        kept.push('\n');
+    }
     afg_game::io::write_atomic(path, kept.as_bytes())?;
-    Ok(kept
-        .lines()
-        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
-        .filter_map(|v| v["elapsed_s"].as_f64())
-        .fold(0.0, f64::max))
+    Ok(elapsed)
 }
 
 pub fn run(args: TrainArgs) -> Result<()> {
@@ -370,16 +372,25 @@ pub struct Curve {
     pub baselines: Vec<(String, f64)>,
 }
 
-/// Reads the validation curve from `dir/log.jsonl`.
-pub fn read_curve(dir: &Path) -> Result<Curve> {
+/// The events of `dir/log.jsonl`, one JSON value per line.
+fn read_log(dir: &Path) -> Result<Vec<serde_json::Value>> {
     let path = dir.join("log.jsonl");
     let text =
         std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+    text.lines()
+        .enumerate()
+        .map(|(i, line)| {
+            serde_json::from_str(line)
+                .with_context(|| format!("{}:{}: not JSON", path.display(), i + 1))
+        })
+        .collect()
+}
+
+/// Reads the validation curve from `dir/log.jsonl`.
+pub fn read_curve(dir: &Path) -> Result<Curve> {
     let (mut label, mut points, mut baselines) =
         (dir.display().to_string(), Vec::new(), Vec::new());
-    for (i, line) in text.lines().enumerate() {
-        let v: serde_json::Value = serde_json::from_str(line)
-            .with_context(|| format!("{}:{}: not JSON", path.display(), i + 1))?;
+    for v in read_log(dir)? {
         match v["event"].as_str() {
             Some("start") => {
                 let c = &v["config"];
@@ -640,12 +651,7 @@ pub fn run_report(args: ReportArgs) -> Result<()> {
     println!("|---|---|---|---|---|---|---|");
     let mut baseline_rows = Vec::new();
     for dir in &args.dirs {
-        let text = std::fs::read_to_string(dir.join("log.jsonl"))
-            .with_context(|| format!("{}", dir.display()))?;
-        let events: Vec<serde_json::Value> = text
-            .lines()
-            .map(serde_json::from_str)
-            .collect::<Result<_, _>>()?;
+        let events = read_log(dir)?;
         let start = events
             .iter()
             .find(|e| e["event"] == "start")
@@ -748,11 +754,7 @@ pub fn command_line(c: &TrainConfig, dir: &Path) -> String {
 pub fn write_manifest(dir: &Path) -> Result<()> {
     let config: TrainConfig =
         serde_json::from_str(&std::fs::read_to_string(dir.join("config.json"))?)?;
-    let log = std::fs::read_to_string(dir.join("log.jsonl"))?;
-    let events: Vec<serde_json::Value> = log
-        .lines()
-        .map(serde_json::from_str)
-        .collect::<Result<_, _>>()?;
+    let events = read_log(dir)?;
     let last_validation = events
         .iter()
         .rev()
