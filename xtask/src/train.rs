@@ -542,6 +542,41 @@ mod tests {
     }
 
     #[test]
+    fn command_line_reproduces_the_configuration() {
+        let dir = Path::new("models/x");
+        for flags in [
+            "--scale 20",
+            "--scale 60 --algo dqn --net s2v --steps 50 --seed 3",
+            "--scale 20 --lr 0.001 --batch 64 --n-step 3",
+            "--scale 20 --gain-residual",
+            "--scale 100 --paper",
+        ] {
+            let argv = ["cargo xtask", "train"]
+                .into_iter()
+                .chain(flags.split(' '))
+                .chain(["--out", "models/x"]);
+            let crate::Command::Train(args) = crate::Cli::try_parse_from(argv).unwrap().command
+            else {
+                unreachable!("a train command")
+            };
+            let config = args.config().unwrap();
+            let line = command_line(&config, dir);
+            let crate::Command::Train(again) = crate::Cli::try_parse_from(line.split(' ').skip(1))
+                .unwrap()
+                .command
+            else {
+                unreachable!("a train command")
+            };
+            assert_eq!(
+                serde_json::to_value(again.config().unwrap()).unwrap(),
+                serde_json::to_value(&config).unwrap(),
+                "{line}"
+            );
+            assert!(line.ends_with(" --out models/x"), "{line}");
+        }
+    }
+
+    #[test]
     fn truncating_a_log_keeps_earlier_steps_and_their_clock() {
         let path = std::env::temp_dir().join(format!("afg-truncate-{}.jsonl", std::process::id()));
         let lines = [
@@ -742,6 +777,11 @@ pub fn command_line(c: &TrainConfig, dir: &Path) -> String {
     }
     if c.n_step != default.n_step {
         cmd += &format!(" --n-step {}", c.n_step);
+    }
+    if let NetworkConfig::AfgNet(a) = &c.network
+        && a.gain_residual == Some(true)
+    {
+        cmd += " --gain-residual";
     }
     if !c.huber {
         cmd += " --paper";
