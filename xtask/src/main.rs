@@ -11,6 +11,9 @@ mod train;
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 /// afg project tasks. Run `cargo xtask <command> --help` for each command's options.
 #[derive(Parser)]
 #[command(name = "cargo xtask", version, about)]

@@ -9,7 +9,7 @@ use burn::tensor::backend::Backend;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use crate::layers::{Activation, QHead, seeded_linear};
+use crate::layers::{Activation, QHead, linear_of_concat, seeded_linear};
 use crate::tensors::GraphTensors;
 
 /// Shape and seed of an [`AfgNet`].
@@ -107,28 +107,39 @@ impl<B: Backend> AfgNet<B> {
         let mut delta =
             s.apply(self.theta1.forward(g.nu.clone())) + s.apply(self.theta2.forward(g.mu.clone()));
         let d = delta.dims()[1];
-        // [w_ik || ν_k] for every edge                                [E, 1 + M]
-        let edge_input = (g.num_edges() > 0)
-            .then(|| Tensor::cat(vec![g.weight.clone(), g.senders_of(g.nu.clone())], 1));
-        for layer in &self.layers {
-            // eq. 5: η_i = σ(θ3 [mean_k σ(θ4 [w_ik || ν_k]) || |N_i|])   [V, d]
-            let messages = g.neighbour_mean(d, || {
-                s.apply(
-                    layer
-                        .theta4
-                        .forward(edge_input.clone().expect("edges exist")),
-                )
-            });
-            let eta = s.apply(
-                layer
-                    .theta3
-                    .forward(Tensor::cat(vec![messages, g.degree.clone()], 1)),
+        if self.layers.is_empty() {
+            return delta;
+        }
+        // eq. 5's messages σ(θ4 [w_ik || ν_k]) depend on the graph and the assignment
+        // only, not on δ: all layers' messages are made in one product and summed into
+        // their receivers in one pass, then each layer takes its d columns.  [V, L d]
+        let width = d * self.layers.len();
+        let all_messages = g.neighbour_mean(width, || {
+            let weight = Tensor::cat(
+                self.layers.iter().map(|l| l.theta4.weight.val()).collect(),
+                1,
             );
+            let bias = Tensor::cat(
+                self.layers
+                    .iter()
+                    .map(|l| l.theta4.bias.as_ref().expect("θ4 has a bias").val())
+                    .collect(),
+                0,
+            );
+            s.apply(g.edge_features.clone().matmul(weight) + bias.unsqueeze())
+        });
+        for (l, layer) in self.layers.iter().enumerate() {
+            // eq. 5: η_i = σ(θ3 [mean_k σ(θ4 [w_ik || ν_k]) || |N_i|])   [V, d]
+            let messages = all_messages.clone().narrow(1, l * d, d);
+            let eta = s.apply(linear_of_concat(
+                &layer.theta3,
+                vec![messages, g.degree.clone()],
+            ));
             // eqs. 6–7: mean_k w_ik δ_k                               [V, d]
             let weighted = g.weighted_neighbour_mean(delta.clone());
-            let inner = s.apply(layer.theta6.forward(Tensor::cat(vec![weighted, eta], 1)));
+            let inner = s.apply(linear_of_concat(&layer.theta6, vec![weighted, eta]));
             // eq. 8: δ'_i = σ(θ5 [δ_i || σ(θ6 [..])])                 [V, d]
-            delta = s.apply(layer.theta5.forward(Tensor::cat(vec![delta, inner], 1)));
+            delta = s.apply(linear_of_concat(&layer.theta5, vec![delta, inner]));
         }
         delta
     }

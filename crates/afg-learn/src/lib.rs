@@ -21,7 +21,7 @@ mod train;
 pub use afgnet::{AfgLayer, AfgNet, AfgNetConfig};
 pub use env::Env;
 pub use fast::{FastPolicy, FastRollout, FastRolloutOutcome};
-pub use layers::{Activation, QHead};
+pub use layers::{Activation, QHead, linear_of_concat};
 pub use network::{NetworkConfig, QNetwork};
 pub use policy::{LearnError, LearnedPolicy, LearnedRun, load_network, save_network};
 pub use rollout::greedy_rollouts;

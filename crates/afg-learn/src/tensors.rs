@@ -25,6 +25,9 @@ pub struct GraphTensors<B: Backend> {
     pub sender: Tensor<B, 1, Int>,
     /// Edge weight w_ik, `[E, 1]`.
     pub weight: Tensor<B, 2>,
+    /// AFGNet's edge input `[w_ik || ν_k]` (weight, then the sender's robot
+    /// features), `[E, 1 + M]`: built here rather than gathered on the device.
+    pub edge_features: Tensor<B, 2>,
     /// Graph of each node, `[V]`.
     pub node_graph: Tensor<B, 1, Int>,
     /// `1 / N_g`, `[G, 1]`: turns per-graph sums into means.
@@ -78,6 +81,11 @@ impl<B: Backend> GraphTensors<B> {
         let m = batch.num_tasks;
         let inv_degree: Vec<f32> = batch.degree.iter().map(|&d| 1.0 / d.max(1.0)).collect();
         let inv_size: Vec<f32> = batch.graph_size.iter().map(|&n| 1.0 / n).collect();
+        let mut edge_features = Vec::with_capacity(batch.num_edges() * (1 + m));
+        for (&w, &k) in batch.edge_weight.iter().zip(&batch.edge_sender) {
+            edge_features.push(w);
+            edge_features.extend_from_slice(&batch.nu[k as usize * m..(k as usize + 1) * m]);
+        }
         GraphTensors {
             nu: float2(&batch.nu, m, device),
             mu: float2(&batch.mu, m, device),
@@ -86,6 +94,7 @@ impl<B: Backend> GraphTensors<B> {
             receiver: int1(&batch.edge_receiver, device),
             sender: int1(&batch.edge_sender, device),
             weight: float2(&batch.edge_weight, 1, device),
+            edge_features: float2(&edge_features, 1 + m, device),
             node_graph: int1(&batch.node_graph, device),
             inv_graph_size: float2(&inv_size, 1, device),
             actors: int1(&batch.actors, device),
