@@ -161,8 +161,10 @@ pub fn run_models(args: ModelBenchArgs) -> Result<()> {
     use afg_learn::{Activation, GraphTensors, InferBackend, NetworkConfig};
     let device = Default::default();
     println!(
-        "Median of {} runs; batch of {} states from random partial episodes (M = 5); CPU ndarray back end.\n",
-        args.repeats, args.batch
+        "Median of {} runs; batch of {} states from random partial episodes (M = 5); CPU ndarray back end; {} allocator.\n",
+        args.repeats,
+        args.batch,
+        crate::ALLOCATOR_NAME
     );
     println!(
         "| network | N | forward, edge lists | forward, dense | train step, edge lists | train step, dense | speed-up of the step |"

@@ -11,8 +11,17 @@ mod train;
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 
+/// See the `mimalloc` feature in Cargo.toml.
+#[cfg(feature = "mimalloc")]
 #[global_allocator]
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
+/// The global allocator this build uses, for benchmark headers.
+pub const ALLOCATOR_NAME: &str = if cfg!(feature = "mimalloc") {
+    "mimalloc"
+} else {
+    "system"
+};
 
 /// afg project tasks. Run `cargo xtask <command> --help` for each command's options.
 #[derive(Parser)]

@@ -44,7 +44,7 @@ pub struct TrainArgs {
     /// Transitions per gradient step.
     #[arg(long)]
     batch: Option<usize>,
-    /// Adam learning rate.
+    /// Adam learning rate (default 1e-3; the paper's is 1e-4).
     #[arg(long)]
     lr: Option<f64>,
     /// n-step returns (1 = the paper's one-step target).
@@ -55,7 +55,7 @@ pub struct TrainArgs {
     #[arg(long)]
     gain_residual: bool,
     /// The paper's settings where ours differ: squared loss, raw rewards, no clipping,
-    /// target sync every 1000 steps.
+    /// target sync every 1000 steps, learning rate 1e-4 (an explicit --lr still wins).
     #[arg(long)]
     paper: bool,
     /// Run directory: config.json, log.jsonl, checkpoint/, and model.{json,mpk} at the end.
@@ -73,9 +73,9 @@ pub struct TrainArgs {
 /// kind for AFGNet DDQN (see docs/training.md for the measured rates).
 pub fn default_steps(scale: usize) -> Option<u64> {
     match scale {
-        20 => Some(6_000),
-        60 => Some(1_800),
-        100 => Some(900),
+        20 => Some(20_000),
+        60 => Some(7_000),
+        100 => Some(4_000),
         _ => None,
     }
 }
@@ -108,6 +108,13 @@ impl TrainArgs {
             AlgoArg::Ddqn => Algo::Ddqn,
         };
         let mut c = TrainConfig::new(scale, algo, network, steps, seed);
+        if self.paper {
+            c.huber = false;
+            c.reward_scaling = false;
+            c.grad_clip = None;
+            c.target_sync = 1000;
+            c.lr = 1e-4;
+        }
         if let Some(b) = self.batch {
             c.batch = b;
         }
@@ -116,12 +123,6 @@ impl TrainArgs {
         }
         if let Some(k) = self.n_step {
             c.n_step = k;
-        }
-        if self.paper {
-            c.huber = false;
-            c.reward_scaling = false;
-            c.grad_clip = None;
-            c.target_sync = 1000;
         }
         c.check()?;
         Ok(c)
