@@ -47,6 +47,10 @@ pub struct TrainArgs {
     /// Adam learning rate (default 1e-3; the paper's is 1e-4).
     #[arg(long)]
     lr: Option<f64>,
+    /// Keep the learning rate constant (by default it anneals linearly to a tenth of
+    /// --lr over the run).
+    #[arg(long)]
+    constant_lr: bool,
     /// n-step returns (1 = the paper's one-step target).
     #[arg(long)]
     n_step: Option<usize>,
@@ -55,7 +59,8 @@ pub struct TrainArgs {
     #[arg(long)]
     gain_residual: bool,
     /// The paper's settings where ours differ: squared loss, raw rewards, no clipping,
-    /// target sync every 1000 steps, learning rate 1e-4 (an explicit --lr still wins).
+    /// target sync every 1000 steps, constant learning rate 1e-4 (an explicit --lr still
+    /// wins).
     #[arg(long)]
     paper: bool,
     /// Run directory: config.json, log.jsonl, checkpoint/, and model.{json,mpk} at the end.
@@ -114,6 +119,10 @@ impl TrainArgs {
             c.grad_clip = None;
             c.target_sync = 1000;
             c.lr = 1e-4;
+            c.lr_decay = false;
+        }
+        if self.constant_lr {
+            c.lr_decay = false;
         }
         if let Some(b) = self.batch {
             c.batch = b;
@@ -136,6 +145,7 @@ impl TrainArgs {
             || self.seed.is_some()
             || self.batch.is_some()
             || self.lr.is_some()
+            || self.constant_lr
             || self.n_step.is_some()
             || self.gain_residual
             || self.paper
@@ -551,6 +561,7 @@ mod tests {
             "--scale 20 --lr 0.001 --batch 64 --n-step 3",
             "--scale 20 --gain-residual",
             "--scale 100 --paper",
+            "--scale 20 --constant-lr --lr 0.01",
         ] {
             let argv = ["cargo xtask", "train"]
                 .into_iter()
@@ -776,6 +787,10 @@ pub fn command_line(c: &TrainConfig, dir: &Path) -> String {
     if c.lr != default.lr {
         cmd += &format!(" --lr {}", c.lr);
     }
+    if !c.lr_decay && c.huber {
+        // (--paper implies it)
+        cmd += " --constant-lr";
+    }
     if c.n_step != default.n_step {
         cmd += &format!(" --n-step {}", c.n_step);
     }
@@ -863,6 +878,7 @@ pub fn run_all(args: TrainAllArgs) -> Result<()> {
                 seed: Some(0),
                 batch: None,
                 lr: None,
+                constant_lr: false,
                 n_step: None,
                 gain_residual: false,
                 paper: false,

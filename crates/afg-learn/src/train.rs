@@ -68,8 +68,13 @@ pub struct TrainConfig {
     pub steps: u64,
     /// Transitions per gradient step.
     pub batch: usize,
-    /// Adam learning rate.
+    /// Adam learning rate (at step 0; see `lr_decay`).
     pub lr: f64,
+    /// Anneal the learning rate linearly from `lr` to `lr / 10` over the run
+    /// ([`TrainConfig::learning_rate`]), so that the final weights settle instead of
+    /// swinging between validations. Files written before it existed load as `false`.
+    #[serde(default)]
+    pub lr_decay: bool,
     /// Gradient steps between target-network syncs.
     pub target_sync: u64,
     /// ε at the start of training.
@@ -116,6 +121,7 @@ impl TrainConfig {
             steps,
             batch: 256,
             lr: 1e-3,
+            lr_decay: true,
             target_sync: (steps / 20).clamp(10, 1000),
             eps_start: 1.0,
             eps_end: 0.05,
@@ -167,6 +173,29 @@ impl TrainConfig {
             return bad("the gain residual is in the features' unit: it needs reward scaling");
         }
         Ok(())
+    }
+
+    /// The learning rate of gradient step `step` (0-based): `lr` constant, or annealed
+    /// linearly to `lr / 10` at the last step when `lr_decay` is set.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_learn::{Algo, NetworkConfig, TrainConfig};
+    ///
+    /// let mut c = TrainConfig::new(20, Algo::Ddqn, NetworkConfig::afgnet(5, 0), 101, 0);
+    /// c.lr = 1e-3;
+    /// assert_eq!(c.learning_rate(0), 1e-3);
+    /// assert!((c.learning_rate(50) - 5.5e-4).abs() < 1e-12);
+    /// assert!((c.learning_rate(100) - 1e-4).abs() < 1e-12);
+    /// c.lr_decay = false;
+    /// assert_eq!(c.learning_rate(100), 1e-3);
+    /// ```
+    pub fn learning_rate(&self, step: u64) -> f64 {
+        if !self.lr_decay || self.steps <= 1 {
+            return self.lr;
+        }
+        let progress = (step as f64 / (self.steps - 1) as f64).min(1.0);
+        self.lr * (1.0 - 0.9 * progress)
     }
 
     /// ε at gradient step `step`.
@@ -561,7 +590,8 @@ impl Trainer {
         };
         let loss_value: f32 = loss.clone().into_scalar();
         let grads = GradientsParams::from_grads(loss.backward(), &self.online);
-        self.online = self.optim.step(self.config.lr, self.online.clone(), grads);
+        let lr = self.config.learning_rate(self.step);
+        self.online = self.optim.step(lr, self.online.clone(), grads);
         loss_value
     }
 
