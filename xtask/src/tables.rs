@@ -350,6 +350,7 @@ fn write_outputs(root: &Path, res: &Results, tables: &str, quick: bool) -> Resul
     md.push_str(END);
     md.push('\n');
     let _ = writeln!(md, "\n{}", headline(res));
+    md.push_str(&models_table(root)?);
     afg_game::io::write_atomic(&docs.join("RESULTS.md"), md.as_bytes())?;
     let readme = root.join("README.md");
     if readme.exists() {
@@ -420,6 +421,51 @@ fn assignment_map(root: &Path, out: &Path) -> Result<()> {
     }
     afg_game::io::write_atomic(out, svg.as_bytes())?;
     Ok(())
+}
+
+/// The training budget of every committed model the tables use, from its manifest.
+fn models_table(root: &Path) -> Result<String> {
+    let mut md = String::from(
+        "\n## The committed models\n\n\
+         Each row's command retrains it (`manifest.json` beside the weights; \
+         wall times are those of runs that shared the 2 cores with other work).\n\n\
+         | model | N | steps | learning rate | wall time | final validation, % of OPT | command |\n\
+         |---|---|---|---|---|---|---|\n",
+    );
+    for (label, dir) in TABLE1_MODELS {
+        for n in [20, 60, 100] {
+            let path = root.join("models").join(format!("{dir}_n{n}"));
+            let Ok(text) = std::fs::read_to_string(path.join("manifest.json")) else {
+                continue;
+            };
+            let manifest: serde_json::Value = serde_json::from_str(&text)
+                .with_context(|| format!("reading {}/manifest.json", path.display()))?;
+            let config: afg_learn::TrainConfig = serde_json::from_str(
+                &std::fs::read_to_string(path.join("config.json"))
+                    .with_context(|| format!("reading {}/config.json", path.display()))?,
+            )?;
+            let lr = if config.lr_decay {
+                format!(
+                    "{:.1e} → {:.1e} (annealed)",
+                    config.lr,
+                    config.learning_rate(config.steps)
+                )
+            } else {
+                format!("{:.1e} (constant)", config.lr)
+            };
+            let minutes = manifest["wall_time_s"].as_f64().unwrap_or(f64::NAN) / 60.0;
+            let pct = manifest["final_validation"]["percent_of_opt"]
+                .as_f64()
+                .unwrap_or(f64::NAN);
+            let _ = writeln!(
+                md,
+                "| {label} | {n} | {} | {lr} | {minutes:.0} min | {pct:.1} % | `{}` |",
+                config.steps,
+                manifest["command"].as_str().unwrap_or("?")
+            );
+        }
+    }
+    Ok(md)
 }
 
 /// The honest headline: AFGNet_DDQN against DA, greedy and OPT at each N, in numbers.
