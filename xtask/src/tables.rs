@@ -440,10 +440,7 @@ fn models_table(root: &Path) -> Result<String> {
             };
             let manifest: serde_json::Value = serde_json::from_str(&text)
                 .with_context(|| format!("reading {}/manifest.json", path.display()))?;
-            let config: afg_learn::TrainConfig = serde_json::from_str(
-                &std::fs::read_to_string(path.join("config.json"))
-                    .with_context(|| format!("reading {}/config.json", path.display()))?,
-            )?;
+            let config = crate::train::read_config(&path)?;
             let lr = if config.lr_decay {
                 format!(
                     "{:.1e} → {:.1e} (annealed)",

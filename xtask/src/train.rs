@@ -185,23 +185,26 @@ fn truncate_log(path: &Path, step: u64) -> Result<f64> {
     Ok(elapsed)
 }
 
+/// The configuration of the run in `dir` (its `config.json`).
+pub fn read_config(dir: &Path) -> Result<TrainConfig> {
+    let text = std::fs::read_to_string(dir.join("config.json")).with_context(|| {
+        format!(
+            "{} holds no training run (config.json missing)",
+            dir.display()
+        )
+    })?;
+    serde_json::from_str(&text).with_context(|| {
+        format!(
+            "{}/config.json is not a training configuration",
+            dir.display()
+        )
+    })
+}
+
 pub fn run(args: TrainArgs) -> Result<()> {
     let (dir, mut trainer, elapsed_before) = match &args.resume {
         Some(dir) => {
-            let stored: TrainConfig = serde_json::from_str(
-                &std::fs::read_to_string(dir.join("config.json")).with_context(|| {
-                    format!(
-                        "{} holds no training run (config.json missing)",
-                        dir.display()
-                    )
-                })?,
-            )
-            .with_context(|| {
-                format!(
-                    "{}/config.json is not a training configuration",
-                    dir.display()
-                )
-            })?;
+            let stored = read_config(dir)?;
             if args.any_setting_given() && args.config()? != stored {
                 bail!(
                     "{} holds a run with other settings; resume it without settings, or start a new run with --out",
@@ -808,8 +811,7 @@ pub fn command_line(c: &TrainConfig, dir: &Path) -> String {
 /// Writes `dir/manifest.json` from the run's config and log: the command, seed, steps,
 /// wall time, git revision and final validation welfare.
 pub fn write_manifest(dir: &Path) -> Result<()> {
-    let config: TrainConfig =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("config.json"))?)?;
+    let config = read_config(dir)?;
     let events = read_log(dir)?;
     let last_validation = events
         .iter()
