@@ -3,6 +3,7 @@
 mod bench;
 mod datasets;
 mod plain;
+mod regret;
 mod scale;
 mod solve;
 mod tables;
@@ -53,6 +54,8 @@ pub enum Command {
     TrainingReport(train::ReportArgs),
     /// Train every model the tables use (AFGNet DDQN/DQN and S2V DDQN at N = 20, 60, 100).
     TrainAll(train::TrainAllArgs),
+    /// Where a trained model loses welfare along its rollouts, against the exact Q*.
+    Regret(regret::RegretArgs),
     /// (Re)write manifest.json of finished training runs from their config and log.
     Manifest(train::ManifestArgs),
 }
@@ -70,6 +73,7 @@ fn main() -> Result<()> {
         Command::TrainingReport(args) => train::run_report(args),
         Command::TrainAll(args) => train::run_all(args),
         Command::Manifest(args) => train::run_manifest(args),
+        Command::Regret(args) => regret::run(args),
     }
 }
 

@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use afg_baseline::Method;
+use afg_graph::Units;
 use afg_learn::{
     Algo, NetworkConfig, TrainConfig, TrainEvent, Trainer, save_network, validation_instances,
 };
@@ -22,6 +23,12 @@ pub enum AlgoArg {
 pub enum NetArg {
     Afgnet,
     S2v,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum UnitsArg {
+    ScaleFree,
+    MeanReward,
 }
 
 #[derive(Args)]
@@ -54,6 +61,23 @@ pub struct TrainArgs {
     /// n-step returns (1 = the paper's one-step target).
     #[arg(long)]
     n_step: Option<usize>,
+    /// Units of the network's inputs and rewards: scale-free (welfare / β, edge weights
+    /// / their mean, the same at every N) or mean-reward (welfare / the instance's mean
+    /// task reward, raw edge weights: the first models' units).
+    #[arg(long, value_enum)]
+    units: Option<UnitsArg>,
+    /// Gradient steps between target-network syncs (default: the run's budget / 20,
+    /// clamped to 10..=1000).
+    #[arg(long)]
+    target_sync: Option<u64>,
+    /// Episodes run side by side (each acting step adds this many transitions).
+    #[arg(long)]
+    parallel_envs: Option<usize>,
+    /// Potential-based reward shaping with the greedy completion's value: the network
+    /// learns how much better than finishing greedily each action is (not in the paper;
+    /// the optimal policy is unchanged).
+    #[arg(long)]
+    greedy_shaping: bool,
     /// AFGNet only: add each action's immediate reward (the actor's join gain) to the
     /// Q values, so the network learns only the value of what follows (not in the paper).
     #[arg(long)]
@@ -108,6 +132,10 @@ impl TrainArgs {
             }
             NetArg::S2v => NetworkConfig::s2v(5, seed),
         };
+        let network = network.with_units(match self.units.unwrap_or(UnitsArg::ScaleFree) {
+            UnitsArg::ScaleFree => Units::ScaleFree,
+            UnitsArg::MeanReward => Units::MeanReward,
+        });
         let algo = match self.algo.unwrap_or(AlgoArg::Ddqn) {
             AlgoArg::Dqn => Algo::Dqn,
             AlgoArg::Ddqn => Algo::Ddqn,
@@ -133,6 +161,13 @@ impl TrainArgs {
         if let Some(k) = self.n_step {
             c.n_step = k;
         }
+        if let Some(k) = self.target_sync {
+            c.target_sync = k;
+        }
+        if let Some(k) = self.parallel_envs {
+            c.parallel_envs = k;
+        }
+        c.greedy_shaping = self.greedy_shaping;
         c.check()?;
         Ok(c)
     }
@@ -147,6 +182,10 @@ impl TrainArgs {
             || self.lr.is_some()
             || self.constant_lr
             || self.n_step.is_some()
+            || self.units.is_some()
+            || self.target_sync.is_some()
+            || self.parallel_envs.is_some()
+            || self.greedy_shaping
             || self.gain_residual
             || self.paper
     }
@@ -299,16 +338,22 @@ pub fn run(args: TrainArgs) -> Result<()> {
                         Ok(())
                     }
                 }
-                TrainEvent::Validation {
-                    step,
-                    welfare,
-                    percent_of_opt,
-                } => {
-                    last_val = *welfare;
+                TrainEvent::Validation { step, result } => {
+                    last_val = result.welfare;
+                    if result.collapsed() {
+                        bar.suspend(|| {
+                            eprintln!(
+                                "warning: step {step}: collapse — on average {:.0} % of the robots took one task",
+                                100.0 * result.largest_task_share
+                            )
+                        });
+                    }
                     append_log(
                         &log,
-                        &json!({"event": "validation", "step": step, "welfare": welfare,
-                        "percent_of_opt": percent_of_opt, "elapsed_s": elapsed()}),
+                        &json!({"event": "validation", "step": step, "welfare": result.welfare,
+                        "percent_of_opt": result.percent_of_opt,
+                        "largest_task_share": result.largest_task_share,
+                        "collapsed": result.collapsed(), "elapsed_s": elapsed()}),
                     )
                 }
             };
@@ -331,10 +376,12 @@ pub fn run(args: TrainArgs) -> Result<()> {
         &json!({"event": "end", "step": trainer.step(), "elapsed_s": elapsed()}),
     )?;
     bar.finish_and_clear();
-    let (welfare, pct) = trainer.validate()?;
+    let v = trainer.validate()?;
     println!(
-        "{name}: {} steps; validation welfare {welfare:.3} ({pct:.2} % of OPT); model in {}",
+        "{name}: {} steps; validation welfare {:.3} ({:.2} % of OPT); model in {}",
         trainer.step(),
+        v.welfare,
+        v.percent_of_opt,
         dir.join("model.mpk").display()
     );
     Ok(())
@@ -565,6 +612,9 @@ mod tests {
             "--scale 20 --gain-residual",
             "--scale 100 --paper",
             "--scale 20 --constant-lr --lr 0.01",
+            "--scale 60 --units mean-reward --target-sync 77 --parallel-envs 8",
+            "--scale 20 --paper --target-sync 50",
+            "--scale 60 --greedy-shaping",
         ] {
             let argv = ["cargo xtask", "train"]
                 .into_iter()
@@ -797,6 +847,20 @@ pub fn command_line(c: &TrainConfig, dir: &Path) -> String {
     if c.n_step != default.n_step {
         cmd += &format!(" --n-step {}", c.n_step);
     }
+    // (--paper sets the sync to 1000)
+    let default_sync = if c.huber { default.target_sync } else { 1000 };
+    if c.target_sync != default_sync {
+        cmd += &format!(" --target-sync {}", c.target_sync);
+    }
+    if c.parallel_envs != default.parallel_envs {
+        cmd += &format!(" --parallel-envs {}", c.parallel_envs);
+    }
+    if c.greedy_shaping {
+        cmd += " --greedy-shaping";
+    }
+    if c.network.units() == Units::MeanReward {
+        cmd += " --units mean-reward";
+    }
     if let NetworkConfig::AfgNet(a) = &c.network
         && a.gain_residual == Some(true)
     {
@@ -882,6 +946,10 @@ pub fn run_all(args: TrainAllArgs) -> Result<()> {
                 lr: None,
                 constant_lr: false,
                 n_step: None,
+                units: None,
+                target_sync: None,
+                parallel_envs: None,
+                greedy_shaping: false,
                 gain_residual: false,
                 paper: false,
                 out: Some(dir),

@@ -13,6 +13,13 @@
 //! from one lazy-deletion heap per ordered task pair; Johnson potentials keep the
 //! reduced costs non-negative so Dijkstra over the M task nodes applies.
 //!
+//! [`Optimum::complete`] solves the same problem with some robots fixed in place: a
+//! fixed robot never enters a heap (so no path shifts it), and the slot costs of its
+//! task start after the fixed members (F_j(n + f_j) − F_j(f_j) is concave whenever
+//! F_j is). This is the exact Q\* oracle of the sequential MDP: with γ = 1 and the
+//! welfare difference as reward, `Q*(s_t, a) = OPT(robots before t fixed, robot t on
+//! a) − W(s_t)`.
+//!
 //! # Complexity
 //! Per robot O(M² + L M log N) for a path of L shifts; O(N M² log N) in all and
 //! O(N M) memory. No N × N structure anywhere.
@@ -39,13 +46,66 @@ use crate::{AllocError, AllocStats, Allocation, Allocator, timed};
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Optimum;
 
+impl Optimum {
+    /// The best complete assignment that keeps every robot assigned in `partial` where
+    /// it is (its optimal completion). With an empty `partial` this is the optimum.
+    ///
+    /// # Errors
+    /// [`AllocError::InvalidParameter`] if `partial` has another N or M than the
+    /// instance, or puts more robots in a task than its capacity.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::{Allocator, Optimum};
+    /// use afg_game::{Assignment, GeneratorConfig, RobotId, TaskId};
+    /// let inst = GeneratorConfig::paper(30, 5, 1).generate()?;
+    /// let mut partial = Assignment::unassigned(30, 5);
+    /// partial.set(RobotId(0), Some(TaskId(3)));
+    /// let done = Optimum.complete(&inst, &partial)?;
+    /// assert_eq!(done.task_of(RobotId(0)), Some(TaskId(3)));
+    /// // Fixing a robot can only cost welfare.
+    /// let opt = Optimum.allocate(&inst)?.assignment;
+    /// assert!(inst.welfare(&done) <= inst.welfare(&opt) + 1e-9);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn complete(
+        &self,
+        instance: &Instance,
+        partial: &Assignment,
+    ) -> Result<Assignment, AllocError> {
+        if partial.num_robots() != instance.num_robots()
+            || partial.sizes().len() != instance.num_tasks()
+        {
+            return Err(AllocError::InvalidParameter(format!(
+                "the partial assignment has {} robots and {} tasks, the instance {} and {}",
+                partial.num_robots(),
+                partial.sizes().len(),
+                instance.num_robots(),
+                instance.num_tasks()
+            )));
+        }
+        if let Some(j) = instance
+            .task_ids()
+            .find(|&j| partial.size(j) > instance.capacity(j))
+        {
+            return Err(AllocError::InvalidParameter(format!(
+                "the partial assignment puts {} robots in task {j}, above its capacity {}",
+                partial.size(j),
+                instance.capacity(j)
+            )));
+        }
+        Ok(optimum(instance, partial.clone()).0)
+    }
+}
+
 impl Allocator for Optimum {
     fn name(&self) -> String {
         "opt".into()
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
-        let ((assignment, shifts), wall_time) = timed(|| optimum(instance));
+        let empty = Assignment::unassigned(instance.num_robots(), instance.num_tasks());
+        let ((assignment, shifts), wall_time) = timed(|| optimum(instance, empty));
         Ok(Allocation {
             assignment,
             stats: AllocStats {
@@ -143,8 +203,9 @@ enum Pred {
     Shift { from: usize, robot: u32 },
 }
 
-/// The optimum assignment and the number of robot shifts the augmentations made.
-fn optimum(inst: &Instance) -> (Assignment, u64) {
+/// The optimal completion of `partial` (robots assigned there stay) and the number of
+/// robot shifts the augmentations made. `partial` must respect capacities.
+fn optimum(inst: &Instance, partial: Assignment) -> (Assignment, u64) {
     let (n, m) = (inst.num_robots(), inst.num_tasks());
     let costs = inst
         .robot_ids()
@@ -154,7 +215,7 @@ fn optimum(inst: &Instance) -> (Assignment, u64) {
         inst,
         m,
         costs,
-        assignment: Assignment::unassigned(n, m),
+        assignment: partial,
         stamps: vec![0; n],
         heaps: (0..m * m).map(|_| BinaryHeap::new()).collect(),
     };
@@ -163,7 +224,10 @@ fn optimum(inst: &Instance) -> (Assignment, u64) {
     let mut pred = vec![Pred::Source; m];
     let mut done = vec![false; m];
     let mut shifts = 0u64;
-    for robot in 0..n {
+    let free: Vec<usize> = (0..n)
+        .filter(|&i| s.assignment.task_of(RobotId(i as u32)).is_none())
+        .collect();
+    for robot in free {
         // Dijkstra over task nodes with reduced costs; the source's own edges may be negative.
         for j in 0..m {
             dist[j] = s.cost(robot, j) - potential[j];

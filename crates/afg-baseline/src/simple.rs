@@ -19,6 +19,31 @@ use crate::{AllocError, AllocStats, Allocation, Allocator, timed};
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Greedy;
 
+impl Greedy {
+    /// Completes `partial`: its unassigned robots, in index order, each join the task
+    /// with the best marginal welfare that has room; assigned robots stay. O(N M).
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::{Allocator, Greedy};
+    /// use afg_game::{Assignment, GeneratorConfig};
+    /// let inst = GeneratorConfig::paper(20, 5, 1).generate()?;
+    /// let empty = Assignment::unassigned(20, 5);
+    /// assert_eq!(Greedy.complete(&inst, &empty), Greedy.allocate(&inst)?.assignment);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn complete(&self, instance: &Instance, partial: &Assignment) -> Assignment {
+        let mut a = partial.clone();
+        for i in instance.robot_ids() {
+            if a.task_of(i).is_none() {
+                let task = instance.best_response(&a, i, Preference::Balanced);
+                a.set(i, task);
+            }
+        }
+        a
+    }
+}
+
 impl Allocator for Greedy {
     fn name(&self) -> String {
         "greedy".into()

@@ -15,11 +15,28 @@ fn dataset(n: usize) -> Vec<Instance> {
 
 /// The best welfare over all M^N assignments that respect capacities.
 fn brute_force(inst: &Instance) -> f64 {
+    brute_force_completion(
+        inst,
+        &Assignment::unassigned(inst.num_robots(), inst.num_tasks()),
+    )
+}
+
+/// The best welfare over all complete assignments that respect capacities and keep
+/// the robots assigned in `partial` where they are.
+fn brute_force_completion(inst: &Instance, partial: &Assignment) -> f64 {
     let (n, m) = (inst.num_robots(), inst.num_tasks());
     let mut best = f64::NEG_INFINITY;
     let mut code = vec![0usize; n];
     'outer: loop {
-        let tasks = code.iter().map(|&j| Some(TaskId(j as u32))).collect();
+        let tasks = code
+            .iter()
+            .enumerate()
+            .map(|(i, &j)| {
+                partial
+                    .task_of(RobotId(i as u32))
+                    .or(Some(TaskId(j as u32)))
+            })
+            .collect();
         if let Ok(a) = Assignment::from_tasks(inst, tasks) {
             best = best.max(inst.welfare(&a));
         }
@@ -57,6 +74,75 @@ fn opt_equals_brute_force_on_small_instances() {
             "case {case}: OPT {got} vs brute force {want}"
         );
     }
+}
+
+#[test]
+fn completion_equals_brute_force_with_fixed_prefixes() {
+    let mut rng = ChaCha8Rng::seed_from_u64(2025);
+    for case in 0..1200 {
+        let n = rng.random_range(1..=7);
+        let m = rng.random_range(1..=4);
+        let mut cfg = GeneratorConfig::paper(n, m, rng.random());
+        cfg.eps = rng.random_range(1.62..6.0);
+        cfg.beta = rng.random_range(0.0..3.0);
+        if case % 2 == 1 {
+            cfg = cfg.with_capacity_slack(rng.random_range(1.0..1.5));
+        }
+        let inst = cfg.generate().unwrap();
+        // A random prefix of robots on random tasks with room, as in the MDP.
+        let mut partial = Assignment::unassigned(n, m);
+        for i in 0..rng.random_range(0..=n) {
+            let robot = RobotId(i as u32);
+            let open: Vec<TaskId> = inst
+                .task_ids()
+                .filter(|&j| partial.has_room(&inst, robot, j))
+                .collect();
+            partial.set(robot, Some(open[rng.random_range(0..open.len())]));
+        }
+        let done = Optimum.complete(&inst, &partial).unwrap();
+        inst.check(&done).unwrap();
+        assert!(done.is_complete());
+        for i in inst.robot_ids() {
+            if let Some(j) = partial.task_of(i) {
+                assert_eq!(
+                    done.task_of(i),
+                    Some(j),
+                    "case {case}: fixed robot {i} moved"
+                );
+            }
+        }
+        let (got, want) = (inst.welfare(&done), brute_force_completion(&inst, &partial));
+        assert!(
+            (got - want).abs() < 1e-9 * want.abs().max(1.0),
+            "case {case}: completion {got} vs brute force {want}"
+        );
+    }
+}
+
+#[test]
+fn completion_rejects_a_partial_assignment_of_another_shape_or_over_capacity() {
+    let inst = GeneratorConfig::paper(6, 2, 1)
+        .with_capacity_slack(1.0)
+        .generate()
+        .unwrap();
+    assert!(
+        Optimum
+            .complete(&inst, &Assignment::unassigned(5, 2))
+            .is_err()
+    );
+    assert!(
+        Optimum
+            .complete(&inst, &Assignment::unassigned(6, 3))
+            .is_err()
+    );
+    // Capacities of ⌈6 / 2⌉ = 3 each: four robots on task 0 are over capacity.
+    assert_eq!(inst.capacity(TaskId(0)), 3);
+    let mut over = Assignment::unassigned(6, 2);
+    for i in 0..4 {
+        over.set(RobotId(i), Some(TaskId(0)));
+    }
+    let err = Optimum.complete(&inst, &over).unwrap_err().to_string();
+    assert!(err.contains("above its capacity 3"), "{err}");
 }
 
 /// Checks every method on one instance: valid, complete, capacity-respecting, ≤ OPT,

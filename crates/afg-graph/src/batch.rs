@@ -36,7 +36,8 @@ pub struct GraphBatch {
     pub edge_receiver: Vec<u32>,
     /// Sending neighbour k of each directed edge, `[edges]`.
     pub edge_sender: Vec<u32>,
-    /// Weight w_ik = d(i, k) of each edge, `[edges]`.
+    /// Weight w_ik = d(i, k) of each edge in the state's edge unit
+    /// ([`Units::edge_unit`](crate::Units::edge_unit)), `[edges]`.
     pub edge_weight: Vec<f32>,
     /// Graph of each node, `[nodes]`.
     pub node_graph: Vec<u32>,
@@ -93,6 +94,7 @@ impl GraphBatch {
         );
         let offset = self.num_nodes() as u32;
         let g = self.num_graphs() as u32;
+        let edge_unit = state.units().edge_unit(graph);
         for i in inst.robot_ids() {
             self.nu.extend(state.nu(i));
             self.mu.extend_from_slice(state.mu(i));
@@ -101,7 +103,7 @@ impl GraphBatch {
             for (&k, &w) in graph.neighbours(i).iter().zip(graph.weights(i)) {
                 self.edge_receiver.push(offset + i.0);
                 self.edge_sender.push(offset + k);
-                self.edge_weight.push(w as f32);
+                self.edge_weight.push((w / edge_unit) as f32);
             }
         }
         self.graph_size.push(inst.num_robots() as f32);

@@ -7,10 +7,12 @@
 mod batch;
 mod neighbours;
 mod state;
+mod units;
 
 pub use batch::GraphBatch;
 pub use neighbours::{GraphKind, RobotGraph};
-pub use state::{AllocationState, FULL_TASK_FEATURE, feature_scale, join_gain, write_task_column};
+pub use state::{AllocationState, join_gain, write_task_column};
+pub use units::{Units, feature_scale};
 
 use thiserror::Error;
 

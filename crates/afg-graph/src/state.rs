@@ -3,9 +3,9 @@
 //! For robot i and task j (SPEC §3, paper §III A):
 //! - robot feature `ν_i ∈ R^M`: one-hot of i's task, zero while unassigned;
 //! - task feature `μ_i[j] = u_i(j, n_j^{-i} + 1)`: the utility i would get in j given
-//!   the others' current assignment (eq. 2), divided by the instance's
-//!   [`feature_scale`] so that features are O(1) whatever N is; a task that is full for
-//!   i gets [`FULL_TASK_FEATURE`] and is masked as an action.
+//!   the others' current assignment (eq. 2), in the welfare unit of the state's
+//!   [`Units`]; a task that is full for i gets [`Units::full_task_feature`] and is
+//!   masked as an action.
 //!
 //! When one robot moves into task j, `n_j^{-i}` changes for every robot except the
 //! mover, so exactly column j of μ changes (and the column of the task it left, if
@@ -13,23 +13,11 @@
 
 use afg_game::{Assignment, Instance, Preference, RobotId, TaskId};
 
-/// μ of a task that has no room for the robot (in feature units, below any real utility
-/// on instances where beta·√2 < the mean reward, such as the paper's).
-pub const FULL_TASK_FEATURE: f32 = -1.0;
-
-/// The unit of task features: the mean initial reward `mean_j r_j` of the instance
-/// (1 if all rewards are 0). Utilities scale with N/M in the paper's distribution;
-/// dividing by this keeps features comparable across N, so a model trained at one
-/// scale can be applied at another.
-pub fn feature_scale(instance: &Instance) -> f64 {
-    let mean = instance.tasks().iter().map(|t| t.reward).sum::<f64>() / instance.num_tasks() as f64;
-    if mean > 0.0 { mean } else { 1.0 }
-}
+use crate::Units;
 
 /// Writes column `task` of the task features μ (row-major `[N, M]`, see the module
-/// docs) for `assignment`, in the unit `scale` (normally [`feature_scale`]). O(N): the
-/// value part F_j(m+1)/(m+1) takes only two values, m = n_j for robots outside j and
-/// m = n_j - 1 for its members.
+/// docs) for `assignment`, in `units`. O(N): the value part F_j(m+1)/(m+1) takes only
+/// two values, m = n_j for robots outside j and m = n_j - 1 for its members.
 ///
 /// [`AllocationState`] keeps μ up to date with this; a caller that keeps only an
 /// [`Assignment`] can rebuild μ whenever it needs it.
@@ -40,12 +28,12 @@ pub fn feature_scale(instance: &Instance) -> f64 {
 /// # Examples
 /// ```
 /// use afg_game::GeneratorConfig;
-/// use afg_graph::{AllocationState, feature_scale, write_task_column};
+/// use afg_graph::{AllocationState, Units, write_task_column};
 /// let inst = GeneratorConfig::paper(8, 3, 1).generate()?;
 /// let state = AllocationState::new(&inst);
 /// let mut mu = vec![0.0; 8 * 3];
 /// for j in inst.task_ids() {
-///     write_task_column(&inst, state.assignment(), feature_scale(&inst), j, &mut mu);
+///     write_task_column(&inst, state.assignment(), Units::default(), j, &mut mu);
 /// }
 /// assert_eq!(mu, state.mu_matrix());
 /// # Ok::<(), Box<dyn std::error::Error>>(())
@@ -53,11 +41,13 @@ pub fn feature_scale(instance: &Instance) -> f64 {
 pub fn write_task_column(
     instance: &Instance,
     assignment: &Assignment,
-    scale: f64,
+    units: Units,
     task: TaskId,
     mu: &mut [f32],
 ) {
     let m = instance.num_tasks();
+    let scale = units.welfare_unit(instance);
+    let full = units.full_task_feature();
     let n_j = assignment.size(task);
     let cap = instance.capacity(task);
     let share = |others: usize| instance.coalition_value(task, others + 1) / (others + 1) as f64;
@@ -66,7 +56,7 @@ pub fn write_task_column(
         let member = assignment.task_of(i) == Some(task);
         let others = n_j - usize::from(member);
         mu[i.index() * m + task.index()] = if others >= cap {
-            FULL_TASK_FEATURE
+            full
         } else {
             let value = if member { inside } else { outside };
             ((value - instance.cost(i, task)) / scale) as f32
@@ -75,8 +65,8 @@ pub fn write_task_column(
 }
 
 /// The welfare gain of `robot` joining `task` (its balanced score: the change in total
-/// welfare when an unassigned robot joins), in the unit `scale`; 0 where the task is
-/// full for it. AFGNet's optional gain residual adds this to its Q values.
+/// welfare when an unassigned robot joins), divided by `scale` (a
+/// [`Units::welfare_unit`]); 0 where the task is full for it. AFGNet's optional gain residual adds this to its Q values.
 ///
 /// # Examples
 /// ```
@@ -123,25 +113,34 @@ pub struct AllocationState<'a> {
     assignment: Assignment,
     /// `mu[i * M + j]`, in feature units.
     mu: Vec<f32>,
+    units: Units,
     scale: f64,
 }
 
 impl<'a> AllocationState<'a> {
-    /// The empty assignment.
+    /// The empty assignment, in the default [`Units`].
     pub fn new(instance: &'a Instance) -> Self {
-        Self::from_assignment(
+        Self::with_units(
             instance,
             Assignment::unassigned(instance.num_robots(), instance.num_tasks()),
+            Units::default(),
         )
     }
 
-    /// Features of `assignment` computed from scratch (the reference for the incremental update).
+    /// Features of `assignment` in the default [`Units`], computed from scratch (the
+    /// reference for the incremental update).
     pub fn from_assignment(instance: &'a Instance, assignment: Assignment) -> Self {
+        Self::with_units(instance, assignment, Units::default())
+    }
+
+    /// Features of `assignment` in `units`, computed from scratch.
+    pub fn with_units(instance: &'a Instance, assignment: Assignment, units: Units) -> Self {
         let mut s = AllocationState {
             instance,
             assignment,
             mu: vec![0.0; instance.num_robots() * instance.num_tasks()],
-            scale: feature_scale(instance),
+            units,
+            scale: units.welfare_unit(instance),
         };
         for j in instance.task_ids() {
             s.refresh_column(j);
@@ -152,6 +151,16 @@ impl<'a> AllocationState<'a> {
     /// The instance.
     pub fn instance(&self) -> &'a Instance {
         self.instance
+    }
+
+    /// The units of the features.
+    pub fn units(&self) -> Units {
+        self.units
+    }
+
+    /// The welfare unit of the features ([`Units::welfare_unit`] of the instance).
+    pub fn welfare_unit(&self) -> f64 {
+        self.scale
     }
 
     /// The current assignment.
@@ -227,7 +236,7 @@ impl<'a> AllocationState<'a> {
         write_task_column(
             self.instance,
             &self.assignment,
-            self.scale,
+            self.units,
             task,
             &mut self.mu,
         );

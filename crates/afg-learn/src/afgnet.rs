@@ -1,6 +1,7 @@
 //! AFGNet (paper eqs. 4–9, SPEC §3): robot features, task features and
 //! distance-weighted neighbour messages embedded in L rounds.
 
+use afg_graph::Units;
 use burn::config::Config;
 use burn::module::Module;
 use burn::nn::Linear;
@@ -36,6 +37,10 @@ pub struct AfgNetConfig {
     /// (`None` = off).
     #[config(default = "None")]
     pub gain_residual: Option<bool>,
+    /// The units of the inputs and rewards ([`Units`]). Optional so that files written
+    /// before it existed still load (`None` = [`Units::MeanReward`]).
+    #[config(default = "None")]
+    pub units: Option<Units>,
 }
 
 impl AfgNetConfig {
@@ -61,6 +66,7 @@ impl AfgNetConfig {
             head,
             activation: self.activation,
             gain_residual: self.gain_residual.unwrap_or(false),
+            units: self.units.unwrap_or_default(),
         }
     }
 }
@@ -94,9 +100,16 @@ pub struct AfgNet<B: Backend> {
     activation: Activation,
     #[module(skip)]
     gain_residual: bool,
+    #[module(skip)]
+    units: Units,
 }
 
 impl<B: Backend> AfgNet<B> {
+    /// The units of the inputs the network expects.
+    pub fn units(&self) -> Units {
+        self.units
+    }
+
     /// Node embeddings δ^L.
     ///
     /// # Shapes

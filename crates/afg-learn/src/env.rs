@@ -1,8 +1,9 @@
 //! The sequential allocation MDP (SPEC §3): robots act once each in index order, an
 //! action is a task with room, the reward is the change in welfare, γ = 1.
 
-use afg_game::{Instance, Preference, RobotId, TaskId};
-use afg_graph::AllocationState;
+use afg_baseline::Greedy;
+use afg_game::{Assignment, Instance, Preference, RobotId, TaskId};
+use afg_graph::{AllocationState, Units};
 
 use crate::LearnError;
 
@@ -29,10 +30,20 @@ pub struct Env<'a> {
 }
 
 impl<'a> Env<'a> {
-    /// A fresh episode: nobody assigned, robot 0 to act.
+    /// A fresh episode: nobody assigned, robot 0 to act; features in the default
+    /// [`Units`].
     pub fn reset(instance: &'a Instance) -> Self {
+        Self::reset_in(instance, Units::default())
+    }
+
+    /// A fresh episode with features in `units` (rewards stay raw welfare).
+    pub fn reset_in(instance: &'a Instance, units: Units) -> Self {
         Env {
-            state: AllocationState::new(instance),
+            state: AllocationState::with_units(
+                instance,
+                afg_game::Assignment::unassigned(instance.num_robots(), instance.num_tasks()),
+                units,
+            ),
             next: 0,
         }
     }
@@ -82,4 +93,56 @@ impl<'a> Env<'a> {
         self.next += 1;
         Ok((reward, self.actor().is_none()))
     }
+}
+
+/// The summed reward (γ = 1, raw welfare) of robots `first, first + 1, …` taking
+/// `actions` from `assignment`, which is advanced past them.
+///
+/// Unshaped, this is the welfare change. With `greedy_shaping` it is the change of
+/// `W(greedy completion)`, i.e. the reward plus `Φ(s') − Φ(s)` with the potential
+/// `Φ(s) = W(greedy completion of s) − W(s)` (Ng, Harada and Russell, 1999): Φ depends
+/// on the state only, so the optimal policy is unchanged, while the values to learn
+/// become what an action gains over finishing greedily.
+///
+/// # Examples
+/// ```
+/// use afg_baseline::{Allocator, Greedy};
+/// use afg_game::{Assignment, GeneratorConfig, TaskId};
+/// use afg_learn::n_step_reward;
+/// let inst = GeneratorConfig::paper(6, 2, 1).generate()?;
+/// let actions = [TaskId(0), TaskId(1), TaskId(1), TaskId(0), TaskId(0), TaskId(1)];
+/// let mut a = Assignment::unassigned(6, 2);
+/// let raw = n_step_reward(&inst, &mut a, 0, &actions, false);
+/// assert!((raw - inst.welfare(&a)).abs() < 1e-9);
+/// // Shaped, a whole episode returns the final welfare minus greedy's.
+/// let mut b = Assignment::unassigned(6, 2);
+/// let shaped = n_step_reward(&inst, &mut b, 0, &actions, true);
+/// let greedy = inst.welfare(&Greedy.allocate(&inst)?.assignment);
+/// assert!((shaped - (inst.welfare(&a) - greedy)).abs() < 1e-9);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn n_step_reward(
+    instance: &Instance,
+    assignment: &mut Assignment,
+    first: usize,
+    actions: &[TaskId],
+    greedy_shaping: bool,
+) -> f64 {
+    let greedy_value = |a: &Assignment| instance.welfare(&Greedy.complete(instance, a));
+    let mut reward = if greedy_shaping {
+        -greedy_value(assignment)
+    } else {
+        0.0
+    };
+    for (k, &task) in actions.iter().enumerate() {
+        let robot = RobotId((first + k) as u32);
+        if !greedy_shaping {
+            reward += instance.score(assignment, robot, task, Preference::Balanced);
+        }
+        assignment.set(robot, Some(task));
+    }
+    if greedy_shaping {
+        reward += greedy_value(assignment);
+    }
+    reward
 }

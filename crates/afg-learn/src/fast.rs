@@ -34,7 +34,7 @@ use std::ops::Range;
 use std::time::{Duration, Instant};
 
 use afg_game::{Assignment, Instance, RobotId, TaskId};
-use afg_graph::{RobotGraph, feature_scale, join_gain, write_task_column};
+use afg_graph::{RobotGraph, Units, join_gain, write_task_column};
 use burn::nn::Linear;
 use burn::tensor::backend::Backend;
 use faer::linalg::matmul::matmul;
@@ -250,6 +250,8 @@ pub struct FastPolicy {
     hidden: usize,
     /// Add the actor's join gain to the Q values (AFGNet's `gain_residual`).
     gain_residual: bool,
+    /// The units of the inputs.
+    units: Units,
 }
 
 /// What a fast rollout returns.
@@ -303,6 +305,7 @@ impl FastPolicy {
                     tasks: c.tasks,
                     hidden: d,
                     gain_residual: c.gain_residual.unwrap_or(false),
+                    units: config.units(),
                 }
             }
             (NetworkConfig::S2v(c), QNetwork::S2v(n)) => FastPolicy {
@@ -317,6 +320,7 @@ impl FastPolicy {
                 tasks: c.tasks,
                 hidden: c.hidden,
                 gain_residual: false,
+                units: config.units(),
             },
             _ => panic!("the network is not the kind its configuration describes"),
         }
@@ -325,6 +329,11 @@ impl FastPolicy {
     /// Number of tasks M the network was built for.
     pub fn tasks(&self) -> usize {
         self.tasks
+    }
+
+    /// The units of the network's inputs (and of its Q values).
+    pub fn units(&self) -> Units {
+        self.units
     }
 
     /// Greedy rollout in index order with one network pass per block of `block`
@@ -383,7 +392,10 @@ pub struct FastRollout<'a> {
     instance: &'a Instance,
     graph: &'a RobotGraph,
     assignment: Assignment,
+    /// The welfare unit of the gains ([`Units::welfare_unit`]).
     scale: f64,
+    /// Edge weights are multiplied by this (1 / [`Units::edge_unit`]).
+    inv_edge_unit: f32,
     /// Task features μ, `[N, M]`.
     mu: Vec<f32>,
     /// Node embeddings of the last pass, `[N, d]`.
@@ -435,7 +447,8 @@ impl<'a> FastRollout<'a> {
             instance,
             graph,
             assignment: Assignment::unassigned(n, m),
-            scale: feature_scale(instance),
+            scale: policy.units.welfare_unit(instance),
+            inv_edge_unit: (1.0 / policy.units.edge_unit(graph)) as f32,
             mu: vec![0.0; n * m],
             delta: vec![0.0; n * d],
             wide: vec![0.0; n * 2 * d],
@@ -515,7 +528,13 @@ impl<'a> FastRollout<'a> {
                 self.moved = moved;
                 self.cached = cached;
                 for j in self.instance.task_ids() {
-                    write_task_column(self.instance, &self.assignment, self.scale, j, &mut self.mu);
+                    write_task_column(
+                        self.instance,
+                        &self.assignment,
+                        self.policy.units,
+                        j,
+                        &mut self.mu,
+                    );
                 }
                 self.afgnet_pass(net, n, m, d);
             }
@@ -572,7 +591,7 @@ impl<'a> FastRollout<'a> {
             message.fill(0.0);
             for (&k, &w) in neighbours.iter().zip(weights) {
                 let task = self.assignment.task_of(RobotId(k));
-                let w = w as f32;
+                let w = w as f32 * self.inv_edge_unit;
                 let base = &layer.edge_task.bias;
                 match task {
                     Some(j) => {
@@ -629,7 +648,7 @@ impl<'a> FastRollout<'a> {
                 let acc = &mut self.scratch[i * d..(i + 1) * d];
                 acc.fill(0.0);
                 for (&k, &w) in neighbours.iter().zip(self.graph.weights(robot)) {
-                    let w = w as f32;
+                    let w = w as f32 * self.inv_edge_unit;
                     let row = &self.wide[k as usize * 2 * d..k as usize * 2 * d + d];
                     for (a, &x) in acc.iter_mut().zip(row) {
                         *a += x * w;
@@ -666,9 +685,9 @@ impl<'a> FastRollout<'a> {
         for i in self.instance.robot_ids() {
             self.vec_a.fill(0.0);
             for &w in self.graph.weights(i) {
+                let w = w as f32 * self.inv_edge_unit;
                 for c in 0..d {
-                    self.vec_a[c] +=
-                        (w as f32 * net.theta4.weight[c] + net.theta4.bias[c]).max(0.0);
+                    self.vec_a[c] += (w * net.theta4.weight[c] + net.theta4.bias[c]).max(0.0);
                 }
             }
             net.theta3

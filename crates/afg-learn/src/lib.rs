@@ -12,6 +12,7 @@ mod fast;
 mod layers;
 mod network;
 mod policy;
+mod regret;
 mod rollout;
 mod s2v;
 mod targets;
@@ -19,17 +20,18 @@ mod tensors;
 mod train;
 
 pub use afgnet::{AfgLayer, AfgNet, AfgNetConfig};
-pub use env::Env;
+pub use env::{Env, n_step_reward};
 pub use fast::{FastPolicy, FastRollout, FastRolloutOutcome};
 pub use layers::{Activation, QHead, linear_of_concat};
 pub use network::{NetworkConfig, QNetwork};
 pub use policy::{LearnError, LearnedPolicy, LearnedRun, load_network, save_network};
+pub use regret::{RegretStep, q_star, regret_trace};
 pub use rollout::greedy_rollouts;
 pub use s2v::{S2v, S2vConfig};
 pub use targets::{double_dqn_target, dqn_target, masked_argmax};
 pub use tensors::{DENSE_MAX_NODES, DenseAdjacency, GraphTensors};
 pub use train::{
-    Algo, TrainConfig, TrainEvent, Trainer, checkpoint_dir, training_instance_seed,
+    Algo, TrainConfig, TrainEvent, Trainer, Validation, checkpoint_dir, training_instance_seed,
     validation_instances,
 };
 

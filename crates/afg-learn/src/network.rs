@@ -1,5 +1,6 @@
 //! One type for "a Q network": AFGNet or S2V, chosen by configuration.
 
+use afg_graph::Units;
 use burn::module::Module;
 use burn::tensor::Tensor;
 use burn::tensor::backend::Backend;
@@ -39,6 +40,25 @@ impl NetworkConfig {
         }
     }
 
+    /// The units of the network's inputs and rewards.
+    pub fn units(&self) -> Units {
+        match self {
+            NetworkConfig::AfgNet(c) => c.units,
+            NetworkConfig::S2v(c) => c.units,
+        }
+        .unwrap_or_default()
+    }
+
+    /// The same network in other units (`None` for [`Units::MeanReward`], so that the
+    /// configuration files of such networks stay as they were).
+    pub fn with_units(self, units: Units) -> Self {
+        let units = (units != Units::MeanReward).then_some(units);
+        match self {
+            NetworkConfig::AfgNet(c) => NetworkConfig::AfgNet(c.with_units(units)),
+            NetworkConfig::S2v(c) => NetworkConfig::S2v(c.with_units(units)),
+        }
+    }
+
     /// Short name: `afgnet` or `s2v`.
     pub fn name(&self) -> &'static str {
         match self {
@@ -69,6 +89,14 @@ pub enum QNetwork<B: Backend> {
 }
 
 impl<B: Backend> QNetwork<B> {
+    /// The units of the inputs the network expects (from its configuration).
+    pub fn units(&self) -> Units {
+        match self {
+            QNetwork::AfgNet(n) => n.units(),
+            QNetwork::S2v(n) => n.units(),
+        }
+    }
+
     /// Q values of each graph's acting robot.
     ///
     /// # Shapes

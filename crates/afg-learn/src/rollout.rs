@@ -30,7 +30,8 @@ pub fn greedy_rollouts<B: Backend>(
         .iter()
         .map(|i| RobotGraph::build(i.robots(), graph))
         .collect::<Result<Vec<_>, _>>()?;
-    let mut envs: Vec<Env<'_>> = instances.iter().map(Env::reset).collect();
+    let units = network.units();
+    let mut envs: Vec<Env<'_>> = instances.iter().map(|i| Env::reset_in(i, units)).collect();
     loop {
         let live: Vec<usize> = (0..envs.len())
             .filter(|&e| envs[e].actor().is_some())

@@ -1,5 +1,6 @@
 //! structure2vec (Dai et al. 2017), the paper's S2V baseline: robot features only.
 
+use afg_graph::Units;
 use burn::config::Config;
 use burn::module::Module;
 use burn::nn::Linear;
@@ -29,6 +30,10 @@ pub struct S2vConfig {
     /// Seed of the weight initialisation.
     #[config(default = 0)]
     pub seed: u64,
+    /// The units of the inputs and rewards ([`Units`]). Optional so that files written
+    /// before it existed still load (`None` = [`Units::MeanReward`]).
+    #[config(default = "None")]
+    pub units: Option<Units>,
 }
 
 impl S2vConfig {
@@ -43,6 +48,7 @@ impl S2vConfig {
             theta4: seeded_linear(&mut rng, 1, p, device),
             head: QHead::new(&mut rng, p, m, self.activation, device),
             iterations: self.iterations,
+            units: self.units.unwrap_or_default(),
         }
     }
 }
@@ -62,9 +68,16 @@ pub struct S2v<B: Backend> {
     pub head: QHead<B>,
     #[module(skip)]
     iterations: usize,
+    #[module(skip)]
+    units: Units,
 }
 
 impl<B: Backend> S2v<B> {
+    /// The units of the inputs the network expects.
+    pub fn units(&self) -> Units {
+        self.units
+    }
+
     /// Node embeddings μ^T:
     /// `μ_v ← relu(θ1 x_v + θ2 Σ_{u∈N(v)} μ_u + θ3 Σ_u relu(θ4 w_uv))`, from μ = 0.
     ///

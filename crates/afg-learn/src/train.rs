@@ -17,8 +17,8 @@ use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 
 use afg_baseline::{Allocator, Optimum};
-use afg_game::{Assignment, GeneratorConfig, Instance, Preference, RobotId, TaskId};
-use afg_graph::{AllocationState, GraphBatch, GraphKind, RobotGraph, feature_scale};
+use afg_game::{Assignment, GeneratorConfig, Instance, RobotId, TaskId};
+use afg_graph::{AllocationState, GraphBatch, GraphKind, RobotGraph};
 use burn::module::AutodiffModule;
 use burn::optim::adaptor::OptimizerAdaptor;
 use burn::optim::{Adam, AdamConfig, GradientsParams, Optimizer};
@@ -30,7 +30,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::{
     GraphTensors, InferBackend, LearnError, NetworkConfig, QNetwork, TrainBackend,
-    double_dqn_target, dqn_target, greedy_rollouts, load_network, masked_argmax, save_network,
+    double_dqn_target, dqn_target, greedy_rollouts, load_network, masked_argmax, n_step_reward,
+    save_network,
 };
 
 /// The bootstrap rule.
@@ -95,8 +96,19 @@ pub struct TrainConfig {
     pub n_step: usize,
     /// Huber loss (δ = 1) instead of the squared error.
     pub huber: bool,
-    /// Rewards in units of the instance's mean initial reward (the task-feature unit).
+    /// Rewards in the network's welfare unit ([`afg_graph::Units::welfare_unit`], the
+    /// task features' unit) instead of raw welfare.
     pub reward_scaling: bool,
+    /// Potential-based reward shaping (Ng, Harada and Russell, 1999) with the potential
+    /// Φ(s) = W(greedy completion of s) − W(s), the welfare that one-pass greedy would
+    /// still add from s. The shaped reward of steps t..t+n is then
+    /// `W(greedy completion of s_{t+n}) − W(greedy completion of s_t)`, and the network
+    /// learns `Q(s, a) − Φ(s)`: what the policy gains over finishing greedily, O(action
+    /// gaps) instead of O(N). Φ does not depend on the action, so the optimal policy and
+    /// the greedy policy of a learned Q are unchanged. Not in the paper; files written
+    /// before it existed load as `false`.
+    #[serde(default)]
+    pub greedy_shaping: bool,
     /// Gradient norm clipping.
     pub grad_clip: Option<f32>,
     /// Size of the fixed validation set (seeded, disjoint from datasets and training).
@@ -132,6 +144,7 @@ impl TrainConfig {
             warmup: 2_048,
             huber: true,
             reward_scaling: true,
+            greedy_shaping: false,
             grad_clip: Some(10.0),
             validation_instances: 32,
             validate_every: (steps / 40).max(1),
@@ -168,9 +181,11 @@ impl TrainConfig {
             return bad("replay_capacity must hold an episode and the warmup");
         }
         if matches!(&self.network, NetworkConfig::AfgNet(c) if c.gain_residual == Some(true))
-            && !self.reward_scaling
+            && (!self.reward_scaling || self.greedy_shaping)
         {
-            return bad("the gain residual is in the features' unit: it needs reward scaling");
+            return bad(
+                "the gain residual is in the features' unit and adds the unshaped reward: it needs reward scaling and no shaping",
+            );
         }
         Ok(())
     }
@@ -254,11 +269,33 @@ pub enum TrainEvent {
     Validation {
         /// Gradient steps done.
         step: u64,
-        /// Mean welfare of the greedy policy on the validation set.
-        welfare: f64,
-        /// Mean of welfare / OPT, in percent.
-        percent_of_opt: f64,
+        /// The greedy policy on the validation set.
+        #[serde(flatten)]
+        result: Validation,
     },
+}
+
+/// The greedy policy of a network on the validation set.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Validation {
+    /// Mean welfare.
+    pub welfare: f64,
+    /// Mean of welfare / OPT, in percent.
+    pub percent_of_opt: f64,
+    /// Mean over instances of the share of robots on the most common task. Near 1 the
+    /// policy has collapsed onto one task index; OPT's share is far lower (about 0.3 in
+    /// the paper's distribution at M = 5).
+    pub largest_task_share: f64,
+}
+
+impl Validation {
+    /// Share of robots on one task above which a validation counts as collapsed.
+    pub const COLLAPSE_SHARE: f64 = 0.6;
+
+    /// Whether most robots went to one task ([`Validation::COLLAPSE_SHARE`]).
+    pub fn collapsed(&self) -> bool {
+        self.largest_task_share > Self::COLLAPSE_SHARE
+    }
 }
 
 /// One episode as stored: the instance seed and the actions taken.
@@ -434,7 +471,7 @@ impl Trainer {
 
     fn reward_unit(&self, inst: &Instance) -> f64 {
         if self.config.reward_scaling {
-            feature_scale(inst)
+            self.config.network.units().welfare_unit(inst)
         } else {
             1.0
         }
@@ -454,10 +491,11 @@ impl Trainer {
                 },
             )?);
         }
+        let units = self.config.network.units();
         let mut batch = GraphBatch::new(m);
         for ep in &self.running {
             let t = ep.record.actions.len();
-            let state = AllocationState::from_assignment(&ep.instance, ep.assignment_after(t));
+            let state = AllocationState::with_units(&ep.instance, ep.assignment_after(t), units);
             batch.push(&ep.graph, &state, RobotId(t as u32));
         }
         let device = Default::default();
@@ -501,6 +539,7 @@ impl Trainer {
             self.config.batch,
         );
         let total = self.replay_len();
+        let units = self.config.network.units();
         let mut now = GraphBatch::new(m);
         let mut next = GraphBatch::new(m);
         let (mut actions, mut rewards, mut next_row) = (
@@ -515,23 +554,22 @@ impl Trainer {
             let mut a = ep.assignment_after(t);
             now.push(
                 &ep.graph,
-                &AllocationState::from_assignment(&ep.instance, a.clone()),
+                &AllocationState::with_units(&ep.instance, a.clone(), units),
                 robot,
             );
             actions.push(i64::from(task.0));
             // n-step return: the rewards of steps t..end, then bootstrap from s_end.
             let end = (t + self.config.n_step).min(n);
-            let mut reward = 0.0;
-            for k in t..end {
-                let (i, j) = (RobotId(k as u32), TaskId(u32::from(ep.record.actions[k])));
-                reward += ep.instance.score(&a, i, j, Preference::Balanced);
-                a.set(i, Some(j));
-            }
+            let taken: Vec<TaskId> = ep.record.actions[t..end]
+                .iter()
+                .map(|&j| TaskId(u32::from(j)))
+                .collect();
+            let reward = n_step_reward(&ep.instance, &mut a, t, &taken, self.config.greedy_shaping);
             rewards.push((reward / self.reward_unit(&ep.instance)) as f32);
             next_row.push((end < n).then(|| {
                 next.push(
                     &ep.graph,
-                    &AllocationState::from_assignment(&ep.instance, a),
+                    &AllocationState::with_units(&ep.instance, a, units),
                     RobotId(end as u32),
                 );
                 next.num_graphs() - 1
@@ -595,12 +633,11 @@ impl Trainer {
         loss_value
     }
 
-    /// Greedy welfare of the current network on the validation set: (mean welfare,
-    /// mean percent of OPT).
+    /// The greedy policy of the current network on the validation set.
     ///
     /// # Errors
     /// Graph errors (none for valid configurations).
-    pub fn validate(&self) -> Result<(f64, f64), LearnError> {
+    pub fn validate(&self) -> Result<Validation, LearnError> {
         let device = Default::default();
         let assignments = greedy_rollouts(
             &self.online.valid(),
@@ -623,7 +660,19 @@ impl Trainer {
             .map(|(w, o)| 100.0 * w / o)
             .sum::<f64>()
             / k;
-        Ok((mean, pct))
+        let largest_task_share = assignments
+            .iter()
+            .map(|a| {
+                let largest = a.sizes().iter().copied().max().unwrap_or(0);
+                largest as f64 / a.num_robots().max(1) as f64
+            })
+            .sum::<f64>()
+            / k;
+        Ok(Validation {
+            welfare: mean,
+            percent_of_opt: pct,
+            largest_task_share,
+        })
     }
 
     /// Trains until `until` gradient steps (at most the configured total), reporting
@@ -657,11 +706,10 @@ impl Trainer {
             if self.step.is_multiple_of(self.config.validate_every)
                 || self.step == self.config.steps
             {
-                let (welfare, percent_of_opt) = self.validate()?;
+                let result = self.validate()?;
                 on_event(&TrainEvent::Validation {
                     step: self.step,
-                    welfare,
-                    percent_of_opt,
+                    result,
                 });
             }
         }

@@ -86,6 +86,15 @@ fn fast_path_matches_burn_with_random_weights_on_the_datasets() {
                 .with_gain_residual(Some(true))
                 .with_seed(6),
         ),
+        // Scale-free units: μ, gains and edge weights rescaled on both paths.
+        NetworkConfig::afgnet(5, 12).with_units(afg_graph::Units::ScaleFree),
+        NetworkConfig::s2v(5, 12).with_units(afg_graph::Units::ScaleFree),
+        NetworkConfig::AfgNet(
+            afg_learn::AfgNetConfig::new(5)
+                .with_gain_residual(Some(true))
+                .with_seed(7),
+        )
+        .with_units(afg_graph::Units::ScaleFree),
     ];
     for config in &configs {
         let network = config.init::<B>(&device);

@@ -2,13 +2,17 @@
 
 use std::path::PathBuf;
 
+use afg_baseline::{Allocator, Greedy};
+use afg_game::{Assignment, GeneratorConfig, TaskId};
+use afg_graph::Units;
 use afg_learn::{
     Algo, InferBackend, LearnError, NetworkConfig, QNetwork, TrainConfig, TrainEvent, Trainer,
-    double_dqn_target, dqn_target,
+    double_dqn_target, dqn_target, n_step_reward,
 };
 use burn::module::{Module, ModuleVisitor, Param};
 use burn::tensor::Tensor;
 use burn::tensor::backend::Backend;
+use proptest::prelude::*;
 
 #[test]
 fn dqn_and_double_dqn_targets_differ_where_the_nets_disagree() {
@@ -59,11 +63,10 @@ fn smoke_run_has_finite_losses_and_validations() {
         let (mut losses, mut validations) = (Vec::new(), Vec::new());
         t.run_until(u64::MAX, |e| match e {
             TrainEvent::Step { loss, .. } => losses.push(*loss),
-            TrainEvent::Validation {
-                welfare,
-                percent_of_opt,
-                ..
-            } => validations.push((*welfare, *percent_of_opt)),
+            TrainEvent::Validation { result, .. } => {
+                assert!((0.0..=1.0).contains(&result.largest_task_share));
+                validations.push((result.welfare, result.percent_of_opt))
+            }
         })
         .unwrap();
         assert_eq!(t.step(), 200);
@@ -164,4 +167,68 @@ fn epsilon_decays_linearly_then_stays() {
     assert!((c.epsilon(50) - 0.525).abs() < 1e-12);
     assert!((c.epsilon(100) - 0.05).abs() < 1e-12);
     assert!((c.epsilon(900) - 0.05).abs() < 1e-12);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// n-step rewards add up: splitting an episode into chunks of any length gives the
+    /// same total, which is the final welfare unshaped and the final welfare minus the
+    /// greedy allocation's shaped (the potential telescopes).
+    #[test]
+    fn n_step_rewards_telescope(seed in 0u64..1000, n in 2usize..12, m in 1usize..5,
+                                chunk in 1usize..6, picks in prop::collection::vec(0u32..5, 12)) {
+        let inst = GeneratorConfig::paper(n, m, seed).with_capacity_slack(1.5).generate().unwrap();
+        // A feasible episode: each robot takes its pick, or the next task with room.
+        let mut a = Assignment::unassigned(n, m);
+        let mut actions = Vec::new();
+        for (i, pick) in picks.iter().take(n).enumerate() {
+            let robot = afg_game::RobotId(i as u32);
+            let task = (0..m as u32)
+                .map(|k| TaskId((pick + k) % m as u32))
+                .find(|&j| a.has_room(&inst, robot, j))
+                .unwrap();
+            a.set(robot, Some(task));
+            actions.push(task);
+        }
+        let greedy = inst.welfare(&Greedy.allocate(&inst).unwrap().assignment);
+        for shaped in [false, true] {
+            let mut state = Assignment::unassigned(n, m);
+            let mut total = 0.0;
+            for start in (0..n).step_by(chunk) {
+                let end = (start + chunk).min(n);
+                total += n_step_reward(&inst, &mut state, start, &actions[start..end], shaped);
+            }
+            prop_assert_eq!(&state, &a);
+            let want = inst.welfare(&a) - if shaped { greedy } else { 0.0 };
+            prop_assert!((total - want).abs() < 1e-9 * want.abs().max(1.0), "{} vs {}", total, want);
+        }
+    }
+}
+
+#[test]
+fn scale_free_and_shaped_runs_train() {
+    let net = NetworkConfig::afgnet(5, 1).with_units(Units::ScaleFree);
+    let mut c = tiny(Algo::Ddqn, net, 60);
+    c.greedy_shaping = true;
+    c.n_step = 3;
+    let mut t = Trainer::new(c).unwrap();
+    let mut losses = Vec::new();
+    t.run_until(u64::MAX, |e| {
+        if let TrainEvent::Step { loss, .. } = e {
+            losses.push(*loss)
+        }
+    })
+    .unwrap();
+    assert_eq!(losses.len(), 60);
+    assert!(losses.iter().all(|l| l.is_finite()));
+    assert_eq!(t.network().units(), Units::ScaleFree);
+}
+
+#[test]
+fn the_gain_residual_refuses_shaping() {
+    let net = NetworkConfig::AfgNet(afg_learn::AfgNetConfig::new(5).with_gain_residual(Some(true)));
+    let mut c = tiny(Algo::Ddqn, net, 10);
+    c.greedy_shaping = true;
+    assert!(matches!(c.check(), Err(LearnError::InvalidConfig(_))));
 }

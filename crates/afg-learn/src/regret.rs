@@ -1,0 +1,154 @@
+//! The exact Q\* of the sequential MDP and where a policy loses welfare.
+//!
+//! The reward is the welfare difference and γ = 1, so the optimal action value is an
+//! optimal completion: `Q*(s_t, a) = OPT(robots before t fixed, robot t on a) − W(s_t)`
+//! ([`q_star`], one min-cost flow per action, [`afg_baseline::Optimum::complete`]).
+//! A policy's shortfall then telescopes over its own rollout:
+//! `OPT − W(final) = Σ_t [max_a Q*(s_t, a) − Q*(s_t, a_t)]`, so each step's regret says
+//! exactly where the welfare was lost ([`regret_trace`]).
+
+use afg_baseline::Optimum;
+use afg_game::{Assignment, Instance, RobotId, TaskId};
+use afg_graph::RobotGraph;
+use serde::Serialize;
+
+use crate::{FastPolicy, FastRollout, LearnError, masked_argmax};
+
+/// `Q*(s, a)` for robot `actor` acting in `assignment`, in raw welfare: for each task,
+/// the best final welfare with the robots assigned in `assignment` fixed and `actor` on
+/// that task, minus the welfare of `assignment`. `None` where the task has no room.
+///
+/// # Errors
+/// [`LearnError::InvalidAction`] if the actor is already assigned or the assignment
+/// does not fit the instance.
+///
+/// # Examples
+/// ```
+/// use afg_baseline::{Allocator, Optimum};
+/// use afg_game::{Assignment, GeneratorConfig, RobotId};
+/// use afg_learn::q_star;
+/// let inst = GeneratorConfig::paper(12, 3, 1).generate()?;
+/// let empty = Assignment::unassigned(12, 3);
+/// let q = q_star(&inst, &empty, RobotId(0))?;
+/// // From the empty state, the best action value is OPT itself.
+/// let best = q.iter().flatten().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
+/// let opt = inst.welfare(&Optimum.allocate(&inst)?.assignment);
+/// assert!((best - opt).abs() < 1e-9);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn q_star(
+    instance: &Instance,
+    assignment: &Assignment,
+    actor: RobotId,
+) -> Result<Vec<Option<f64>>, LearnError> {
+    if assignment.task_of(actor).is_some() {
+        return Err(LearnError::InvalidAction(format!(
+            "robot {actor} has already acted"
+        )));
+    }
+    let now = instance.welfare(assignment);
+    let mut with_actor = assignment.clone();
+    instance
+        .task_ids()
+        .map(|j| {
+            if !assignment.has_room(instance, actor, j) {
+                return Ok(None);
+            }
+            with_actor.set(actor, Some(j));
+            let done = Optimum
+                .complete(instance, &with_actor)
+                .map_err(|e| LearnError::InvalidAction(e.to_string()))?;
+            Ok(Some(instance.welfare(&done) - now))
+        })
+        .collect()
+}
+
+/// One step of a rollout, seen through Q\*.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RegretStep {
+    /// Step index t (the acting robot).
+    pub t: usize,
+    /// The task taken.
+    pub action: TaskId,
+    /// `max_a Q*(s_t, a) − Q*(s_t, a_t)` ≥ 0: welfare lost at this step.
+    pub regret: f64,
+    /// Best minus second-best Q\* (0 with one allowed task): how much a wrong choice
+    /// costs at least.
+    pub gap: f64,
+    /// The network's Q values of every task, in its output unit (for a network trained
+    /// with reward scaling, the welfare unit of its [`Units`](afg_graph::Units):
+    /// multiply by `unit` for raw welfare).
+    pub q: Vec<f64>,
+    /// `Q*(s_t, a)` of every task, raw welfare; `None` where the task is full.
+    pub q_star: Vec<Option<f64>>,
+    /// The instance's welfare unit in the network's units.
+    pub unit: f64,
+    /// `Q*(s_t, a_t)`.
+    pub q_star_taken: f64,
+}
+
+/// A greedy rollout of `policy` (one pass per robot) with every step's Q\*.
+///
+/// # Errors
+/// As [`FastRollout::new`].
+///
+/// # Complexity
+/// N·M optimal completions: O(N² M³ log N). Meant for diagnosis at N ≤ a few thousand.
+///
+/// # Examples
+/// ```
+/// use afg_baseline::{Allocator, Optimum};
+/// use afg_game::GeneratorConfig;
+/// use afg_graph::{GraphKind, RobotGraph};
+/// use afg_learn::{FastPolicy, NetworkConfig, regret_trace};
+/// let config = NetworkConfig::afgnet(5, 0);
+/// let fast = FastPolicy::from_network(&config, &config.init::<afg_learn::InferBackend>(&Default::default()));
+/// let inst = GeneratorConfig::paper(20, 5, 3).generate()?;
+/// let graph = RobotGraph::build(inst.robots(), GraphKind::default())?;
+/// let (steps, assignment) = regret_trace(&fast, &inst, &graph)?;
+/// // The regrets add up to the shortfall from OPT.
+/// let opt = inst.welfare(&Optimum.allocate(&inst)?.assignment);
+/// let lost: f64 = steps.iter().map(|s| s.regret).sum();
+/// assert!((opt - inst.welfare(&assignment) - lost).abs() < 1e-6);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn regret_trace(
+    policy: &FastPolicy,
+    instance: &Instance,
+    graph: &RobotGraph,
+) -> Result<(Vec<RegretStep>, Assignment), LearnError> {
+    let m = instance.num_tasks();
+    let unit = policy.units().welfare_unit(instance);
+    let mut run = FastRollout::new(policy, instance, graph)?;
+    let (mut q, mut mask) = (vec![0.0f32; m], vec![false; m]);
+    let mut steps = Vec::with_capacity(instance.num_robots());
+    for robot in instance.robot_ids() {
+        run.evaluate();
+        run.q_values(robot, &mut q);
+        run.action_mask(robot, &mut mask);
+        let action = masked_argmax(&q, &mask).ok_or_else(|| {
+            LearnError::InvalidAction(format!("no task has room for robot {robot}"))
+        })?;
+        let star = q_star(instance, run.assignment(), robot)?;
+        let mut values: Vec<f64> = star.iter().flatten().copied().collect();
+        values.sort_by(|a, b| b.total_cmp(a));
+        let best = values[0];
+        let taken = star[action].expect("the action has room");
+        let (regret, gap) = (
+            (best - taken).max(0.0),
+            values.get(1).map_or(0.0, |second| best - second),
+        );
+        steps.push(RegretStep {
+            t: robot.index(),
+            action: TaskId(action as u32),
+            regret,
+            gap,
+            q: q.iter().map(|&x| f64::from(x)).collect(),
+            q_star: star,
+            unit,
+            q_star_taken: taken,
+        });
+        run.assign(robot, TaskId(action as u32));
+    }
+    Ok((steps, run.assignment().clone()))
+}
