@@ -3,6 +3,7 @@
 mod bench;
 mod datasets;
 mod plain;
+mod realloc;
 mod regret;
 mod scale;
 mod solve;
@@ -38,6 +39,8 @@ pub enum Command {
     ReproduceTables(tables::TablesArgs),
     /// Write the fixed test datasets under datasets/ (or verify them with --check).
     GenDatasets(datasets::GenArgs),
+    /// Draw your own instances (the paper's distribution, every knob) into a JSON Lines file.
+    Gen(datasets::GenCustomArgs),
     /// Solve an instance or a dataset with one allocator and print welfare, % of OPT, NS_rate.
     Solve(solve::SolveArgs),
     /// Time the classical allocators over a sweep of N and print a Markdown table.
@@ -64,6 +67,7 @@ fn main() -> Result<()> {
     match Cli::parse().command {
         Command::ReproduceTables(args) => tables::run(args),
         Command::GenDatasets(args) => datasets::run(args),
+        Command::Gen(args) => datasets::run_custom(args),
         Command::Solve(args) => solve::run(args),
         Command::BenchBaselines(args) => bench::run(args),
         Command::BenchModels(args) => bench::run_models(args),

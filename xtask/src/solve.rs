@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use afg_baseline::{Allocator, Method, Optimum};
-use afg_game::{Instance, Preference};
+use afg_game::{Assignment, Instance, Preference};
 use anyhow::{Context, Result};
 use clap::Args;
 use serde::Serialize;
@@ -14,35 +14,51 @@ use serde::Serialize;
 pub struct SolveArgs {
     /// Allocator: opt, da (GRAPE, centralised), da-decentralised, da-balanced, greedy, nearest, random.
     #[arg(long, short, group = "allocator")]
-    method: Option<Method>,
+    pub(crate) method: Option<Method>,
     /// A learned policy instead: a trained run directory (holding model.json and
     /// model.mpk), e.g. models/afgnet_ddqn_n20.
     #[arg(long, group = "allocator")]
-    model: Option<PathBuf>,
+    pub(crate) model: Option<PathBuf>,
     /// Learned policy: robots per network evaluation [default: 1, the exact greedy rollout].
     #[arg(long)]
-    block: Option<usize>,
+    pub(crate) block: Option<usize>,
     /// Learned policy: balanced best-response sweeps after the rollout (Def. 3 stable result).
     #[arg(long)]
-    repair: bool,
+    pub(crate) repair: bool,
     /// Learned policy: roll out with the Burn network (the slow reference path).
     #[arg(long)]
-    exact_burn: bool,
-    /// An instance JSON file (format "afg-instance").
+    pub(crate) exact_burn: bool,
+    /// Your instances: one instance JSON file (format "afg-instance"), or a JSON Lines
+    /// file with one instance per line; "-" reads standard input.
     #[arg(long, group = "source")]
-    input: Option<PathBuf>,
+    pub(crate) input: Option<PathBuf>,
+    /// Write each instance's assignment to this file: one JSON line per instance, format
+    /// "afg-assignment" (`tasks[i]` = robot i's task), with a `summary` of its welfare,
+    /// % of OPT, coalition sizes and stability.
+    #[arg(long)]
+    pub(crate) out: Option<PathBuf>,
+    /// Draw the first instance's assignment (beside OPT's) as an SVG map.
+    #[arg(long)]
+    pub(crate) svg: Option<PathBuf>,
+    /// Warm start after robots or tasks changed: a previous assignment file whose
+    /// optional `left_robots` / `left_tasks` name what left (the instance keeps the
+    /// survivors in order, then the newcomers). Survivors keep their task, the others
+    /// join by best response, then best-response dynamics run to a stable assignment
+    /// (method da-balanced or da only; one instance).
+    #[arg(long)]
+    pub(crate) from: Option<PathBuf>,
     /// A committed dataset by robot count: 20, 60, 100, 500 or 1000.
     #[arg(long, group = "source")]
-    dataset: Option<usize>,
+    pub(crate) dataset: Option<usize>,
     /// Use only the first K instances of the dataset.
     #[arg(long)]
-    limit: Option<usize>,
+    pub(crate) limit: Option<usize>,
     /// Seed of the randomised methods (random, da-decentralised).
     #[arg(long, default_value_t = 0)]
-    seed: u64,
+    pub(crate) seed: u64,
     /// Print JSON (per instance and mean) instead of text.
     #[arg(long)]
-    json: bool,
+    pub(crate) json: bool,
 }
 
 /// One instance's result.
@@ -57,20 +73,58 @@ pub struct Row {
 }
 
 impl Row {
-    /// Runs `method` and OPT on `inst`.
-    pub fn compute(inst: &Instance, method: &dyn Allocator) -> Result<Row> {
+    /// Runs `method` and OPT on `inst`; the row and the method's assignment.
+    pub fn compute(inst: &Instance, method: &dyn Allocator) -> Result<(Row, Assignment)> {
         let out = method.allocate(inst)?;
+        Ok((Self::of(inst, &out.assignment, out.stats)?, out.assignment))
+    }
+
+    /// The row of an assignment made elsewhere (OPT is computed here).
+    fn of(
+        inst: &Instance,
+        assignment: &Assignment,
+        stats: afg_baseline::AllocStats,
+    ) -> Result<Row> {
         let opt = Optimum.allocate(inst)?;
-        let (welfare, opt_welfare) = (inst.welfare(&out.assignment), inst.welfare(&opt.assignment));
+        let (welfare, opt_welfare) = (inst.welfare(assignment), inst.welfare(&opt.assignment));
         Ok(Row {
             welfare,
             opt_welfare,
             percent_of_opt: 100.0 * welfare / opt_welfare,
-            ns_rate_balanced: inst.ns_rate(&out.assignment, Preference::Balanced),
-            ns_rate_selfish: inst.ns_rate(&out.assignment, Preference::Selfish),
-            stats: out.stats,
+            ns_rate_balanced: inst.ns_rate(assignment, Preference::Balanced),
+            ns_rate_selfish: inst.ns_rate(assignment, Preference::Selfish),
+            stats,
         })
     }
+
+    /// The line `--out` writes for this row's assignment.
+    fn assignment_line(&self, method: &str, inst: &Instance, a: &Assignment) -> String {
+        a.to_json_with_summary(Some(serde_json::json!({
+            "method": method,
+            "welfare": self.welfare,
+            "opt_welfare": self.opt_welfare,
+            "percent_of_opt": self.percent_of_opt,
+            "coalition_sizes": a.sizes(),
+            "stable_balanced": inst.is_stable(a, Preference::Balanced),
+            "ns_rate_balanced": self.ns_rate_balanced,
+            "ns_rate_selfish": self.ns_rate_selfish,
+        })))
+    }
+}
+
+/// Reads `--input`: a file or standard input ("-"), one instance or JSON Lines.
+fn read_instances(path: &std::path::Path) -> Result<Vec<Instance>> {
+    let text = if path.as_os_str() == "-" {
+        std::io::read_to_string(std::io::stdin()).context("reading standard input")?
+    } else {
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?
+    };
+    let instances = afg_game::io::parse_instances(&text)
+        .with_context(|| format!("reading {}", path.display()))?;
+    if instances.is_empty() {
+        anyhow::bail!("{} holds no instance", path.display());
+    }
+    Ok(instances)
 }
 
 #[derive(Serialize)]
@@ -100,15 +154,15 @@ pub fn run(args: SolveArgs) -> Result<()> {
         anyhow::bail!("--block, --repair and --exact-burn apply to a learned policy (--model DIR)");
     }
     let (source, mut instances) = match (&args.input, args.dataset) {
-        (Some(p), _) => (
-            p.display().to_string(),
-            vec![Instance::read(p).with_context(|| format!("reading {}", p.display()))?],
-        ),
+        (Some(p), _) => (p.display().to_string(), read_instances(p)?),
         (None, Some(n)) => (format!("datasets/n{n}.jsonl"), crate::datasets::load(n)?),
         (None, None) => unreachable!("clap requires a source"),
     };
     if let Some(k) = args.limit {
         instances.truncate(k);
+    }
+    if let Some(from) = &args.from {
+        return crate::realloc::run(&args, from, &instances);
     }
     let (name, method): (String, Box<dyn Allocator>) = match (&args.method, &args.model) {
         (Some(m), _) => (m.to_string(), m.allocator(args.seed)),
@@ -123,15 +177,18 @@ pub fn run(args: SolveArgs) -> Result<()> {
         (None, None) => unreachable!("clap requires an allocator"),
     };
     let bar = crate::progress(instances.len() as u64, &format!("{name} on {source}"));
-    let rows = instances
+    let (rows, assignments): (Vec<Row>, Vec<Assignment>) = instances
         .iter()
         .map(|inst| {
             let row = Row::compute(inst, method.as_ref());
             bar.inc(1);
             row
         })
-        .collect::<Result<Vec<_>>>()?;
+        .collect::<Result<Vec<_>>>()?
+        .into_iter()
+        .unzip();
     bar.finish_and_clear();
+    write_outputs(&args, &name, &instances, &rows, &assignments)?;
     let k = rows.len() as f64;
     let mean = |f: &dyn Fn(&Row) -> f64| rows.iter().map(f).sum::<f64>() / k;
     let m = Mean {
@@ -183,6 +240,33 @@ pub fn run(args: SolveArgs) -> Result<()> {
     Ok(())
 }
 
+/// `--out` and `--svg`; written before anything is printed, atomically.
+fn write_outputs(
+    args: &SolveArgs,
+    name: &str,
+    instances: &[Instance],
+    rows: &[Row],
+    assignments: &[Assignment],
+) -> Result<()> {
+    if let Some(out) = &args.out {
+        let mut text = String::new();
+        for ((inst, row), a) in instances.iter().zip(rows).zip(assignments) {
+            text += &row.assignment_line(name, inst, a);
+            text.push('\n');
+        }
+        afg_game::io::write_atomic(out, text.as_bytes())?;
+    }
+    if let Some(svg) = &args.svg {
+        let opt = Optimum.allocate(&instances[0])?.assignment;
+        crate::tables::draw_assignments(
+            &instances[0],
+            &[("OPT", &opt), (name, &assignments[0])],
+            svg,
+        )?;
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use clap::Parser;
@@ -194,6 +278,158 @@ mod tests {
             crate::Command::Solve(a) => super::run(a),
             _ => unreachable!("only solve here"),
         }
+    }
+
+    fn temp(name: &str) -> std::path::PathBuf {
+        let d = std::env::temp_dir().join(format!("afg-solve-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    #[test]
+    fn json_lines_in_assignments_and_a_map_out() {
+        let dir = temp("out");
+        let a = afg_game::GeneratorConfig::paper(12, 3, 1)
+            .generate()
+            .unwrap();
+        let b = afg_game::GeneratorConfig::paper(9, 3, 2)
+            .generate()
+            .unwrap();
+        let input = dir.join("mine.jsonl");
+        std::fs::write(
+            &input,
+            afg_game::io::dataset_to_jsonl(&[a.clone(), b.clone()]),
+        )
+        .unwrap();
+        let (out, svg) = (dir.join("out.jsonl"), dir.join("map.svg"));
+        let path = |p: &std::path::Path| p.to_str().unwrap().to_owned();
+        solve(&[
+            "--method",
+            "da-balanced",
+            "--input",
+            &path(&input),
+            "--out",
+            &path(&out),
+            "--svg",
+            &path(&svg),
+        ])
+        .unwrap();
+        let text = std::fs::read_to_string(&out).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines.len(), 2);
+        for (line, inst) in lines.iter().zip([&a, &b]) {
+            // Each line is an assignment of its instance, with its summary.
+            let assignment = afg_game::Assignment::from_json(line, inst).unwrap();
+            assert!(assignment.is_complete());
+            let v: serde_json::Value = serde_json::from_str(line).unwrap();
+            let sizes: Vec<usize> =
+                serde_json::from_value(v["summary"]["coalition_sizes"].clone()).unwrap();
+            assert_eq!(sizes, assignment.sizes());
+            assert!(
+                (v["summary"]["welfare"].as_f64().unwrap() - inst.welfare(&assignment)).abs()
+                    < 1e-9
+            );
+            assert_eq!(v["summary"]["stable_balanced"], true);
+        }
+        assert!(std::fs::read_to_string(&svg).unwrap().starts_with("<svg"));
+        // A single instance file (pretty-printed over many lines) is one instance.
+        let single = dir.join("one.json");
+        let pretty = serde_json::to_string_pretty(
+            &serde_json::from_str::<serde_json::Value>(&a.to_json()).unwrap(),
+        )
+        .unwrap();
+        std::fs::write(&single, pretty).unwrap();
+        solve(&[
+            "--method",
+            "greedy",
+            "--input",
+            &path(&single),
+            "--out",
+            &path(&out),
+        ])
+        .unwrap();
+        assert_eq!(std::fs::read_to_string(&out).unwrap().lines().count(), 1);
+    }
+
+    #[test]
+    fn a_bad_line_names_its_line_and_writes_nothing() {
+        let dir = temp("bad");
+        let a = afg_game::GeneratorConfig::paper(12, 3, 1)
+            .generate()
+            .unwrap();
+        let input = dir.join("mine.jsonl");
+        let bad = a.to_json().replace("\"eps\":4.0", "\"eps\":1.0");
+        let text = format!("{}\n{}\n{}\n", a.to_json(), a.to_json(), bad);
+        assert_ne!(bad, a.to_json(), "the test must break the third line");
+        std::fs::write(&input, text).unwrap();
+        let out = dir.join("out.jsonl");
+        let err = solve(&[
+            "--method",
+            "opt",
+            "--input",
+            input.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .unwrap_err();
+        assert!(format!("{err:#}").contains("line 3"), "{err:#}");
+        assert!(!out.exists());
+        std::fs::write(&input, "").unwrap();
+        let err = solve(&["--method", "opt", "--input", input.to_str().unwrap()]).unwrap_err();
+        assert!(format!("{err:#}").contains("no instance"), "{err:#}");
+    }
+
+    #[test]
+    fn warm_start_from_a_previous_assignment() {
+        let dir = temp("from");
+        let inst = afg_game::GeneratorConfig::paper(40, 5, 3)
+            .generate()
+            .unwrap();
+        let path = |p: &std::path::Path| p.to_str().unwrap().to_owned();
+        let (input, first) = (dir.join("now.json"), dir.join("first.jsonl"));
+        inst.write(&input).unwrap();
+        solve(&[
+            "--method",
+            "opt",
+            "--input",
+            &path(&input),
+            "--out",
+            &path(&first),
+        ])
+        .unwrap();
+        // The same robots again: nothing moves, nothing is placed.
+        let again = dir.join("again.jsonl");
+        solve(&[
+            "--method",
+            "da-balanced",
+            "--input",
+            &path(&input),
+            "--from",
+            &path(&first),
+            "--out",
+            &path(&again),
+        ])
+        .unwrap();
+        let v: serde_json::Value =
+            serde_json::from_str(std::fs::read_to_string(&again).unwrap().trim()).unwrap();
+        assert_eq!(
+            (
+                v["summary"]["moved"].as_u64(),
+                v["summary"]["placed"].as_u64()
+            ),
+            (Some(0), Some(0))
+        );
+        let err = solve(&[
+            "--method",
+            "opt",
+            "--input",
+            &path(&input),
+            "--from",
+            &path(&first),
+        ])
+        .unwrap_err();
+        assert!(format!("{err:#}").contains("da-balanced"), "{err:#}");
     }
 
     #[test]

@@ -370,7 +370,6 @@ fn write_outputs(root: &Path, res: &Results, tables: &str, quick: bool) -> Resul
 /// Instance 0 of the N = 100 test set: OPT beside AFGNet_DDQN (or GRAPE DA while no
 /// N = 100 model is committed). Robots coloured by task, tasks as squares sized by coalition.
 fn assignment_map(root: &Path, out: &Path) -> Result<()> {
-    use plotters::prelude::*;
     let inst = crate::datasets::load(100)?.swap_remove(0);
     let opt = Optimum.allocate(&inst)?.assignment;
     let stem = model_stem(root, "afgnet_ddqn", 100);
@@ -385,19 +384,41 @@ fn assignment_map(root: &Path, out: &Path) -> Result<()> {
             Method::Da.allocator(0).allocate(&inst)?.assignment,
         )
     };
+    draw_assignments(&inst, &[("OPT", &opt), (label, &other)], out)
+}
+
+/// Draws assignments of one instance side by side as an SVG: robots coloured by task
+/// (black if unassigned), tasks as squares sized by coalition, welfare in each title.
+pub fn draw_assignments(
+    inst: &Instance,
+    panels: &[(&str, &afg_game::Assignment)],
+    out: &Path,
+) -> Result<()> {
+    use plotters::prelude::*;
     let mut svg = String::new();
     {
-        let root_area = SVGBackend::with_string(&mut svg, (1000, 520)).into_drawing_area();
+        let width = 500 * panels.len().max(1) as u32;
+        let root_area = SVGBackend::with_string(&mut svg, (width, 520)).into_drawing_area();
         root_area.fill(&WHITE)?;
-        let panels = root_area.split_evenly((1, 2));
-        for (area, (name, a)) in panels.iter().zip([("OPT", &opt), (label, &other)]) {
+        let areas = root_area.split_evenly((1, panels.len().max(1)));
+        // The unit square, widened to hold every robot and task of other instances.
+        let points = inst
+            .robots()
+            .iter()
+            .chain(inst.tasks().iter().map(|t| &t.position));
+        let (mut x, mut y) = ((0.0f64, 1.0f64), (0.0f64, 1.0f64));
+        for p in points {
+            x = (x.0.min(p.x), x.1.max(p.x));
+            y = (y.0.min(p.y), y.1.max(p.y));
+        }
+        for (area, (name, a)) in areas.iter().zip(panels) {
             let title = format!("{name}: welfare {:.2}", inst.welfare(a));
             let mut chart = ChartBuilder::on(area)
                 .caption(title, ("sans-serif", 18))
                 .margin(10)
                 .x_label_area_size(25)
                 .y_label_area_size(35)
-                .build_cartesian_2d(0.0..1.0, 0.0..1.0)?;
+                .build_cartesian_2d(x.0..x.1, y.0..y.1)?;
             chart.configure_mesh().disable_mesh().draw()?;
             for (i, p) in inst.robots().iter().enumerate() {
                 let color =

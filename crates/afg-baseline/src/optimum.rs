@@ -96,6 +96,35 @@ impl Optimum {
         }
         Ok(optimum(instance, partial.clone()).0)
     }
+
+    /// The optimum with its task prices π: every robot's optimal task minimises
+    /// `β d(i, j) − π_j` over all tasks (LP duality for the min-cost flow; the prices are
+    /// the Johnson potentials of the task nodes after the last augmentation). Prices are
+    /// defined up to a common constant; these have no particular offset.
+    ///
+    /// Why: a robot in task j may move to k through the residual edge of cost
+    /// `c_ik − c_ij`, whose reduced cost `c_ik − c_ij + π_j − π_k` is non-negative at
+    /// the optimum. Robots whose minimum is unique therefore sit exactly where argmin
+    /// sends them; ties are settled by the counts.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::Optimum;
+    /// use afg_game::{GeneratorConfig, RobotId};
+    /// let inst = GeneratorConfig::paper(60, 5, 1).generate()?;
+    /// let (opt, prices) = Optimum.with_prices(&inst);
+    /// for i in inst.robot_ids() {
+    ///     let own = opt.task_of(i).unwrap();
+    ///     let value = |j: afg_game::TaskId| inst.cost(i, j) - prices[j.index()];
+    ///     assert!(inst.task_ids().all(|k| value(own) <= value(k) + 1e-9));
+    /// }
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn with_prices(&self, instance: &Instance) -> (Assignment, Vec<f64>) {
+        let empty = Assignment::unassigned(instance.num_robots(), instance.num_tasks());
+        let (assignment, _, prices) = optimum(instance, empty);
+        (assignment, prices)
+    }
 }
 
 impl Allocator for Optimum {
@@ -105,7 +134,7 @@ impl Allocator for Optimum {
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
         let empty = Assignment::unassigned(instance.num_robots(), instance.num_tasks());
-        let ((assignment, shifts), wall_time) = timed(|| optimum(instance, empty));
+        let ((assignment, shifts, _), wall_time) = timed(|| optimum(instance, empty));
         Ok(Allocation {
             assignment,
             stats: AllocStats {
@@ -203,9 +232,10 @@ enum Pred {
     Shift { from: usize, robot: u32 },
 }
 
-/// The optimal completion of `partial` (robots assigned there stay) and the number of
-/// robot shifts the augmentations made. `partial` must respect capacities.
-fn optimum(inst: &Instance, partial: Assignment) -> (Assignment, u64) {
+/// The optimal completion of `partial` (robots assigned there stay), the number of
+/// robot shifts the augmentations made and the final task potentials. `partial` must
+/// respect capacities.
+fn optimum(inst: &Instance, partial: Assignment) -> (Assignment, u64, Vec<f64>) {
     let (n, m) = (inst.num_robots(), inst.num_tasks());
     let costs = inst
         .robot_ids()
@@ -282,5 +312,5 @@ fn optimum(inst: &Instance, partial: Assignment) -> (Assignment, u64) {
             potential[j] += dist[j];
         }
     }
-    (s.assignment, shifts)
+    (s.assignment, shifts, potential)
 }

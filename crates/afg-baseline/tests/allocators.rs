@@ -120,6 +120,49 @@ fn completion_equals_brute_force_with_fixed_prefixes() {
 }
 
 #[test]
+fn prices_reproduce_the_optimum_up_to_ties() {
+    let mut rng = ChaCha8Rng::seed_from_u64(2026);
+    let (mut robots, mut unique) = (0usize, 0usize);
+    for case in 0..400 {
+        let n = rng.random_range(1..=80);
+        let m = rng.random_range(1..=6);
+        let mut cfg = GeneratorConfig::paper(n, m, rng.random());
+        cfg.eps = rng.random_range(1.62..12.0);
+        cfg.beta = rng.random_range(0.1..3.0);
+        if case % 2 == 1 {
+            cfg = cfg.with_capacity_slack(rng.random_range(1.0..1.5));
+        }
+        let inst = cfg.generate().unwrap();
+        let (opt, prices) = Optimum.with_prices(&inst);
+        let best = inst.welfare(&Optimum.allocate(&inst).unwrap().assignment);
+        assert!((inst.welfare(&opt) - best).abs() < 1e-9 * best.abs().max(1.0));
+        for i in inst.robot_ids() {
+            let value = |j: TaskId| inst.cost(i, j) - prices[j.index()];
+            let own = value(opt.task_of(i).unwrap());
+            let mut others: Vec<f64> = inst
+                .task_ids()
+                .filter(|&j| Some(j) != opt.task_of(i))
+                .map(value)
+                .collect();
+            others.sort_by(f64::total_cmp);
+            // Every robot sits at a minimum of β d − π ...
+            assert!(
+                others.first().is_none_or(|&o| own <= o + 1e-9),
+                "case {case}"
+            );
+            // ... and where the minimum is unique, argmin alone puts it there.
+            robots += 1;
+            unique += usize::from(others.first().is_none_or(|&o| own < o - 1e-9));
+        }
+    }
+    // Ties are the exception (a price is set by a robot indifferent between two tasks).
+    assert!(
+        unique * 10 > robots * 8,
+        "{unique} of {robots} robots decided by price alone"
+    );
+}
+
+#[test]
 fn completion_rejects_a_partial_assignment_of_another_shape_or_over_capacity() {
     let inst = GeneratorConfig::paper(6, 2, 1)
         .with_capacity_slack(1.0)

@@ -87,6 +87,9 @@ pub enum GameError {
     /// A generator parameter is out of range.
     #[error("invalid generator parameter: {0}")]
     InvalidGenerator(String),
+    /// A previous assignment that cannot be carried over to the changed instance.
+    #[error("cannot carry the previous assignment over: {0}")]
+    Reallocation(String),
     /// A JSON document of another kind (e.g. an assignment where an instance was expected).
     #[error("expected a JSON document of format \"{expected}\", found \"{found}\"")]
     WrongFormat {
@@ -115,6 +118,15 @@ pub enum GameError {
         /// The parser's message.
         #[source]
         source: serde_json::Error,
+    },
+    /// A valid JSON line of a dataset that is not a valid instance.
+    #[error("line {line}: {source}")]
+    AtLine {
+        /// Line of the JSON Lines file.
+        line: usize,
+        /// What is wrong with the instance on it.
+        #[source]
+        source: Box<GameError>,
     },
     /// Reading or writing a file failed.
     #[error("{path}: {source}")]

@@ -5,7 +5,11 @@
 //!   "tasks": [{"position": {..}, "reward": .., "eps": .., "capacity": ..}, ..],
 //!   "generator": {..}}` (`capacity` and `generator` optional).
 //! A dataset is a JSON Lines file with one such object per line.
-//! An assignment file is `{"format": "afg-assignment", "version": 1, "tasks": [0, 3, null, ..]}`.
+//! An assignment file is `{"format": "afg-assignment", "version": 1, "tasks": [0, 3, null, ..]}`,
+//! with three optional fields: `summary` (any JSON object: what the solver reports
+//! beside it, ignored when read), and `left_robots` / `left_tasks` (robot and task
+//! indices of this assignment that are gone, for a warm start on a changed instance:
+//! [`PreviousAssignment`]).
 
 use std::fs;
 use std::io::Write;
@@ -13,7 +17,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::{Assignment, GameError, GeneratorConfig, Instance, Point, Task, TaskId};
+use crate::{Assignment, GameError, GeneratorConfig, Instance, Point, RobotId, Task, TaskId};
 
 /// Format name of instance documents.
 pub const INSTANCE_FORMAT: &str = "afg-instance";
@@ -83,6 +87,20 @@ struct AssignmentFile {
     format: String,
     version: u32,
     tasks: Vec<Option<TaskId>>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    left_robots: Vec<RobotId>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    left_tasks: Vec<TaskId>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    summary: Option<serde_json::Value>,
+}
+
+impl AssignmentFile {
+    fn parse(text: &str, line: Option<usize>) -> Result<Self, GameError> {
+        let file: AssignmentFile = serde_json::from_str(text).map_err(json_error(line))?;
+        check_header(&file.format, file.version, ASSIGNMENT_FORMAT)?;
+        Ok(file)
+    }
 }
 
 fn json_error(line: Option<usize>) -> impl FnOnce(serde_json::Error) -> GameError {
@@ -153,10 +171,30 @@ impl Assignment {
     /// # Ok::<(), afg_game::GameError>(())
     /// ```
     pub fn to_json(&self) -> String {
+        self.to_json_with_summary(None)
+    }
+
+    /// The assignment as a JSON document with a `summary` object beside it (what a
+    /// solver reports: welfare, coalition sizes, stability; ignored when read back).
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::{Assignment, GeneratorConfig};
+    /// let inst = GeneratorConfig::paper(2, 2, 1).generate()?;
+    /// let a = Assignment::unassigned(2, 2);
+    /// let text = a.to_json_with_summary(Some(serde_json::json!({"welfare": 0.0})));
+    /// assert!(text.ends_with(r#""summary":{"welfare":0.0}}"#));
+    /// assert_eq!(Assignment::from_json(&text, &inst)?, a);
+    /// # Ok::<(), afg_game::GameError>(())
+    /// ```
+    pub fn to_json_with_summary(&self, summary: Option<serde_json::Value>) -> String {
         let file = AssignmentFile {
             format: ASSIGNMENT_FORMAT.to_owned(),
             version: FORMAT_VERSION,
             tasks: self.tasks().to_vec(),
+            left_robots: Vec::new(),
+            left_tasks: Vec::new(),
+            summary,
         };
         serde_json::to_string(&file).expect("an assignment always serialises")
     }
@@ -167,10 +205,153 @@ impl Assignment {
     /// [`GameError::Json`], [`GameError::WrongFormat`], [`GameError::UnsupportedVersion`],
     /// and the errors of [`Assignment::from_tasks`].
     pub fn from_json(text: &str, instance: &Instance) -> Result<Self, GameError> {
-        let file: AssignmentFile = serde_json::from_str(text).map_err(json_error(None))?;
-        check_header(&file.format, file.version, ASSIGNMENT_FORMAT)?;
+        let file = AssignmentFile::parse(text, None)?;
+        if !file.left_robots.is_empty() || !file.left_tasks.is_empty() {
+            return Err(GameError::Reallocation(
+                "the file names robots or tasks that left: read it as a PreviousAssignment".into(),
+            ));
+        }
         Assignment::from_tasks(instance, file.tasks)
     }
+}
+
+/// An assignment of an earlier instance, with the robots and tasks that have left
+/// since, to be carried over to the instance as it is now.
+///
+/// The new instance keeps the surviving robots in their old order, followed by any
+/// robots that joined, and likewise the surviving tasks followed by new ones. Carried
+/// over, survivors keep their task (with its new index); robots that joined, or whose
+/// task left, are unassigned.
+///
+/// # Examples
+/// ```
+/// use afg_game::io::PreviousAssignment;
+/// use afg_game::{GeneratorConfig, RobotId, TaskId};
+/// // Three robots on tasks 1, 0, 1; robot 1 left and two robots joined.
+/// let old = r#"{"format":"afg-assignment","version":1,"tasks":[1,0,1],"left_robots":[1]}"#;
+/// let now = GeneratorConfig::paper(4, 2, 7).generate()?;
+/// let start = PreviousAssignment::from_json(old)?.carry_over(&now)?;
+/// assert_eq!(start.tasks(), &[Some(TaskId(1)), Some(TaskId(1)), None, None]);
+/// # Ok::<(), afg_game::GameError>(())
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct PreviousAssignment {
+    /// The old assignment, indexed by the old robot ids.
+    pub tasks: Vec<Option<TaskId>>,
+    /// Old robot ids that left.
+    pub left_robots: Vec<RobotId>,
+    /// Old task ids that left.
+    pub left_tasks: Vec<TaskId>,
+}
+
+impl PreviousAssignment {
+    /// Parses an assignment document (`left_robots` and `left_tasks` optional).
+    ///
+    /// # Errors
+    /// [`GameError::Json`], [`GameError::WrongFormat`], [`GameError::UnsupportedVersion`].
+    pub fn from_json(text: &str) -> Result<Self, GameError> {
+        let file = AssignmentFile::parse(text, None)?;
+        Ok(PreviousAssignment {
+            tasks: file.tasks,
+            left_robots: file.left_robots,
+            left_tasks: file.left_tasks,
+        })
+    }
+
+    /// Robots of the old assignment that are still there.
+    pub fn survivors(&self) -> usize {
+        self.tasks.len() - self.left_robots.len()
+    }
+
+    /// The starting assignment on `instance` (see the type's docs).
+    ///
+    /// # Errors
+    /// [`GameError::Reallocation`] if a left robot or task is out of range or named
+    /// twice, or the instance has fewer robots or tasks than survived; the errors of
+    /// [`Assignment::from_tasks`] if the survivors overfill a task.
+    pub fn carry_over(&self, instance: &Instance) -> Result<Assignment, GameError> {
+        let bad = |what: String| Err(GameError::Reallocation(what));
+        let old_tasks = self
+            .tasks
+            .iter()
+            .flatten()
+            .map(|j| j.index() + 1)
+            .max()
+            .unwrap_or(0)
+            .max(
+                self.left_tasks
+                    .iter()
+                    .map(|j| j.index() + 1)
+                    .max()
+                    .unwrap_or(0),
+            );
+        let mut robot_gone = vec![false; self.tasks.len()];
+        for &r in &self.left_robots {
+            match robot_gone.get_mut(r.index()) {
+                Some(g) if !*g => *g = true,
+                Some(_) => return bad(format!("robot {r} is named twice in left_robots")),
+                None => {
+                    return bad(format!(
+                        "left robot {r} is out of range (the assignment has {} robots)",
+                        self.tasks.len()
+                    ));
+                }
+            }
+        }
+        // New index of each old task, None if it left.
+        let mut task_map: Vec<Option<u32>> = vec![Some(0); old_tasks];
+        for &j in &self.left_tasks {
+            if task_map[j.index()].is_none() {
+                return bad(format!("task {j} is named twice in left_tasks"));
+            }
+            task_map[j.index()] = None;
+        }
+        let mut next = 0;
+        for slot in task_map.iter_mut().flatten() {
+            *slot = next;
+            next += 1;
+        }
+        if (next as usize) > instance.num_tasks() || self.survivors() > instance.num_robots() {
+            return bad(format!(
+                "{} robots and {next} tasks survived, but the instance has only {} and {}",
+                self.survivors(),
+                instance.num_robots(),
+                instance.num_tasks()
+            ));
+        }
+        let mut tasks: Vec<Option<TaskId>> = self
+            .tasks
+            .iter()
+            .zip(&robot_gone)
+            .filter(|(_, gone)| !**gone)
+            .map(|(t, _)| t.and_then(|j| task_map[j.index()]).map(TaskId))
+            .collect();
+        tasks.resize(instance.num_robots(), None);
+        Assignment::from_tasks(instance, tasks)
+    }
+}
+
+/// Parses one instance document, or a JSON Lines text of several (a dataset).
+///
+/// # Errors
+/// The error of [`Instance::from_json`] if the text is one JSON document, otherwise
+/// that of [`parse_dataset`] (which names the line).
+///
+/// # Examples
+/// ```
+/// use afg_game::{GeneratorConfig, io};
+/// let a = GeneratorConfig::paper(5, 2, 1).generate()?;
+/// let b = GeneratorConfig::paper(7, 2, 2).generate()?;
+/// assert_eq!(io::parse_instances(&a.to_json())?, vec![a.clone()]);
+/// let lines = io::dataset_to_jsonl(&[a.clone(), b.clone()]);
+/// assert_eq!(io::parse_instances(&lines)?, vec![a, b]);
+/// # Ok::<(), afg_game::GameError>(())
+/// ```
+pub fn parse_instances(text: &str) -> Result<Vec<Instance>, GameError> {
+    if serde_json::from_str::<serde::de::IgnoredAny>(text).is_ok() {
+        return Ok(vec![Instance::from_json(text)?]);
+    }
+    parse_dataset(text)
 }
 
 /// Reads a JSON Lines dataset: one instance per non-empty line.
@@ -190,7 +371,15 @@ pub fn parse_dataset(text: &str) -> Result<Vec<Instance>, GameError> {
     text.lines()
         .enumerate()
         .filter(|(_, l)| !l.trim().is_empty())
-        .map(|(i, l)| parse_instance(l, Some(i + 1)))
+        .map(|(i, l)| {
+            parse_instance(l, Some(i + 1)).map_err(|e| match e {
+                GameError::Json { .. } => e,
+                other => GameError::AtLine {
+                    line: i + 1,
+                    source: Box::new(other),
+                },
+            })
+        })
         .collect()
 }
 
