@@ -57,6 +57,8 @@ pub enum Command {
     TrainingReport(train::ReportArgs),
     /// Train every model the tables use (AFGNet DDQN/DQN and S2V DDQN at N = 20, 60, 100).
     TrainAll(train::TrainAllArgs),
+    /// Robots leave an optimally allocated instance: warm-start reallocation against OPT from scratch.
+    ReallocStudy(realloc::StudyArgs),
     /// Where a trained model loses welfare along its rollouts, against the exact Q*.
     Regret(regret::RegretArgs),
     /// (Re)write manifest.json of finished training runs from their config and log.
@@ -78,6 +80,7 @@ fn main() -> Result<()> {
         Command::TrainAll(args) => train::run_all(args),
         Command::Manifest(args) => train::run_manifest(args),
         Command::Regret(args) => regret::run(args),
+        Command::ReallocStudy(args) => realloc::run_study(args),
     }
 }
 

@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use afg_baseline::{Allocator, CentralisedDa, Method, Optimum};
 use afg_game::io::PreviousAssignment;
-use afg_game::{Assignment, Instance, Preference};
+use afg_game::{Assignment, GeneratorConfig, Instance, Preference, RobotId};
 use anyhow::{Context, Result, bail};
 use serde::Serialize;
 
@@ -28,6 +28,10 @@ pub struct Reallocation {
     pub placed: usize,
     /// Survivors whose task OPT from scratch would change.
     pub opt_changes: usize,
+    /// Survivors whose task the same dynamics from scratch (from the empty assignment)
+    /// would change, and that assignment's % of OPT.
+    pub scratch_changes: usize,
+    pub scratch_percent_of_opt: f64,
     pub stable_balanced: bool,
     pub seconds: f64,
 }
@@ -52,6 +56,9 @@ pub fn reallocate(
             .count()
     };
     let (welfare, opt_welfare) = (instance.welfare(&assignment), instance.welfare(&opt));
+    let scratch = CentralisedDa::new(preference)
+        .allocate(instance)?
+        .assignment;
     Ok(Reallocation {
         welfare,
         opt_welfare,
@@ -60,10 +67,42 @@ pub fn reallocate(
         moved: changed(&assignment),
         placed: carried.tasks().iter().filter(|t| t.is_none()).count(),
         opt_changes: changed(&opt),
+        scratch_changes: changed(&scratch),
+        scratch_percent_of_opt: 100.0 * instance.welfare(&scratch) / opt_welfare,
         stable_balanced: instance.is_stable(&assignment, Preference::Balanced),
         seconds,
         assignment,
     })
+}
+
+/// An instance of the paper's distribution solved optimally, then `removed` robots
+/// (spread evenly over the indices) leave: the instance as it is now, and the OPT
+/// assignment as the previous file.
+pub fn after_removal(
+    n: usize,
+    removed: usize,
+    seed: u64,
+    previous_method: Method,
+) -> Result<(Instance, PreviousAssignment)> {
+    let old = GeneratorConfig::paper(n, 5, seed).generate()?;
+    let opt = previous_method.allocator(seed).allocate(&old)?.assignment;
+    let left: Vec<RobotId> = (0..removed)
+        .map(|k| RobotId((k * n / removed) as u32))
+        .collect();
+    let robots = old
+        .robots()
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| !left.contains(&RobotId(*i as u32)))
+        .map(|(_, p)| *p)
+        .collect();
+    let now = Instance::new(robots, old.tasks().to_vec(), old.beta())?;
+    let previous = PreviousAssignment {
+        tasks: opt.tasks().to_vec(),
+        left_robots: left,
+        left_tasks: Vec::new(),
+    };
+    Ok((now, previous))
 }
 
 pub fn run(args: &SolveArgs, from: &Path, instances: &[Instance]) -> Result<()> {
@@ -116,8 +155,8 @@ pub fn run(args: &SolveArgs, from: &Path, instances: &[Instance]) -> Result<()> 
     );
     println!("  % of OPT          {:>12.2}", r.percent_of_opt);
     println!(
-        "  survivors moved   {:>12}   of {} (OPT from scratch would move {})",
-        r.moved, r.survivors, r.opt_changes
+        "  survivors moved   {:>12}   of {} (from scratch: OPT would move {}, the same dynamics {})",
+        r.moved, r.survivors, r.opt_changes, r.scratch_changes
     );
     println!("  robots placed     {:>12}", r.placed);
     println!("  balanced-stable   {:>12}", r.stable_balanced);
@@ -127,36 +166,11 @@ pub fn run(args: &SolveArgs, from: &Path, instances: &[Instance]) -> Result<()> 
 
 #[cfg(test)]
 mod tests {
-    use afg_game::{GeneratorConfig, RobotId};
-
     use super::*;
-
-    /// The OPT assignment of an instance with some robots removed, as a previous file.
-    fn after_removal(n: usize, removed: usize, seed: u64) -> (Instance, PreviousAssignment) {
-        let old = GeneratorConfig::paper(n, 5, seed).generate().unwrap();
-        let opt = Optimum.allocate(&old).unwrap().assignment;
-        let left: Vec<RobotId> = (0..removed)
-            .map(|k| RobotId((k * n / removed) as u32))
-            .collect();
-        let robots = old
-            .robots()
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| !left.contains(&RobotId(*i as u32)))
-            .map(|(_, p)| *p)
-            .collect();
-        let now = Instance::new(robots, old.tasks().to_vec(), old.beta()).unwrap();
-        let previous = PreviousAssignment {
-            tasks: opt.tasks().to_vec(),
-            left_robots: left,
-            left_tasks: Vec::new(),
-        };
-        (now, previous)
-    }
 
     #[test]
     fn warm_start_moves_few_robots_and_stays_near_the_optimum() {
-        let (now, previous) = after_removal(300, 30, 4);
+        let (now, previous) = after_removal(300, 30, 4, Method::Opt).unwrap();
         let r = reallocate(&now, &previous, Preference::Balanced).unwrap();
         assert!(r.stable_balanced);
         assert_eq!((r.survivors, r.placed), (270, 0));
@@ -204,4 +218,84 @@ mod tests {
             assert!(format!("{err:#}").contains(needle), "{text}: {err:#}");
         }
     }
+}
+
+#[derive(clap::Args)]
+pub struct StudyArgs {
+    /// Robots before the removal.
+    #[arg(long, default_value_t = 1000)]
+    robots: usize,
+    /// Share of the robots that leave.
+    #[arg(long, default_value_t = 0.1)]
+    remove: f64,
+    /// Instances (seeds 0..count).
+    #[arg(long, default_value_t = 20)]
+    count: u64,
+    /// The allocator of the previous assignment: opt or da-balanced (then the warm start
+    /// runs balanced best-response dynamics), or da (GRAPE: selfish dynamics).
+    #[arg(long, default_value_t = Method::Opt)]
+    previous: Method,
+}
+
+/// `cargo xtask realloc-study`: robots leave an optimally allocated instance; the warm
+/// start against solving from scratch, as a Markdown table.
+pub fn run_study(args: StudyArgs) -> Result<()> {
+    if !(0.0..1.0).contains(&args.remove) || args.count == 0 {
+        bail!("--remove must lie in [0, 1) and --count be positive");
+    }
+    let removed = (args.robots as f64 * args.remove).round() as usize;
+    let preference = match args.previous {
+        Method::Opt | Method::DaBalanced => Preference::Balanced,
+        Method::Da => Preference::Selfish,
+        other => bail!("--previous {other}: use opt, da-balanced or da"),
+    };
+    let dynamics = if preference == Preference::Selfish {
+        "GRAPE DA"
+    } else {
+        "balanced DA"
+    };
+    let mut rows = Vec::new();
+    for seed in 0..args.count {
+        let (now, previous) = after_removal(args.robots, removed.max(1), seed, args.previous)?;
+        rows.push(reallocate(&now, &previous, preference)?);
+    }
+    let k = rows.len() as f64;
+    let mean = |f: &dyn Fn(&Reallocation) -> f64| rows.iter().map(f).sum::<f64>() / k;
+    let min_pct = rows
+        .iter()
+        .map(|r| r.percent_of_opt)
+        .fold(f64::INFINITY, f64::min);
+    println!(
+        "N = {} robots, {} leave (spread over the indices), M = 5, {} instances; the previous assignment is {}'s.\n",
+        args.robots,
+        removed.max(1),
+        rows.len(),
+        args.previous
+    );
+    println!(
+        "| method | survivors moved (mean) | % of OPT (mean / worst) | balanced-stable | time (ms, mean) |"
+    );
+    println!("|---|---|---|---|---|");
+    println!(
+        "| warm start ({dynamics} from the old assignment) | {:.1} | {:.3} / {:.3} | {} of {} | {:.2} |",
+        mean(&|r| r.moved as f64),
+        mean(&|r| r.percent_of_opt),
+        min_pct,
+        rows.iter().filter(|r| r.stable_balanced).count(),
+        rows.len(),
+        1e3 * mean(&|r| r.seconds)
+    );
+    println!(
+        "| {dynamics} from scratch | {:.1} | {:.3} / {:.3} | – | – |",
+        mean(&|r| r.scratch_changes as f64),
+        mean(&|r| r.scratch_percent_of_opt),
+        rows.iter()
+            .map(|r| r.scratch_percent_of_opt)
+            .fold(f64::INFINITY, f64::min)
+    );
+    println!(
+        "| OPT from scratch | {:.1} | 100 / 100 | – | – |",
+        mean(&|r| r.opt_changes as f64)
+    );
+    Ok(())
 }
