@@ -53,6 +53,9 @@ pub struct RegretSummary {
     pub gap_over_error: f64,
     /// Mean share of robots on the most common task.
     pub largest_task_share: f64,
+    /// Mean over instances of the mean task reward r̄ (the mean-reward welfare unit):
+    /// the median gap in that unit is `gap_quantiles[1] / mean_reward`.
+    pub mean_reward: f64,
 }
 
 pub fn summarise(dir: &std::path::Path, instances: &[Instance]) -> Result<RegretSummary> {
@@ -63,7 +66,7 @@ pub fn summarise(dir: &std::path::Path, instances: &[Instance]) -> Result<Regret
     let (mut by_decile, mut total_regret) = ([0.0f64; 10], 0.0);
     let (mut gaps, mut sq_error, mut wrong, mut steps) = (Vec::new(), 0.0, 0usize, 0usize);
     let (mut sq_advantage, mut advantages) = (0.0, 0usize);
-    let (mut pct, mut share) = (0.0, 0.0);
+    let (mut pct, mut share, mut mean_reward) = (0.0, 0.0, 0.0);
     let bar = crate::progress(instances.len() as u64, &format!("regret {}", dir.display()));
     for inst in instances {
         let n = inst.num_robots();
@@ -71,6 +74,7 @@ pub fn summarise(dir: &std::path::Path, instances: &[Instance]) -> Result<Regret
         let (trace, final_assignment) = regret_trace(&fast, inst, &graph)?;
         let opt = inst.welfare(&Optimum.allocate(inst)?.assignment);
         pct += 100.0 * inst.welfare(&final_assignment) / opt;
+        mean_reward += afg_graph::feature_scale(inst);
         share += *final_assignment.sizes().iter().max().unwrap_or(&0) as f64 / n as f64;
         let mut before = afg_game::Assignment::unassigned(n, inst.num_tasks());
         for s in &trace {
@@ -124,13 +128,14 @@ pub fn summarise(dir: &std::path::Path, instances: &[Instance]) -> Result<Regret
         advantage_error_rms,
         gap_over_error: quantile(0.5) / advantage_error_rms,
         largest_task_share: share / k,
+        mean_reward: mean_reward / k,
     })
 }
 
 /// The summaries as a Markdown table, one row per model.
 pub fn markdown(rows: &[RegretSummary]) -> String {
     let mut out = String::from(
-        "| model | N | % of OPT | regret by tenth of the rollout (% of the total) | wrong steps | Q* gap p10 / p50 / p90 | Q error (RMS) | advantage error (RMS) | gap p50 / advantage error | largest task |\n|---|---|---|---|---|---|---|---|---|---|\n",
+        "| model | N | % of OPT | regret by tenth of the rollout (% of the total) | wrong steps | Q* gap p10 / p50 / p90 | gap p50 / r̄ | Q error (RMS) | advantage error (RMS) | gap p50 / advantage error | largest task |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let deciles: Vec<String> = r
@@ -139,7 +144,7 @@ pub fn markdown(rows: &[RegretSummary]) -> String {
             .map(|d| format!("{d:.0}"))
             .collect();
         out += &format!(
-            "| {} | {} | {:.2} % | {} | {:.1} % | {:.3} / {:.3} / {:.3} | {:.3} | {:.3} | {:.2} | {:.2} |\n",
+            "| {} | {} | {:.2} % | {} | {:.1} % | {:.3} / {:.3} / {:.3} | {:.4} | {:.3} | {:.3} | {:.2} | {:.2} |\n",
             r.model,
             r.robots,
             r.percent_of_opt,
@@ -148,6 +153,7 @@ pub fn markdown(rows: &[RegretSummary]) -> String {
             r.gap_quantiles[0],
             r.gap_quantiles[1],
             r.gap_quantiles[2],
+            r.gap_quantiles[1] / r.mean_reward,
             r.q_error_rms,
             r.advantage_error_rms,
             r.gap_over_error,

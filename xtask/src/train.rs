@@ -73,11 +73,12 @@ pub struct TrainArgs {
     /// Episodes run side by side (each acting step adds this many transitions).
     #[arg(long)]
     parallel_envs: Option<usize>,
-    /// Potential-based reward shaping with the greedy completion's value: the network
-    /// learns how much better than finishing greedily each action is (not in the paper;
-    /// the optimal policy is unchanged).
+    /// Turn off the reward shaping. By default rewards are shaped with the potential
+    /// "welfare a greedy completion would still add", so the network learns how much
+    /// better than finishing greedily each action is (not in the paper; the optimal
+    /// policy is unchanged; docs/training.md).
     #[arg(long)]
-    greedy_shaping: bool,
+    no_shaping: bool,
     /// AFGNet only: add each action's immediate reward (the actor's join gain) to the
     /// Q values, so the network learns only the value of what follows (not in the paper).
     #[arg(long)]
@@ -142,6 +143,7 @@ impl TrainArgs {
         };
         let mut c = TrainConfig::new(scale, algo, network, steps, seed);
         if self.paper {
+            c.greedy_shaping = false;
             c.huber = false;
             c.reward_scaling = false;
             c.grad_clip = None;
@@ -167,7 +169,10 @@ impl TrainArgs {
         if let Some(k) = self.parallel_envs {
             c.parallel_envs = k;
         }
-        c.greedy_shaping = self.greedy_shaping;
+        // The gain residual adds the unshaped reward to Q: it implies no shaping.
+        if self.no_shaping || self.gain_residual {
+            c.greedy_shaping = false;
+        }
         c.check()?;
         Ok(c)
     }
@@ -185,7 +190,7 @@ impl TrainArgs {
             || self.units.is_some()
             || self.target_sync.is_some()
             || self.parallel_envs.is_some()
-            || self.greedy_shaping
+            || self.no_shaping
             || self.gain_residual
             || self.paper
     }
@@ -614,7 +619,7 @@ mod tests {
             "--scale 20 --constant-lr --lr 0.01",
             "--scale 60 --units mean-reward --target-sync 77 --parallel-envs 8",
             "--scale 20 --paper --target-sync 50",
-            "--scale 60 --greedy-shaping",
+            "--scale 60 --no-shaping",
         ] {
             let argv = ["cargo xtask", "train"]
                 .into_iter()
@@ -855,8 +860,11 @@ pub fn command_line(c: &TrainConfig, dir: &Path) -> String {
     if c.parallel_envs != default.parallel_envs {
         cmd += &format!(" --parallel-envs {}", c.parallel_envs);
     }
-    if c.greedy_shaping {
-        cmd += " --greedy-shaping";
+    let gain_residual =
+        matches!(&c.network, NetworkConfig::AfgNet(a) if a.gain_residual == Some(true));
+    if !c.greedy_shaping && c.huber && !gain_residual {
+        // (--paper and --gain-residual imply it)
+        cmd += " --no-shaping";
     }
     if c.network.units() == Units::MeanReward {
         cmd += " --units mean-reward";
@@ -949,7 +957,7 @@ pub fn run_all(args: TrainAllArgs) -> Result<()> {
                 units: None,
                 target_sync: None,
                 parallel_envs: None,
-                greedy_shaping: false,
+                no_shaping: false,
                 gain_residual: false,
                 paper: false,
                 out: Some(dir),

@@ -122,7 +122,8 @@ pub struct TrainConfig {
 impl TrainConfig {
     /// Defaults for `robots` and a step budget: batch 256, Adam 1e-3 (the paper's 1e-4
     /// learns too slowly for a CPU budget; docs/training.md), ε 1.0 → 0.05 over
-    /// 10 % of the steps, 16 parallel episodes, Huber loss, reward scaling, gradient
+    /// 10 % of the steps, 16 parallel episodes, Huber loss, reward scaling, greedy
+    /// reward shaping ([`TrainConfig::greedy_shaping`]), gradient
     /// clipping at norm 10, and a target sync every `clamp(steps / 20, 10, 1000)` steps
     /// (the paper's c = 1000 assumes 2.5 M steps; a CPU budget needs more syncs).
     pub fn new(robots: usize, algo: Algo, network: NetworkConfig, steps: u64, seed: u64) -> Self {
@@ -144,7 +145,7 @@ impl TrainConfig {
             warmup: 2_048,
             huber: true,
             reward_scaling: true,
-            greedy_shaping: false,
+            greedy_shaping: true,
             grad_clip: Some(10.0),
             validation_instances: 32,
             validate_every: (steps / 40).max(1),
