@@ -207,7 +207,7 @@ pub fn run_models(args: ModelBenchArgs) -> Result<()> {
         }
     }
     println!(
-        "\nAFGNet's training step against the plain model of shared/BURN-NOTES.md \
+        "\nAFGNet's training step against the plain model of the first Burn notes of this project \
          (neighbours padded to the largest degree, gather + reshape + sum; same parameters, \
          same Q values), in the same run:\n"
     );

@@ -26,7 +26,7 @@ pub fn seed(n: usize, index: usize) -> u64 {
     (n * 1_000_000 + index) as u64
 }
 
-/// The generated dataset for `n` robots (paper distribution, SPEC defaults).
+/// The generated dataset for `n` robots (paper distribution, the defaults of docs/decisions.md).
 pub fn generate(n: usize) -> Result<Vec<Instance>> {
     (0..INSTANCES)
         .map(|i| Ok(GeneratorConfig::paper(n, TASKS, seed(n, i)).generate()?))

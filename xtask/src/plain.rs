@@ -1,4 +1,4 @@
-//! The "plain" AFGNet of `shared/BURN-NOTES.md`, kept as the reference that
+//! The "plain" AFGNet of `the first Burn notes of this project`, kept as the reference that
 //! `bench-models` measures our training step against: every node's neighbours padded
 //! to the batch's largest degree, gathered with `select`, reshaped to `[V, D, ·]` and
 //! summed over the slots — no dense per-graph path. It reads the parameters of an

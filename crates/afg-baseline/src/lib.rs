@@ -1,4 +1,4 @@
-//! Classical allocators for the alliance formation game (SPEC §2), all behind one
+//! Classical allocators for the alliance formation game, all behind one
 //! [`Allocator`] trait: GRAPE's decentralised algorithm and its centralised twin
 //! ([`DecentralisedDa`], [`CentralisedDa`], selfish or balanced preference), the exact
 //! optimum ([`Optimum`]), and the trivial [`Greedy`], [`Nearest`] and

@@ -1,4 +1,4 @@
-//! Seeded instance generator: the paper's distribution with SPEC §1 defaults.
+//! Seeded instance generator: the paper's distribution with the defaults of docs/decisions.md.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -57,7 +57,7 @@ pub struct GeneratorConfig {
 
 impl GeneratorConfig {
     /// The paper's setting: positions uniform in the unit square, rewards uniform in
-    /// `[N/M, 2N/M]`, beta = 1; SPEC defaults `eps = max(2, N/M)` and no capacities.
+    /// `[N/M, 2N/M]`, beta = 1; our defaults `eps = max(2, N/M)` and no capacities.
     pub fn paper(robots: usize, tasks: usize, seed: u64) -> Self {
         let per_task = robots as f64 / tasks.max(1) as f64;
         GeneratorConfig {

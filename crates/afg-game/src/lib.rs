@@ -1,4 +1,4 @@
-//! The alliance formation game of multi-robot task assignment (paper §II, SPEC §1).
+//! The alliance formation game of multi-robot task assignment (paper §II; the choices it leaves open are in docs/decisions.md).
 //!
 //! N robots and M tasks in the plane. A coalition of n robots at task j is worth
 //! `F_j(n) = r_j log_{eps_j}(n + eps_j - 1)`, shared equally; robot i pays

@@ -11,7 +11,7 @@ use crate::GraphError;
 #[serde(rename_all = "lowercase", tag = "kind")]
 pub enum GraphKind {
     /// Each robot links to its k nearest robots; the union of both directions is kept
-    /// (SPEC §3 default, k = 10). Ties are broken by robot index.
+    /// (the default, k = 10). Ties are broken by robot index.
     Knn {
         /// Neighbours per robot before symmetrisation.
         k: usize,

@@ -1,6 +1,6 @@
 //! The allocation feature graph's node features and their incremental update.
 //!
-//! For robot i and task j (SPEC §3, paper §III A):
+//! For robot i and task j (paper §III A):
 //! - robot feature `ν_i ∈ R^M`: one-hot of i's task, zero while unassigned;
 //! - task feature `μ_i[j] = u_i(j, n_j^{-i} + 1)`: the utility i would get in j given
 //!   the others' current assignment (eq. 2), in the welfare unit of the state's

@@ -1,4 +1,4 @@
-//! AFGNet (paper eqs. 4–9, SPEC §3): robot features, task features and
+//! AFGNet (paper eqs. 4–9): robot features, task features and
 //! distance-weighted neighbour messages embedded in L rounds.
 
 use afg_graph::Units;

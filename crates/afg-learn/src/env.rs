@@ -1,4 +1,4 @@
-//! The sequential allocation MDP (SPEC §3): robots act once each in index order, an
+//! The sequential allocation MDP (paper §III): robots act once each in index order, an
 //! action is a task with room, the reward is the change in welfare, γ = 1.
 
 use afg_baseline::Greedy;

@@ -1,4 +1,4 @@
-//! Learned allocators (SPEC §3): the AFGNet and S2V Q networks in Burn, the sequential
+//! Learned allocators: the AFGNet and S2V Q networks in Burn, the sequential
 //! allocation environment, and a greedy policy that implements
 //! [`afg_baseline::Allocator`].
 //!

@@ -22,12 +22,12 @@ pub enum NetworkConfig {
 }
 
 impl NetworkConfig {
-    /// AFGNet with the SPEC defaults (d = 64, L = 3, ReLU) for `tasks` tasks.
+    /// AFGNet with the defaults of docs/models.md (d = 64, L = 3, ReLU) for `tasks` tasks.
     pub fn afgnet(tasks: usize, seed: u64) -> Self {
         NetworkConfig::AfgNet(AfgNetConfig::new(tasks).with_seed(seed))
     }
 
-    /// S2V with the SPEC defaults (p = 64, T = 4) for `tasks` tasks.
+    /// S2V with the defaults of docs/models.md (p = 64, T = 4) for `tasks` tasks.
     pub fn s2v(tasks: usize, seed: u64) -> Self {
         NetworkConfig::S2v(S2vConfig::new(tasks).with_seed(seed))
     }

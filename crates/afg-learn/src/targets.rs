@@ -1,6 +1,6 @@
 //! The bootstrap targets of DQN and Double DQN, as pure functions.
 //!
-//! The paper's eqs. 15/16 contain typos; these are the standard forms (SPEC §3).
+//! The paper's eqs. 15/16 contain typos; these are the standard forms (docs/training.md).
 //! `mask` marks the actions available in s' (tasks with room for the next robot);
 //! a terminal transition has no bootstrap.
 

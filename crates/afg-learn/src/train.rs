@@ -1,4 +1,4 @@
-//! DQN and Double DQN training on the sequential allocation MDP (SPEC §3), on the CPU.
+//! DQN and Double DQN training on the sequential allocation MDP, on the CPU.
 //!
 //! - **Experience.** `parallel_envs` episodes run side by side on fresh seeded training
 //!   instances (never the test datasets); one batched forward pass picks ε-greedy
