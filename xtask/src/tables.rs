@@ -273,6 +273,10 @@ fn markdown_tables(res: &Results) -> String {
     }
     let _ = writeln!(
         s,
+        "The learned rows keep the paper's networks and algorithms; where their training departs from the paper (units of the inputs and rewards, reward shaping, loss, learning rate, target sync) is in each model's command under \"The committed models\" in docs/RESULTS.md, and explained in docs/training.md.\n"
+    );
+    let _ = writeln!(
+        s,
         "### Table II — large swarms (classical methods on the first {} instances)\n",
         res.table2[0].1[0].instances
     );

@@ -28,6 +28,7 @@ pub enum NetArg {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum UnitsArg {
     ScaleFree,
+    Bounded,
     MeanReward,
 }
 
@@ -62,8 +63,10 @@ pub struct TrainArgs {
     #[arg(long)]
     n_step: Option<usize>,
     /// Units of the network's inputs and rewards: scale-free (welfare / β, edge weights
-    /// / their mean, the same at every N) or mean-reward (welfare / the instance's mean
-    /// task reward, raw edge weights: the first models' units).
+    /// / their mean, the same at every N), bounded (scale-free, and the value part of
+    /// the task features capped at 4 r_j/eps_j, so that nearly empty tasks look alike
+    /// at every N) or mean-reward (welfare / the instance's mean task reward, raw edge
+    /// weights: the first models' units).
     #[arg(long, value_enum)]
     units: Option<UnitsArg>,
     /// Gradient steps between target-network syncs (default: the run's budget / 20,
@@ -135,6 +138,7 @@ impl TrainArgs {
         };
         let network = network.with_units(match self.units.unwrap_or(UnitsArg::ScaleFree) {
             UnitsArg::ScaleFree => Units::ScaleFree,
+            UnitsArg::Bounded => Units::Bounded,
             UnitsArg::MeanReward => Units::MeanReward,
         });
         let algo = match self.algo.unwrap_or(AlgoArg::Ddqn) {
@@ -618,6 +622,7 @@ mod tests {
             "--scale 100 --paper",
             "--scale 20 --constant-lr --lr 0.01",
             "--scale 60 --units mean-reward --target-sync 77 --parallel-envs 8",
+            "--scale 60 --units bounded",
             "--scale 20 --paper --target-sync 50",
             "--scale 60 --no-shaping",
         ] {
@@ -866,8 +871,8 @@ pub fn command_line(c: &TrainConfig, dir: &Path) -> String {
         // (--paper and --gain-residual imply it)
         cmd += " --no-shaping";
     }
-    if c.network.units() == Units::MeanReward {
-        cmd += " --units mean-reward";
+    if c.network.units() != Units::ScaleFree {
+        cmd += &format!(" --units {}", c.network.units().name());
     }
     if let NetworkConfig::AfgNet(a) = &c.network
         && a.gain_residual == Some(true)

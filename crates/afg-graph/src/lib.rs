@@ -12,7 +12,7 @@ mod units;
 pub use batch::GraphBatch;
 pub use neighbours::{GraphKind, RobotGraph};
 pub use state::{AllocationState, join_gain, write_task_column};
-pub use units::{Units, feature_scale};
+pub use units::{Units, VALUE_CAP, feature_scale};
 
 use thiserror::Error;
 

@@ -50,7 +50,10 @@ pub fn write_task_column(
     let full = units.full_task_feature();
     let n_j = assignment.size(task);
     let cap = instance.capacity(task);
-    let share = |others: usize| instance.coalition_value(task, others + 1) / (others + 1) as f64;
+    let value_cap = units.value_cap(instance, task);
+    let share = |others: usize| {
+        (instance.coalition_value(task, others + 1) / (others + 1) as f64).min(value_cap)
+    };
     let (outside, inside) = (share(n_j), if n_j > 0 { share(n_j - 1) } else { 0.0 });
     for i in instance.robot_ids() {
         let member = assignment.task_of(i) == Some(task);

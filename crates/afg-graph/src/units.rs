@@ -11,6 +11,13 @@
 //! - [`Units::ScaleFree`]: welfare in units of β (so a robot's distance cost is its
 //!   distance, and per-robot utilities, rewards and action gaps are O(1) at every N),
 //!   edge weights divided by the graph's mean edge weight (mean 1 at every N).
+//! - [`Units::Bounded`]: as [`Units::ScaleFree`], and the value part of a task feature,
+//!   `F_j(n + 1)/(n + 1)`, capped at [`VALUE_CAP`]`· r_j / eps_j`. In the paper's
+//!   distribution `r_j / eps_j ≈ 1.5` at every N, and the share of a task with n
+//!   members is about that times `eps_j / n` — the same at the same fraction of the
+//!   episode — except for tasks with few members: an empty task's share is `r_j`,
+//!   which grows like N/M. A model trained at N = 60 meets shares of 200–400 at
+//!   N = 1000 that it has never seen; capped, they look like the ones it has.
 
 use afg_game::Instance;
 use serde::{Deserialize, Serialize};
@@ -41,15 +48,21 @@ pub enum Units {
     MeanReward,
     /// Welfare / β; edge distances / the graph's mean edge length.
     ScaleFree,
+    /// [`Units::ScaleFree`] with the value part of the task features capped.
+    Bounded,
 }
+
+/// The cap of the value part of a task feature in [`Units::Bounded`], in units of the
+/// task's `r_j / eps_j`: the share of a task with fewer than about `eps_j / 4` members.
+pub const VALUE_CAP: f64 = 4.0;
 
 impl Units {
     /// The welfare unit: task features, rewards and gains are divided by it.
     pub fn welfare_unit(self, instance: &Instance) -> f64 {
         match self {
             Units::MeanReward => feature_scale(instance),
-            Units::ScaleFree if instance.beta() > 0.0 => instance.beta(),
-            Units::ScaleFree => 1.0,
+            Units::ScaleFree | Units::Bounded if instance.beta() > 0.0 => instance.beta(),
+            Units::ScaleFree | Units::Bounded => 1.0,
         }
     }
 
@@ -57,7 +70,7 @@ impl Units {
     pub fn edge_unit(self, graph: &RobotGraph) -> f64 {
         match self {
             Units::MeanReward => 1.0,
-            Units::ScaleFree => {
+            Units::ScaleFree | Units::Bounded => {
                 let (sum, count) = (0..graph.num_nodes())
                     .flat_map(|i| graph.weights(afg_game::RobotId(i as u32)))
                     .fold((0.0, 0usize), |(s, c), &w| (s + w, c + 1));
@@ -74,7 +87,19 @@ impl Units {
     pub fn full_task_feature(self) -> f32 {
         match self {
             Units::MeanReward => -1.0,
-            Units::ScaleFree => -2.0,
+            Units::ScaleFree | Units::Bounded => -2.0,
+        }
+    }
+
+    /// The largest value part `F_j(n + 1)/(n + 1)` a task feature shows, in raw welfare
+    /// (infinite: no cap).
+    pub fn value_cap(self, instance: &Instance, task: afg_game::TaskId) -> f64 {
+        match self {
+            Units::MeanReward | Units::ScaleFree => f64::INFINITY,
+            Units::Bounded => {
+                let t = instance.task(task);
+                VALUE_CAP * t.reward / t.eps
+            }
         }
     }
 
@@ -83,6 +108,7 @@ impl Units {
         match self {
             Units::MeanReward => "mean-reward",
             Units::ScaleFree => "scale-free",
+            Units::Bounded => "bounded",
         }
     }
 }

@@ -43,6 +43,7 @@ fn features_match_the_utility_definition() {
         (Units::MeanReward, mean_reward, -1.0),
         (Units::ScaleFree, inst.beta(), -2.0),
     ] {
+        // (Bounded units only cap the share of nearly empty tasks: a test of its own.)
         let mut s = AllocationState::with_units(&inst, Assignment::unassigned(8, 3), units);
         for i in 0..8u32 {
             let j = TaskId(i % 3);
@@ -67,4 +68,29 @@ fn features_match_the_utility_definition() {
             }
         }
     }
+}
+
+#[test]
+fn bounded_units_cap_the_value_part_only() {
+    // One task with r = 30, eps = 5: the cap is 4 · 30 / 5 = 24. An empty task's share
+    // is F(1) = r = 30, capped to 24; with two members a newcomer's share is
+    // F(3)/3 = 30 · log_5(7) / 3 ≈ 12.09, below the cap.
+    let task = afg_game::Task {
+        position: afg_game::Point::new(1.0, 0.0),
+        reward: 30.0,
+        eps: 5.0,
+        capacity: None,
+    };
+    let robots = vec![afg_game::Point::new(0.0, 0.0); 3];
+    let inst = afg_game::Instance::new(robots, vec![task], 1.0).unwrap();
+    let empty = AllocationState::with_units(&inst, Assignment::unassigned(3, 1), Units::Bounded);
+    assert!((f64::from(empty.mu(RobotId(0))[0]) - (24.0 - 1.0)).abs() < 1e-5);
+    let free = AllocationState::with_units(&inst, Assignment::unassigned(3, 1), Units::ScaleFree);
+    assert!((f64::from(free.mu(RobotId(0))[0]) - (30.0 - 1.0)).abs() < 1e-5);
+    let mut two = Assignment::unassigned(3, 1);
+    two.set(RobotId(0), Some(TaskId(0)));
+    two.set(RobotId(1), Some(TaskId(0)));
+    let s = AllocationState::with_units(&inst, two, Units::Bounded);
+    let want = 30.0 * 7f64.ln() / 5f64.ln() / 3.0 - 1.0;
+    assert!((f64::from(s.mu(RobotId(2))[0]) - want).abs() < 1e-5);
 }

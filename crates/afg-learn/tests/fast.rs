@@ -89,6 +89,7 @@ fn fast_path_matches_burn_with_random_weights_on_the_datasets() {
         // Scale-free units: μ, gains and edge weights rescaled on both paths.
         NetworkConfig::afgnet(5, 12).with_units(afg_graph::Units::ScaleFree),
         NetworkConfig::s2v(5, 12).with_units(afg_graph::Units::ScaleFree),
+        NetworkConfig::afgnet(5, 13).with_units(afg_graph::Units::Bounded),
         NetworkConfig::AfgNet(
             afg_learn::AfgNetConfig::new(5)
                 .with_gain_residual(Some(true))
