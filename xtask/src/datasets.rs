@@ -105,6 +105,9 @@ pub struct GenCustomArgs {
     /// Distance penalty β (default 1).
     #[arg(long)]
     beta: Option<f64>,
+    /// Initial rewards uniform in [LO, HI] (default [N/M, 2N/M]), e.g. `--rewards 12,24`.
+    #[arg(long, value_delimiter = ',', num_args = 1, value_names = ["LO,HI"])]
+    rewards: Option<Vec<f64>>,
     /// Output JSON Lines file (one instance per line, generator parameters inside).
     #[arg(long)]
     out: PathBuf,
@@ -124,6 +127,12 @@ pub fn generate_custom(args: &GenCustomArgs) -> Result<Vec<Instance>> {
             }
             if let Some(beta) = args.beta {
                 cfg.beta = beta;
+            }
+            if let Some(r) = &args.rewards {
+                let [lo, hi] = r[..] else {
+                    bail!("--rewards takes two numbers, LO,HI");
+                };
+                (cfg.reward_min, cfg.reward_max) = (lo, hi);
             }
             if let Some(slack) = args.capacity_slack {
                 if !(slack.is_finite() && slack >= 1.0) {
@@ -167,7 +176,7 @@ mod tests {
     #[test]
     fn custom_instances_follow_every_knob_and_the_seed() {
         let args = gen_args(
-            "--robots 30 --tasks 4 --count 3 --seed 9 --capacity-slack 1.2 --eps 3 --beta 0.5 --out x.jsonl",
+            "--robots 30 --tasks 4 --count 3 --seed 9 --capacity-slack 1.2 --eps 3 --beta 0.5 --rewards 2,5 --out x.jsonl",
         );
         let a = generate_custom(&args).unwrap();
         assert_eq!(a.len(), 3);
@@ -181,11 +190,12 @@ mod tests {
                     .iter()
                     .all(|t| t.eps == 3.0 && t.capacity.is_some())
             );
+            assert!(inst.tasks().iter().all(|t| (2.0..=5.0).contains(&t.reward)));
         }
         // The same seed gives the same instances; instance i is seed + i.
         assert_eq!(generate_custom(&args).unwrap(), a);
         let one = generate_custom(&gen_args(
-            "--robots 30 --tasks 4 --seed 10 --capacity-slack 1.2 --eps 3 --beta 0.5 --out x.jsonl",
+            "--robots 30 --tasks 4 --seed 10 --capacity-slack 1.2 --eps 3 --beta 0.5 --rewards 2,5 --out x.jsonl",
         ))
         .unwrap();
         assert_eq!(one[0], a[1]);
@@ -201,6 +211,8 @@ mod tests {
                 "capacity-slack",
             ),
             ("--robots 10 --count 0 --out x.jsonl", "count"),
+            ("--robots 10 --rewards 5,2 --out x.jsonl", "reward"),
+            ("--robots 10 --rewards 5 --out x.jsonl", "two numbers"),
         ] {
             let err = generate_custom(&gen_args(flags)).unwrap_err();
             assert!(

@@ -99,7 +99,14 @@ fn fast_path_matches_burn_with_random_weights_on_the_datasets() {
     ];
     for config in &configs {
         let network = config.init::<B>(&device);
-        for (n, count) in [(20, 100), (60, 100), (100, 100)] {
+        // Every instance in the first units; the other units (which change only the
+        // inputs' scale, the same code path) on the first 20 of each set.
+        let count = if config.units() == afg_graph::Units::MeanReward {
+            100
+        } else {
+            20
+        };
+        for n in [20, 60, 100] {
             for inst in dataset(n).iter().take(count) {
                 let worst = assert_parity(config, &network, inst);
                 assert!(worst.is_finite());
