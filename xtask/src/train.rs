@@ -757,8 +757,10 @@ pub struct ReportArgs {
 /// A Markdown table of finished runs: final and best validation welfare against the
 /// classical methods on the same validation set (all read from the runs' logs).
 pub fn run_report(args: ReportArgs) -> Result<()> {
-    println!("| run | N | steps | wall time | final validation welfare | % of OPT | best (step) |");
-    println!("|---|---|---|---|---|---|---|");
+    println!(
+        "| run | N | steps | wall time | final validation welfare | % of OPT | best (step) | collapsed validations |"
+    );
+    println!("|---|---|---|---|---|---|---|---|");
     let mut baseline_rows = Vec::new();
     for dir in &args.dirs {
         let events = read_log(dir)?;
@@ -791,8 +793,23 @@ pub fn run_report(args: ReportArgs) -> Result<()> {
             .file_name()
             .map(|f| f.to_string_lossy().into_owned())
             .unwrap_or_default();
+        // Validations where most robots took one task (logged since the collapse check
+        // exists; "–" for older logs).
+        let flagged: Vec<bool> = vals
+            .iter()
+            .filter_map(|v| v["collapsed"].as_bool())
+            .collect();
+        let collapsed = if flagged.is_empty() {
+            "–".to_owned()
+        } else {
+            format!(
+                "{} of {}",
+                flagged.iter().filter(|&&c| c).count(),
+                flagged.len()
+            )
+        };
         println!(
-            "| {name} | {n} | {} | {:.0} min | {:.3} | {:.2} % | {:.3} ({}) |",
+            "| {name} | {n} | {} | {:.0} min | {:.3} | {:.2} % | {:.3} ({}) | {collapsed} |",
             last["step"],
             wall / 60.0,
             last["welfare"].as_f64().unwrap_or(f64::NAN),
