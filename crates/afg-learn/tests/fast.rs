@@ -31,7 +31,9 @@ fn assert_parity(config: &NetworkConfig, network: &QNetwork<B>, inst: &Instance)
     let fast = FastPolicy::from_network(config, network);
     let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
     let mut run = FastRollout::new(&fast, inst, &graph).unwrap();
-    let mut state = AllocationState::new(inst);
+    // The Burn side sees the state in the network's units, as the trainer builds it.
+    let empty = afg_game::Assignment::unassigned(inst.num_robots(), m);
+    let mut state = AllocationState::with_units(inst, empty, config.units());
     let (mut q_fast, mut mask) = (vec![0.0; m], vec![false; m]);
     let mut worst = 0.0f32;
     for robot in inst.robot_ids() {
@@ -119,7 +121,7 @@ fn fast_path_matches_burn_with_random_weights_on_the_datasets() {
 fn fast_path_matches_burn_with_the_committed_weights() {
     let device = Default::default();
     let mut tried = 0;
-    for name in ["afgnet_ddqn_n20", "s2v_ddqn_n20"] {
+    for name in ["afgnet_ddqn_n20", "s2v_ddqn_n20", "afgnet_ddqn_n60"] {
         let stem = repo(&format!("models/{name}/model"));
         if !stem.with_extension("json").exists() {
             continue;
