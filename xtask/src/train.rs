@@ -107,8 +107,8 @@ pub struct TrainArgs {
 pub fn default_steps(scale: usize) -> Option<u64> {
     match scale {
         20 => Some(20_000),
-        60 => Some(7_000),
-        100 => Some(4_000),
+        60 => Some(2_500),
+        100 => Some(1_500),
         _ => None,
     }
 }

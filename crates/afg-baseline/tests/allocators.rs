@@ -51,20 +51,26 @@ fn brute_force_completion(inst: &Instance, partial: &Assignment) -> f64 {
     }
 }
 
+/// A random instance small enough for brute force (N ≤ 7, M ≤ 4), any eps ≥ φ and
+/// beta; every second case with tight capacities (total just above N, so many tasks
+/// are full).
+fn small_instance(rng: &mut ChaCha8Rng, case: usize) -> Instance {
+    let n = rng.random_range(1..=7);
+    let m = rng.random_range(1..=4);
+    let mut cfg = GeneratorConfig::paper(n, m, rng.random());
+    cfg.eps = rng.random_range(1.62..6.0);
+    cfg.beta = rng.random_range(0.0..3.0);
+    if case % 2 == 1 {
+        cfg = cfg.with_capacity_slack(rng.random_range(1.0..1.5));
+    }
+    cfg.generate().unwrap()
+}
+
 #[test]
 fn opt_equals_brute_force_on_small_instances() {
     let mut rng = ChaCha8Rng::seed_from_u64(2024);
     for case in 0..1200 {
-        let n = rng.random_range(1..=7);
-        let m = rng.random_range(1..=4);
-        let mut cfg = GeneratorConfig::paper(n, m, rng.random());
-        cfg.eps = rng.random_range(1.62..6.0);
-        cfg.beta = rng.random_range(0.0..3.0);
-        if case % 2 == 1 {
-            // Tight capacities: total just above N, so many tasks are full.
-            cfg = cfg.with_capacity_slack(rng.random_range(1.0..1.5));
-        }
-        let inst = cfg.generate().unwrap();
+        let inst = small_instance(&mut rng, case);
         let opt = Optimum.allocate(&inst).unwrap().assignment;
         inst.check(&opt).unwrap();
         assert!(opt.is_complete());
@@ -80,15 +86,8 @@ fn opt_equals_brute_force_on_small_instances() {
 fn completion_equals_brute_force_with_fixed_prefixes() {
     let mut rng = ChaCha8Rng::seed_from_u64(2025);
     for case in 0..1200 {
-        let n = rng.random_range(1..=7);
-        let m = rng.random_range(1..=4);
-        let mut cfg = GeneratorConfig::paper(n, m, rng.random());
-        cfg.eps = rng.random_range(1.62..6.0);
-        cfg.beta = rng.random_range(0.0..3.0);
-        if case % 2 == 1 {
-            cfg = cfg.with_capacity_slack(rng.random_range(1.0..1.5));
-        }
-        let inst = cfg.generate().unwrap();
+        let inst = small_instance(&mut rng, case);
+        let (n, m) = (inst.num_robots(), inst.num_tasks());
         // A random prefix of robots on random tasks with room, as in the MDP.
         let mut partial = Assignment::unassigned(n, m);
         for i in 0..rng.random_range(0..=n) {
