@@ -3,10 +3,10 @@
 
 use std::path::PathBuf;
 
-use afg_baseline::{Allocator, Greedy, Optimum};
+use afg_baseline::{Allocator, Optimum};
 use afg_game::Instance;
 use afg_graph::{GraphKind, RobotGraph};
-use afg_learn::{FastPolicy, LearnedPolicy, regret_trace};
+use afg_learn::{FastPolicy, LearnedPolicy, greedy_completion_welfare, regret_trace};
 use anyhow::{Context, Result};
 use clap::Args;
 use serde::Serialize;
@@ -86,7 +86,7 @@ pub fn summarise(dir: &std::path::Path, instances: &[Instance]) -> Result<Regret
             let unit = if config.reward_scaling { s.unit } else { 1.0 };
             // A shaped network learns Q − Φ, Φ(s) = W(greedy completion of s) − W(s).
             let potential = if config.greedy_shaping {
-                inst.welfare(&Greedy.complete(inst, &before)) - inst.welfare(&before)
+                greedy_completion_welfare(inst, &before) - inst.welfare(&before)
             } else {
                 0.0
             };

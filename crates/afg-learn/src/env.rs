@@ -95,6 +95,13 @@ impl<'a> Env<'a> {
     }
 }
 
+/// `W(greedy completion of assignment)`: the welfare once one-pass greedy has placed
+/// every unassigned robot. The shaping potential of [`n_step_reward`] is this minus
+/// `W(assignment)`. O(N M).
+pub fn greedy_completion_welfare(instance: &Instance, assignment: &Assignment) -> f64 {
+    instance.welfare(&Greedy.complete(instance, assignment))
+}
+
 /// The summed reward (γ = 1, raw welfare) of robots `first, first + 1, …` taking
 /// `actions` from `assignment`, which is advanced past them.
 ///
@@ -128,9 +135,8 @@ pub fn n_step_reward(
     actions: &[TaskId],
     greedy_shaping: bool,
 ) -> f64 {
-    let greedy_value = |a: &Assignment| instance.welfare(&Greedy.complete(instance, a));
     let mut reward = if greedy_shaping {
-        -greedy_value(assignment)
+        -greedy_completion_welfare(instance, assignment)
     } else {
         0.0
     };
@@ -142,7 +148,7 @@ pub fn n_step_reward(
         assignment.set(robot, Some(task));
     }
     if greedy_shaping {
-        reward += greedy_value(assignment);
+        reward += greedy_completion_welfare(instance, assignment);
     }
     reward
 }

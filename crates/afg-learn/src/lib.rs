@@ -20,7 +20,7 @@ mod tensors;
 mod train;
 
 pub use afgnet::{AfgLayer, AfgNet, AfgNetConfig};
-pub use env::{Env, n_step_reward};
+pub use env::{Env, greedy_completion_welfare, n_step_reward};
 pub use fast::{FastPolicy, FastRollout, FastRolloutOutcome};
 pub use layers::{Activation, QHead, linear_of_concat};
 pub use network::{NetworkConfig, QNetwork};
