@@ -257,11 +257,10 @@ pub fn run_models(args: ModelBenchArgs) -> Result<()> {
     );
     println!("|---|---|---|---|");
     for config in [NetworkConfig::afgnet(5, 0), NetworkConfig::s2v(5, 0)] {
-        let mut policy = afg_learn::LearnedPolicy::new(config.clone());
-        policy.exact_burn = true;
-        let burn = median(1, || Ok(policy.allocate(&inst)?))?;
-        policy.exact_burn = false;
+        let policy = afg_learn::LearnedPolicy::new(config.clone());
         let fast = median(3, || Ok(policy.allocate(&inst)?))?;
+        let policy = policy.exact_burn();
+        let burn = median(1, || Ok(policy.allocate(&inst)?))?;
         println!(
             "| {} | {} | {} | {:.1}× |",
             config.name(),

@@ -250,9 +250,9 @@ pub fn run_study(args: StudyArgs) -> Result<()> {
         other => bail!("--previous {other}: use opt, da-balanced or da"),
     };
     let dynamics = if preference == Preference::Selfish {
-        "GRAPE DA"
+        Method::Da.label()
     } else {
-        "balanced DA"
+        Method::DaBalanced.label()
     };
     let mut rows = Vec::new();
     for seed in 0..args.count {

@@ -59,8 +59,9 @@ pub struct RegretSummary {
 }
 
 pub fn summarise(dir: &std::path::Path, instances: &[Instance]) -> Result<RegretSummary> {
-    let config = crate::train::read_config(dir)?;
-    let policy = LearnedPolicy::load(&dir.join("model"))
+    let run = afg_learn::RunDir::new(dir);
+    let config = run.config()?;
+    let policy = LearnedPolicy::load(&run.weights())
         .with_context(|| format!("loading the policy in {}", dir.display()))?;
     let fast = FastPolicy::from_network(policy.config(), policy.network());
     let (mut by_decile, mut total_regret) = ([0.0f64; 10], 0.0);

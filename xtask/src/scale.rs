@@ -110,21 +110,23 @@ fn run_case(case: Case) -> Result<Outcome> {
             out.welfare = inst.welfare(&alloc.assignment);
         }
         None => {
-            let mut policy = match &case.model {
+            let policy = match &case.model {
                 Some(dir) => LearnedPolicy::load(&dir.join("model"))
                     .with_context(|| format!("loading {}", dir.display()))?,
                 None => LearnedPolicy::new(NetworkConfig::afgnet(case.tasks, 0)),
             };
-            policy.block = case.block;
-            policy.exact_burn = case.exact_burn;
-            policy.repair = !case.exact_burn;
+            let policy = if case.exact_burn {
+                policy.exact_burn()
+            } else {
+                policy.with_block(case.block)?.with_repair(true)
+            };
             let start = Instant::now();
             let run = policy.run(&inst)?;
             out.seconds = start.elapsed().as_secs_f64();
             out.welfare = inst.welfare(&run.assignment);
             out.rollout_welfare = Some(run.rollout_welfare);
             out.passes = Some(run.passes);
-            if policy.repair {
+            if policy.repairs() {
                 out.repair_moves = Some(run.repair_moves);
                 out.repair_seconds = Some(run.repair_time.as_secs_f64());
             }

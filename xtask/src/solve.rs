@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use afg_baseline::{Allocator, Method, Optimum};
+use afg_eval::{Score, optimum_welfare};
 use afg_game::{Assignment, Instance, Preference};
 use anyhow::{Context, Result};
 use clap::Args;
@@ -64,11 +65,8 @@ pub struct SolveArgs {
 /// One instance's result.
 #[derive(Serialize)]
 pub struct Row {
-    pub welfare: f64,
-    pub opt_welfare: f64,
-    pub percent_of_opt: f64,
-    pub ns_rate_balanced: f64,
-    pub ns_rate_selfish: f64,
+    #[serde(flatten)]
+    pub score: Score,
     pub stats: afg_baseline::AllocStats,
 }
 
@@ -85,29 +83,21 @@ impl Row {
         assignment: &Assignment,
         stats: afg_baseline::AllocStats,
     ) -> Result<Row> {
-        let opt = Optimum.allocate(inst)?;
-        let (welfare, opt_welfare) = (inst.welfare(assignment), inst.welfare(&opt.assignment));
-        Ok(Row {
-            welfare,
-            opt_welfare,
-            percent_of_opt: 100.0 * welfare / opt_welfare,
-            ns_rate_balanced: inst.ns_rate(assignment, Preference::Balanced),
-            ns_rate_selfish: inst.ns_rate(assignment, Preference::Selfish),
-            stats,
-        })
+        let score = Score::of("the allocation", inst, assignment, optimum_welfare(inst)?)?;
+        Ok(Row { score, stats })
     }
 
     /// The line `--out` writes for this row's assignment.
     fn assignment_line(&self, method: &str, inst: &Instance, a: &Assignment) -> String {
         a.to_json_with_summary(Some(serde_json::json!({
             "method": method,
-            "welfare": self.welfare,
-            "opt_welfare": self.opt_welfare,
-            "percent_of_opt": self.percent_of_opt,
+            "welfare": self.score.welfare,
+            "opt_welfare": self.score.opt_welfare,
+            "percent_of_opt": self.score.percent_of_opt,
             "coalition_sizes": a.sizes(),
             "stable_balanced": inst.is_stable(a, Preference::Balanced),
-            "ns_rate_balanced": self.ns_rate_balanced,
-            "ns_rate_selfish": self.ns_rate_selfish,
+            "ns_rate_balanced": self.score.ns_rate_balanced,
+            "ns_rate_selfish": self.score.ns_rate_selfish,
         })))
     }
 }
@@ -167,11 +157,16 @@ pub fn run(args: SolveArgs) -> Result<()> {
     let (name, method): (String, Box<dyn Allocator>) = match (&args.method, &args.model) {
         (Some(m), _) => (m.to_string(), m.allocator(args.seed)),
         (None, Some(dir)) => {
-            let mut policy = afg_learn::LearnedPolicy::load(&dir.join("model"))
-                .with_context(|| format!("loading the policy in {}", dir.display()))?;
-            policy.block = args.block.unwrap_or(1);
-            policy.repair = args.repair;
-            policy.exact_burn = args.exact_burn;
+            let policy = afg_learn::LearnedPolicy::load(&afg_learn::RunDir::new(dir).weights())
+                .with_context(|| format!("loading the policy in {}", dir.display()))?
+                .with_repair(args.repair);
+            let policy = match (args.exact_burn, args.block) {
+                (true, Some(b)) if b != 1 => {
+                    anyhow::bail!("--exact-burn rolls out one robot at a time (no --block)")
+                }
+                (true, _) => policy.exact_burn(),
+                (false, block) => policy.with_block(block.unwrap_or(1))?,
+            };
             (dir.display().to_string(), Box::new(policy))
         }
         (None, None) => unreachable!("clap requires an allocator"),
@@ -192,11 +187,11 @@ pub fn run(args: SolveArgs) -> Result<()> {
     let k = rows.len() as f64;
     let mean = |f: &dyn Fn(&Row) -> f64| rows.iter().map(f).sum::<f64>() / k;
     let m = Mean {
-        welfare: mean(&|r| r.welfare),
-        opt_welfare: mean(&|r| r.opt_welfare),
-        percent_of_opt: mean(&|r| r.percent_of_opt),
-        ns_rate_balanced: mean(&|r| r.ns_rate_balanced),
-        ns_rate_selfish: mean(&|r| r.ns_rate_selfish),
+        welfare: mean(&|r| r.score.welfare),
+        opt_welfare: mean(&|r| r.score.opt_welfare),
+        percent_of_opt: mean(&|r| r.score.percent_of_opt),
+        ns_rate_balanced: mean(&|r| r.score.ns_rate_balanced),
+        ns_rate_selfish: mean(&|r| r.score.ns_rate_selfish),
         iterations: mean(&|r| r.stats.iterations as f64),
         rounds: mean(&|r| r.stats.rounds as f64),
         messages: mean(&|r| r.stats.messages as f64),

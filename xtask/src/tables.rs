@@ -3,10 +3,10 @@
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 use afg_baseline::{Allocator, Method, Optimum};
-use afg_game::{Instance, Preference};
+use afg_eval::{ModelSpec, Summary, Variant, dataset, evaluate, optima, paper};
+use afg_game::Instance;
 use afg_learn::LearnedPolicy;
 use anyhow::{Context, Result, bail};
 use clap::Args;
@@ -23,101 +23,33 @@ pub struct TablesArgs {
     /// Write nothing; check that README.md shows the tables of docs/RESULTS.md.
     #[arg(long)]
     check: bool,
+    /// Write nothing; recompute every table and fail, naming the cell, where a number
+    /// other than a timing differs from docs/RESULTS.md (beyond the last printed digit).
+    #[arg(long, conflicts_with_all = ["check", "quick", "root"])]
+    verify: bool,
     /// Where to write RESULTS.md, figures/ and the README block (default: the repository).
     #[arg(long)]
     root: Option<PathBuf>,
 }
 
-/// The learned rows: (label, model directory under models/).
-const TABLE1_MODELS: [(&str, &str); 4] = [
-    ("S2V_DDQN", "s2v_ddqn"),
-    ("AFGNet_DQN", "afgnet_dqn"),
-    ("AFGNet_DDQN", "afgnet_ddqn"),
-    // Ours, not in the paper: AFGNet_DDQN with the action's immediate reward added to Q.
-    ("AFGNet_DDQN + gain residual (ours)", "afgnet_ddqn_gain"),
-];
-
-/// Paper Table I: N → (S2V_DDQN, AFGNet_DQN, AFGNet_DDQN, NS_rate of AFGNet_DDQN in %).
-const PAPER_TABLE1: [(usize, [f64; 4]); 3] = [
-    (20, [14.85, 19.31, 22.61, 81.8]),
-    (60, [42.37, 48.00, 59.51, 80.8]),
-    (100, [96.18, 96.99, 106.21, 78.0]),
-];
-
-/// Paper Table II: N → (DA utility, Pretrain_60 utility, DA NS %, P60 NS %, DA s, DRL s).
-const PAPER_TABLE2: [(usize, [f64; 6]); 2] = [
-    (500, [619.11, 620.23, 80.5, 79.5, 181.83, 2.66]),
-    (1000, [1247.53, 1250.75, 80.0, 81.1, 714.88, 10.42]),
-];
+/// The training scale of the model the paper transfers to other N ("Pretrain_60").
+const PRETRAINED_AT: usize = 60;
 
 const BEGIN: &str = "<!-- reproduce-tables:begin -->";
 const END: &str = "<!-- reproduce-tables:end -->";
 
-/// One method on one dataset.
-#[derive(Clone, Debug, Serialize)]
-pub struct Row {
-    pub method: String,
-    pub instances: usize,
-    pub welfare: f64,
-    pub percent_of_opt: f64,
-    pub ns_rate_balanced: f64,
-    pub ns_rate_selfish: f64,
-    pub seconds_per_instance: f64,
-}
-
 #[derive(Serialize)]
 struct Results {
     quick: bool,
-    table1: Vec<(usize, Vec<Row>)>,
-    table2: Vec<(usize, Vec<Row>)>,
+    table1: Vec<(usize, Vec<Summary>)>,
+    table2: Vec<(usize, Vec<Summary>)>,
     missing_models: Vec<String>,
 }
 
-fn evaluate(label: &str, alloc: &dyn Allocator, insts: &[Instance], opt: &[f64]) -> Result<Row> {
-    let (mut welfare, mut pct, mut nsb, mut nss, mut secs) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    for (inst, &o) in insts.iter().zip(opt) {
-        let start = Instant::now();
-        let a = alloc.allocate(inst)?.assignment;
-        secs += start.elapsed().as_secs_f64();
-        let w = inst.welfare(&a);
-        if w > o + 1e-9 * o.abs().max(1.0) {
-            bail!("{label} beats OPT ({w} > {o}): OPT is wrong");
-        }
-        welfare += w;
-        pct += 100.0 * w / o;
-        nsb += inst.ns_rate(&a, Preference::Balanced);
-        nss += inst.ns_rate(&a, Preference::Selfish);
-    }
-    let k = insts.len() as f64;
-    Ok(Row {
-        method: label.to_owned(),
-        instances: insts.len(),
-        welfare: welfare / k,
-        percent_of_opt: pct / k,
-        ns_rate_balanced: 100.0 * nsb / k,
-        ns_rate_selfish: 100.0 * nss / k,
-        seconds_per_instance: secs / k,
-    })
-}
-
-fn model_stem(root: &Path, dir: &str, n: usize) -> PathBuf {
-    root.join("models")
-        .join(format!("{dir}_n{n}"))
-        .join("model")
-}
-
-fn classical(n: usize) -> Vec<(&'static str, Method)> {
-    let mut v = vec![
-        ("OPT", Method::Opt),
-        ("GRAPE DA", Method::Da),
-        ("GRAPE DA, decentralised", Method::DaDecentralised),
-        ("balanced DA", Method::DaBalanced),
-        ("Greedy", Method::Greedy),
-        ("Nearest", Method::Nearest),
-        ("Random", Method::Random),
-    ];
+fn classical(n: usize) -> Vec<Method> {
+    let mut v = Method::ALL.to_vec();
     if n > 1000 {
-        v.retain(|(_, m)| *m != Method::DaDecentralised);
+        v.retain(|m| *m != Method::DaDecentralised);
     }
     v
 }
@@ -125,6 +57,24 @@ fn classical(n: usize) -> Vec<(&'static str, Method)> {
 pub fn run(args: TablesArgs) -> Result<()> {
     if args.check {
         return check_readme(&crate::repo_root());
+    }
+    if args.verify {
+        let root = crate::repo_root();
+        check_readme(&root)?;
+        let committed = results_block(&root.join("docs/RESULTS.md"))?;
+        let fresh = markdown_tables(&compute(&root, false)?);
+        let differences = table_differences(&committed, &fresh);
+        if !differences.is_empty() {
+            for d in &differences {
+                eprintln!("{d}");
+            }
+            bail!(
+                "{} cell(s) of docs/RESULTS.md differ from a fresh run; run `cargo xtask reproduce-tables`",
+                differences.len()
+            );
+        }
+        println!("docs/RESULTS.md matches a fresh run (timings aside)");
+        return Ok(());
     }
     let root = args.root.clone().unwrap_or_else(crate::repo_root);
     let results = compute(&root, args.quick)?;
@@ -146,60 +96,78 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
     let mut missing = Vec::new();
     let bar = crate::progress(5, "reproduce-tables (datasets)");
     let mut table1 = Vec::new();
-    for n in [20, 60, 100] {
+    for n in dataset::TABLE1_SIZES {
         let insts: Vec<Instance> = crate::datasets::load(n)?
             .into_iter()
             .take(t1_instances)
             .collect();
         let opt = optima(&insts)?;
         let mut rows = Vec::new();
-        for (label, dir) in TABLE1_MODELS {
-            let stem = model_stem(root, dir, n);
-            if !stem.with_extension("mpk").exists() {
+        for spec in ModelSpec::table1(n) {
+            let run = spec.run_dir(root);
+            if !run.has_weights() {
                 // Our variants are optional; the paper's three models are expected.
-                if !label.ends_with("(ours)") {
-                    missing.push(format!("models/{dir}_n{n}"));
+                if !spec.is_ours() {
+                    missing.push(format!("models/{}", spec.dir_name()));
                 }
                 continue;
             }
-            let policy = LearnedPolicy::load(&stem)
-                .with_context(|| format!("loading {}", stem.display()))?;
-            rows.push(evaluate(label, &policy, &insts, &opt)?);
+            let policy = LearnedPolicy::load(&run.weights())
+                .with_context(|| format!("loading {}", run.path().display()))?;
+            rows.push(evaluate(&spec.label(), &policy, &insts, &opt)?);
         }
-        for (label, method) in classical(n) {
-            rows.push(evaluate(label, method.allocator(0).as_ref(), &insts, &opt)?);
+        // The N = 60 model at the other scales (the paper's "Pretrain_60" at N = 20, 100).
+        let pretrained = ModelSpec::afgnet_ddqn(PRETRAINED_AT);
+        if n != PRETRAINED_AT && pretrained.run_dir(root).has_weights() {
+            let policy = LearnedPolicy::load(&pretrained.run_dir(root).weights())?;
+            let label = format!("{} trained at N = {PRETRAINED_AT}", pretrained.label());
+            rows.push(evaluate(&label, &policy, &insts, &opt)?);
+        }
+        for method in classical(n) {
+            rows.push(evaluate(
+                method.label(),
+                method.allocator(0).as_ref(),
+                &insts,
+                &opt,
+            )?);
         }
         bar.inc(1);
         table1.push((n, rows));
     }
     let mut table2 = Vec::new();
-    for n in [500, 1000] {
+    for n in dataset::TABLE2_SIZES {
         let insts: Vec<Instance> = crate::datasets::load(n)?
             .into_iter()
             .take(t2_instances)
             .collect();
         let opt = optima(&insts)?;
         let mut rows = Vec::new();
-        for (label, method) in classical(n) {
-            rows.push(evaluate(label, method.allocator(0).as_ref(), &insts, &opt)?);
+        for method in classical(n) {
+            rows.push(evaluate(
+                method.label(),
+                method.allocator(0).as_ref(),
+                &insts,
+                &opt,
+            )?);
         }
         let few = t2_learned.min(insts.len());
-        for (name, dir) in [
-            ("AFGNet_DDQN", "afgnet_ddqn"),
-            ("AFGNet_DDQN + gain residual (ours)", "afgnet_ddqn_gain"),
-        ] {
-            for trained in [20, 60, 100] {
-                let stem = model_stem(root, dir, trained);
-                if !stem.with_extension("mpk").exists() {
+        for variant in [Variant::Paper, Variant::GainResidual] {
+            for trained in dataset::TABLE1_SIZES {
+                let spec = ModelSpec {
+                    variant,
+                    ..ModelSpec::afgnet_ddqn(trained)
+                };
+                let run = spec.run_dir(root);
+                if !run.has_weights() {
                     continue;
                 }
-                let mut policy = LearnedPolicy::load(&stem)?;
-                let label = format!("{name} trained at N = {trained}");
+                let policy = LearnedPolicy::load(&run.weights())?;
+                let label = format!("{} trained at N = {trained}", spec.label());
                 rows.push(evaluate(&label, &policy, &insts[..few], &opt[..few])?);
-                if dir == "afgnet_ddqn" {
+                if variant == Variant::Paper {
                     // The fast variant: one pass per N/100 robots, then balanced repair.
-                    (policy.block, policy.repair) = (n / 100, true);
-                    let label = format!("{label}, block {}, + repair", policy.block);
+                    let policy = policy.with_block(n / 100)?.with_repair(true);
+                    let label = format!("{label}, block {}, + repair", policy.block());
                     rows.push(evaluate(&label, &policy, &insts, &opt)?);
                 }
             }
@@ -218,27 +186,11 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
     })
 }
 
-fn optima(insts: &[Instance]) -> Result<Vec<f64>> {
-    insts
-        .iter()
-        .map(|i| Ok(i.welfare(&Optimum.allocate(i)?.assignment)))
-        .collect()
-}
-
-fn row_line(r: &Row, paper: &str) -> String {
+fn row_line(r: &Summary, paper: &str) -> String {
     format!(
         "| {} | {:.2} | {:.2} % | {:.1} % | {:.1} % | {} |",
         r.method, r.welfare, r.percent_of_opt, r.ns_rate_balanced, r.ns_rate_selfish, paper
     )
-}
-
-/// The paper's numbers for N = `n` in one of its tables.
-fn paper_row<const K: usize>(table: &[(usize, [f64; K])], n: usize) -> [f64; K] {
-    table
-        .iter()
-        .find(|(m, _)| *m == n)
-        .map(|(_, p)| *p)
-        .expect("the paper reports every N we tabulate")
 }
 
 fn markdown_tables(res: &Results) -> String {
@@ -249,11 +201,11 @@ fn markdown_tables(res: &Results) -> String {
         res.table1[0].1[0].instances
     );
     for (n, rows) in &res.table1 {
-        let paper = paper_row(&PAPER_TABLE1, *n);
+        let paper = paper::table1(*n).expect("the paper reports every N of Table I");
         let _ = writeln!(
             s,
             "**N = {n}** (paper: S2V_DDQN {}, AFGNet_DQN {}, AFGNet_DDQN {}, NS_rate {} %)\n",
-            paper[0], paper[1], paper[2], paper[3]
+            paper.s2v_ddqn, paper.afgnet_dqn, paper.afgnet_ddqn, paper.afgnet_ddqn_ns_rate
         );
         let _ = writeln!(
             s,
@@ -261,11 +213,15 @@ fn markdown_tables(res: &Results) -> String {
         );
         let _ = writeln!(s, "|---|---|---|---|---|---|");
         for r in rows {
-            let p = match r.method.as_str() {
-                "S2V_DDQN" => format!("{}", paper[0]),
-                "AFGNet_DQN" => format!("{}", paper[1]),
-                "AFGNet_DDQN" => format!("{} (NS {} %)", paper[2], paper[3]),
-                _ => "–".into(),
+            let model = ModelSpec::table1(*n)
+                .into_iter()
+                .find(|m| m.label() == r.method);
+            let p = match model.and_then(|m| paper.welfare_of(&m).map(|w| (m, w))) {
+                Some((m, w)) if m == ModelSpec::afgnet_ddqn(*n) => {
+                    format!("{w} (NS {} %)", paper.afgnet_ddqn_ns_rate)
+                }
+                Some((_, w)) => format!("{w}"),
+                None => "–".into(),
             };
             let _ = writeln!(s, "{}", row_line(r, &p));
         }
@@ -281,11 +237,16 @@ fn markdown_tables(res: &Results) -> String {
         res.table2[0].1[0].instances
     );
     for (n, rows) in &res.table2 {
-        let paper = paper_row(&PAPER_TABLE2, *n);
+        let paper = paper::table2(*n).expect("the paper reports every N of Table II");
         let _ = writeln!(
             s,
             "**N = {n}** (paper: DA {} in {} s, NS {} %; Pretrain_60 {} in {} s, NS {} %)\n",
-            paper[0], paper[4], paper[2], paper[1], paper[5], paper[3]
+            paper.da_welfare,
+            paper.da_seconds,
+            paper.da_ns_rate,
+            paper.pretrain60_welfare,
+            paper.pretrain60_seconds,
+            paper.pretrain60_ns_rate
         );
         let _ = writeln!(
             s,
@@ -320,16 +281,13 @@ fn markdown_tables(res: &Results) -> String {
 fn write_outputs(root: &Path, res: &Results, tables: &str, quick: bool) -> Result<()> {
     let docs = root.join("docs");
     std::fs::create_dir_all(docs.join("figures"))?;
-    let runs: Vec<PathBuf> = ["afgnet_ddqn", "afgnet_dqn", "s2v_ddqn"]
-        .iter()
-        .flat_map(|d| [20, 60, 100].map(|n| root.join("models").join(format!("{d}_n{n}"))))
-        .filter(|p| p.join("log.jsonl").exists())
-        .collect();
-    for n in [20, 60, 100] {
-        let dirs: Vec<PathBuf> = runs
+    for n in dataset::TABLE1_SIZES {
+        // The paper's three models at this scale (Fig. 1 has no curves of ours).
+        let dirs: Vec<PathBuf> = ModelSpec::table1(n)
             .iter()
-            .filter(|p| p.to_string_lossy().ends_with(&format!("_n{n}")))
-            .cloned()
+            .filter(|m| !m.is_ours())
+            .map(|m| m.run_dir(root).path().to_path_buf())
+            .filter(|p| p.join("log.jsonl").exists())
             .collect();
         if !dirs.is_empty() {
             crate::train::plot_curves(
@@ -376,19 +334,21 @@ fn write_outputs(root: &Path, res: &Results, tables: &str, quick: bool) -> Resul
 fn assignment_map(root: &Path, out: &Path) -> Result<()> {
     let inst = crate::datasets::load(100)?.swap_remove(0);
     let opt = Optimum.allocate(&inst)?.assignment;
-    let stem = model_stem(root, "afgnet_ddqn", 100);
-    let (label, other) = if stem.with_extension("mpk").exists() {
+    let run = ModelSpec::afgnet_ddqn(100).run_dir(root);
+    let (label, other) = if run.has_weights() {
         (
-            "AFGNet_DDQN",
-            LearnedPolicy::load(&stem)?.allocate(&inst)?.assignment,
+            ModelSpec::afgnet_ddqn(100).label(),
+            LearnedPolicy::load(&run.weights())?
+                .allocate(&inst)?
+                .assignment,
         )
     } else {
         (
-            "GRAPE DA (no N = 100 model yet)",
+            format!("{} (no N = 100 model yet)", Method::Da.label()),
             Method::Da.allocator(0).allocate(&inst)?.assignment,
         )
     };
-    draw_assignments(&inst, &[("OPT", &opt), (label, &other)], out)
+    draw_assignments(&inst, &[(Method::Opt.label(), &opt), (&label, &other)], out)
 }
 
 /// Draws assignments of one instance side by side as an SVG: robots coloured by task
@@ -457,15 +417,16 @@ fn models_table(root: &Path) -> Result<String> {
          | model | N | steps | learning rate | wall time | final validation, % of OPT | command |\n\
          |---|---|---|---|---|---|---|\n",
     );
-    for (label, dir) in TABLE1_MODELS {
-        for n in [20, 60, 100] {
-            let path = root.join("models").join(format!("{dir}_n{n}"));
-            let Ok(text) = std::fs::read_to_string(path.join("manifest.json")) else {
+    for kind in ModelSpec::TABLE1_KINDS {
+        for n in dataset::TABLE1_SIZES {
+            let spec = ModelSpec::new(kind.0, kind.1, kind.2, n);
+            let label = spec.label();
+            let run = spec.run_dir(root);
+            if !run.path().join("manifest.json").exists() {
                 continue;
-            };
-            let manifest: serde_json::Value = serde_json::from_str(&text)
-                .with_context(|| format!("reading {}/manifest.json", path.display()))?;
-            let config = crate::train::read_config(&path)?;
+            }
+            let manifest = run.manifest()?;
+            let config = run.config()?;
             let lr = if config.lr_decay {
                 format!(
                     "{:.1e} → {:.1e} (annealed)",
@@ -475,15 +436,15 @@ fn models_table(root: &Path) -> Result<String> {
             } else {
                 format!("{:.1e} (constant)", config.lr)
             };
-            let minutes = manifest["wall_time_s"].as_f64().unwrap_or(f64::NAN) / 60.0;
-            let pct = manifest["final_validation"]["percent_of_opt"]
-                .as_f64()
-                .unwrap_or(f64::NAN);
+            let minutes = manifest.wall_time_s.unwrap_or(f64::NAN) / 60.0;
+            let pct = manifest
+                .final_validation
+                .as_ref()
+                .map_or(f64::NAN, |v| v.percent_of_opt);
             let _ = writeln!(
                 md,
                 "| {label} | {n} | {} | {lr} | {minutes:.0} min | {pct:.1} % | `{}` |",
-                config.steps,
-                manifest["command"].as_str().unwrap_or("?")
+                config.steps, manifest.command
             );
         }
     }
@@ -495,12 +456,14 @@ fn headline(res: &Results) -> String {
     let mut s = String::from("**Headline.** ");
     for (n, rows) in &res.table1 {
         let get = |m: &str| rows.iter().find(|r| r.method == m);
-        let (Some(da), Some(greedy), Some(nearest)) =
-            (get("GRAPE DA"), get("Greedy"), get("Nearest"))
-        else {
+        let (Some(da), Some(greedy), Some(nearest)) = (
+            get(Method::Da.label()),
+            get(Method::Greedy.label()),
+            get(Method::Nearest.label()),
+        ) else {
             continue;
         };
-        match get("AFGNet_DDQN") {
+        match get(&ModelSpec::afgnet_ddqn(*n).label()) {
             Some(drl) => {
                 let _ = write!(
                     s,
@@ -523,17 +486,80 @@ fn headline(res: &Results) -> String {
     s
 }
 
-fn check_readme(root: &Path) -> Result<()> {
-    let block = |path: &Path| -> Result<String> {
-        let text =
-            std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-        let (b, e) = (text.find(BEGIN), text.find(END));
-        match (b, e) {
-            (Some(b), Some(e)) if b < e => Ok(text[b..e].to_owned()),
-            _ => bail!("{} has no {BEGIN} … {END} block", path.display()),
-        }
+/// The tables between the BEGIN and END markers of a file.
+fn results_block(path: &Path) -> Result<String> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    match (text.find(BEGIN), text.find(END)) {
+        (Some(b), Some(e)) if b < e => Ok(text[b + BEGIN.len()..e].trim_start().to_owned()),
+        _ => bail!("{} has no {BEGIN} … {END} block", path.display()),
+    }
+}
+
+/// The cells where two renderings of the tables differ, each named by its table
+/// heading, row and column. Timings are skipped; numbers may differ by one unit of
+/// their last printed digit (floating-point noise between machines).
+fn table_differences(committed: &str, fresh: &str) -> Vec<String> {
+    fn number(cell: &str) -> Option<(f64, f64)> {
+        let t = cell.trim().trim_end_matches('%').trim();
+        let value: f64 = t.parse().ok()?;
+        let decimals = t.split_once('.').map_or(0, |(_, d)| d.len());
+        Some((value, 10f64.powi(-(decimals as i32))))
+    }
+    let cells = |line: &str| -> Vec<String> {
+        line.trim()
+            .trim_matches('|')
+            .split('|')
+            .map(|c| c.trim().to_owned())
+            .collect()
     };
-    if block(&root.join("README.md"))? != block(&root.join("docs/RESULTS.md"))? {
+    let (a, b): (Vec<&str>, Vec<&str>) = (committed.lines().collect(), fresh.lines().collect());
+    let mut out = Vec::new();
+    if a.len() != b.len() {
+        out.push(format!(
+            "the tables have {} lines in docs/RESULTS.md and {} in a fresh run",
+            a.len(),
+            b.len()
+        ));
+    }
+    let (mut heading, mut header) = (String::new(), Vec::new());
+    for (x, y) in a.iter().zip(&b) {
+        if !x.starts_with('|') {
+            if !x.trim().is_empty() {
+                heading = x.trim().to_owned();
+            }
+            if x != y {
+                out.push(format!("{heading}: \"{x}\" is now \"{y}\""));
+            }
+            continue;
+        }
+        let (cx, cy) = (cells(x), cells(y));
+        if cx.first().is_some_and(|c| c == "method") {
+            header = cx.clone();
+        }
+        if cx.len() != cy.len() {
+            out.push(format!("{heading}: row \"{}\" changed shape", cx[0]));
+            continue;
+        }
+        for (k, (u, v)) in cx.iter().zip(&cy).enumerate() {
+            let column = header.get(k).map_or("?", String::as_str);
+            if column.contains("time") || u == v {
+                continue;
+            }
+            let close = match (number(u), number(v)) {
+                (Some((p, du)), Some((q, dv))) => (p - q).abs() <= du.max(dv) * 1.000_001,
+                _ => false,
+            };
+            if !close {
+                out.push(format!("{heading}, {}, {column}: {u} → {v}", cx[0]));
+            }
+        }
+    }
+    out
+}
+
+fn check_readme(root: &Path) -> Result<()> {
+    if results_block(&root.join("README.md"))? != results_block(&root.join("docs/RESULTS.md"))? {
         bail!("README.md's tables differ from docs/RESULTS.md; run `cargo xtask reproduce-tables`");
     }
     println!("README.md shows the tables of docs/RESULTS.md");
@@ -558,13 +584,36 @@ mod tests {
     }
 
     #[test]
+    fn table_differences_name_the_cell_and_skip_timings_and_noise() {
+        let committed = "**N = 20**\n\n| method | welfare | % of OPT | time / instance |\n|---|---|---|---|\n| OPT | 22.61 | 100.00 % | 1 ms |\n| Greedy | 21.80 | 96.43 % | 2 µs |\n";
+        assert!(table_differences(committed, committed).is_empty());
+        // Timings and last-digit noise pass.
+        let noisy = committed
+            .replace("1 ms", "3 ms")
+            .replace("96.43 %", "96.44 %");
+        assert!(table_differences(committed, &noisy).is_empty());
+        // A real change is named by heading, row and column.
+        let stale = committed.replace("21.80", "21.50");
+        let d = table_differences(committed, &stale);
+        assert_eq!(d, ["**N = 20**, Greedy, welfare: 21.80 → 21.50"]);
+        // A new row is reported.
+        let longer = format!("{committed}| Random | 15.00 | 70.00 % | 1 µs |\n");
+        assert_eq!(table_differences(committed, &longer).len(), 1);
+        let renamed = committed.replace("Greedy", "Greedy (v2)");
+        assert_eq!(table_differences(committed, &renamed).len(), 1);
+    }
+
+    #[test]
     fn quick_tables_are_reproducible_and_opt_dominates() {
         let root = crate::repo_root();
         let a = compute(&root, true).unwrap();
         let b = compute(&root, true).unwrap();
         assert_eq!(without_timings(&a), without_timings(&b));
         for (_, rows) in a.table1.iter().chain(&a.table2) {
-            let opt = rows.iter().find(|r| r.method == "OPT").unwrap();
+            let opt = rows
+                .iter()
+                .find(|r| r.method == Method::Opt.label())
+                .unwrap();
             assert!((opt.percent_of_opt - 100.0).abs() < 1e-9);
             for r in rows {
                 assert!(

@@ -1,17 +1,18 @@
 //! `cargo xtask train` and `cargo xtask plot-curves`.
 
-use std::io::Write;
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use afg_baseline::Method;
+use afg_eval::{ModelSpec, Net};
 use afg_graph::Units;
 use afg_learn::{
-    Algo, NetworkConfig, TrainConfig, TrainEvent, Trainer, save_network, validation_instances,
+    Algo, LogEvent, NetworkConfig, Preset, RunDir, RunManifest, TrainConfig, Trainer,
+    ValidationLine, save_network, validation_instances,
 };
 use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
-use serde_json::json;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum AlgoArg {
@@ -62,11 +63,11 @@ pub struct TrainArgs {
     /// n-step returns (1 = the paper's one-step target).
     #[arg(long)]
     n_step: Option<usize>,
-    /// Units of the network's inputs and rewards: scale-free (welfare / β, edge weights
-    /// / their mean, the same at every N), bounded (scale-free, and the value part of
-    /// the task features capped at 4 r_j/eps_j, so that nearly empty tasks look alike
-    /// at every N) or mean-reward (welfare / the instance's mean task reward, raw edge
-    /// weights: the first models' units).
+    /// Units of the network's inputs and rewards: bounded (the default: scale-free, and
+    /// the value part of the task features capped at 4 r_j/eps_j, so that nearly empty
+    /// tasks look alike at every N), scale-free (welfare / β, edge weights / their
+    /// mean, the same at every N) or mean-reward (welfare / the instance's mean task
+    /// reward, raw edge weights: the first models' units).
     #[arg(long, value_enum)]
     units: Option<UnitsArg>,
     /// Gradient steps between target-network syncs (default: the run's budget / 20,
@@ -102,17 +103,6 @@ pub struct TrainArgs {
     checkpoint_secs: u64,
 }
 
-/// The default gradient-step budget at a scale: about an hour on the 2-core CI machine
-/// kind for AFGNet DDQN (see docs/training.md for the measured rates).
-pub fn default_steps(scale: usize) -> Option<u64> {
-    match scale {
-        20 => Some(20_000),
-        60 => Some(2_500),
-        100 => Some(1_500),
-        _ => None,
-    }
-}
-
 impl TrainArgs {
     fn config(&self) -> Result<TrainConfig> {
         let scale = self
@@ -120,7 +110,7 @@ impl TrainArgs {
             .context("--scale is required for a new run (or pass --resume DIR)")?;
         let steps = match self.steps {
             Some(s) => s,
-            None => default_steps(scale).with_context(|| {
+            None => TrainConfig::default_steps(scale).with_context(|| {
                 format!("no default budget for --scale {scale} (known: 20, 60, 100); pass --steps")
             })?,
         };
@@ -136,7 +126,7 @@ impl TrainArgs {
             }
             NetArg::S2v => NetworkConfig::s2v(5, seed),
         };
-        let network = network.with_units(match self.units.unwrap_or(UnitsArg::ScaleFree) {
+        let network = network.with_units(match self.units.unwrap_or(UnitsArg::Bounded) {
             UnitsArg::ScaleFree => Units::ScaleFree,
             UnitsArg::Bounded => Units::Bounded,
             UnitsArg::MeanReward => Units::MeanReward,
@@ -145,16 +135,12 @@ impl TrainArgs {
             AlgoArg::Dqn => Algo::Dqn,
             AlgoArg::Ddqn => Algo::Ddqn,
         };
-        let mut c = TrainConfig::new(scale, algo, network, steps, seed);
-        if self.paper {
-            c.greedy_shaping = false;
-            c.huber = false;
-            c.reward_scaling = false;
-            c.grad_clip = None;
-            c.target_sync = 1000;
-            c.lr = 1e-4;
-            c.lr_decay = false;
-        }
+        let preset = if self.paper {
+            Preset::Paper
+        } else {
+            Preset::Ours
+        };
+        let mut c = TrainConfig::from_preset(preset, scale, algo, network, steps, seed);
         if self.constant_lr {
             c.lr_decay = false;
         }
@@ -200,70 +186,27 @@ impl TrainArgs {
     }
 }
 
-fn append_log(path: &Path, value: &serde_json::Value) -> Result<()> {
-    let mut f = std::fs::OpenOptions::new()
-        .create(true)
-        .append(true)
-        .open(path)?;
-    writeln!(f, "{value}")?;
-    Ok(())
-}
-
-/// Keeps the log lines of steps up to `step` (a resumed run repeats what came after)
-/// and returns the last kept `elapsed_s`, from which the resumed run's clock goes on.
-fn truncate_log(path: &Path, step: u64) -> Result<f64> {
-    let text = std::fs::read_to_string(path).unwrap_or_default();
-    let (mut kept, mut elapsed) = (String::new(), 0.0f64);
-    for line in text.lines() {
-        let event = serde_json::from_str::<serde_json::Value>(line).ok();
-        let event = event.as_ref();
-        if event
-            .and_then(|v| v["step"].as_u64())
-            .is_some_and(|s| s > step)
-        {
-            continue;
-        }
-        if let Some(e) = event.and_then(|v| v["elapsed_s"].as_f64()) {
-            elapsed = elapsed.max(e);
-        }
-        kept.push_str(line);
-        kept.push('\n');
-    }
-    afg_game::io::write_atomic(path, kept.as_bytes())?;
-    Ok(elapsed)
-}
-
-/// The configuration of the run in `dir` (its `config.json`).
-pub fn read_config(dir: &Path) -> Result<TrainConfig> {
-    let text = std::fs::read_to_string(dir.join("config.json")).with_context(|| {
-        format!(
-            "{} holds no training run (config.json missing)",
-            dir.display()
-        )
-    })?;
-    serde_json::from_str(&text).with_context(|| {
-        format!(
-            "{}/config.json is not a training configuration",
-            dir.display()
-        )
-    })
-}
-
 pub fn run(args: TrainArgs) -> Result<()> {
-    let (dir, mut trainer, elapsed_before) = match &args.resume {
+    let (run, _lock, mut trainer, elapsed_before) = match &args.resume {
         Some(dir) => {
-            let stored = read_config(dir)?;
+            let run = RunDir::new(dir);
+            let stored = run.config()?;
             if args.any_setting_given() && args.config()? != stored {
                 bail!(
                     "{} holds a run with other settings; resume it without settings, or start a new run with --out",
                     dir.display()
                 );
             }
+            let lock = run.lock()?;
             let trainer =
                 Trainer::resume(dir).with_context(|| format!("resuming {}", dir.display()))?;
-            let elapsed_before = truncate_log(&dir.join("log.jsonl"), trainer.step())?;
-            eprintln!("resuming {} at step {}", dir.display(), trainer.step());
-            (dir.clone(), trainer, elapsed_before)
+            let elapsed_before = run.truncate_log(trainer.steps_done())?;
+            eprintln!(
+                "resuming {} at step {}",
+                dir.display(),
+                trainer.steps_done()
+            );
+            (run, lock, trainer, elapsed_before)
         }
         None => {
             let config = args.config()?;
@@ -271,42 +214,31 @@ pub fn run(args: TrainArgs) -> Result<()> {
                 .out
                 .clone()
                 .context("pass --out DIR for a new run (or --resume DIR)")?;
-            if dir.join("config.json").exists() {
-                bail!(
-                    "{} already holds a training run; use --resume {0} or another --out",
-                    dir.display()
-                );
-            }
-            std::fs::create_dir_all(&dir)?;
-            afg_game::io::write_atomic(
-                &dir.join("config.json"),
-                serde_json::to_string_pretty(&config)?.as_bytes(),
-            )?;
+            let run = RunDir::create(&dir, &config)?;
+            let lock = run.lock()?;
             let trainer = Trainer::new(config.clone())?;
-            append_log(
-                &dir.join("log.jsonl"),
-                &json!({"event": "start", "config": config, "git_revision": git_revision(), "baselines": baselines(&config)?}),
-            )?;
-            (dir, trainer, 0.0)
+            run.append(&LogEvent::Start {
+                baselines: baselines(&config)?,
+                config,
+                git_revision: git_revision(),
+            })?;
+            (run, lock, trainer, 0.0)
         }
     };
     let config = trainer.config().clone();
-    let log = dir.join("log.jsonl");
-    let bar = crate::progress(
-        config.steps,
-        &format!(
-            "{}_{} N={}",
-            config.network.name(),
-            config.algo.name(),
-            config.robots
-        ),
+    let name = format!(
+        "{}_{} N={}",
+        config.network.name(),
+        config.algo.name(),
+        config.robots
     );
+    let bar = crate::progress(config.steps, &name);
     bar.set_style(
         indicatif::ProgressStyle::with_template("{msg} [{bar:25}] {pos}/{len} {per_sec} eta {eta}")
             .expect("valid template")
             .progress_chars("=> "),
     );
-    bar.set_position(trainer.step());
+    bar.set_position(trainer.steps_done());
     let started = Instant::now();
     // Seconds of training so far, across resumes (time lost after a run's last
     // checkpoint is not counted).
@@ -314,96 +246,71 @@ pub fn run(args: TrainArgs) -> Result<()> {
     let mut last_checkpoint = Instant::now();
     let mut last_val = f64::NAN;
     let mut window = Vec::new();
-    let name = format!(
-        "{}_{} N={}",
-        config.network.name(),
-        config.algo.name(),
-        config.robots
-    );
-    while trainer.step() < config.steps {
-        let target = trainer.step() + 1;
-        let mut failure = None;
-        trainer.run_until(target, |event| {
-            let result = match event {
-                TrainEvent::Step {
-                    step,
-                    loss,
-                    epsilon,
-                } => {
-                    window.push(*loss);
-                    bar.set_position(*step);
-                    bar.set_message(format!(
-                        "{name} ε {epsilon:.2} loss {loss:.4} val {last_val:.2}"
-                    ));
-                    if step.is_multiple_of(10) {
-                        let mean = window.iter().sum::<f32>() / window.len() as f32;
-                        window.clear();
-                        append_log(
-                            &log,
-                            &json!({"event": "step", "step": step, "loss": mean, "epsilon": epsilon,
-                            "elapsed_s": elapsed()}),
-                        )
-                    } else {
-                        Ok(())
-                    }
-                }
-                TrainEvent::Validation { step, result } => {
-                    last_val = result.welfare;
-                    if result.collapsed() {
-                        bar.suspend(|| {
-                            eprintln!(
-                                "warning: step {step}: collapse — on average {:.0} % of the robots took one task",
-                                100.0 * result.largest_task_share
-                            )
-                        });
-                    }
-                    append_log(
-                        &log,
-                        &json!({"event": "validation", "step": step, "welfare": result.welfare,
-                        "percent_of_opt": result.percent_of_opt,
-                        "largest_task_share": result.largest_task_share,
-                        "collapsed": result.collapsed(), "elapsed_s": elapsed()}),
+    while !trainer.is_finished() {
+        let report = trainer.step()?;
+        let (step, loss, epsilon) = (report.step, report.loss, report.epsilon);
+        window.push(loss);
+        bar.set_position(step);
+        bar.set_message(format!(
+            "{name} ε {epsilon:.2} loss {loss:.4} val {last_val:.2}"
+        ));
+        if step.is_multiple_of(10) {
+            let mean = window.iter().sum::<f32>() / window.len() as f32;
+            window.clear();
+            run.append(&LogEvent::Step {
+                step,
+                loss: mean,
+                epsilon,
+                elapsed_s: elapsed(),
+            })?;
+        }
+        if let Some(result) = report.validation {
+            last_val = result.welfare;
+            if result.collapsed() {
+                bar.suspend(|| {
+                    eprintln!(
+                        "warning: step {step}: collapse — on average {:.0} % of the robots took one task",
+                        100.0 * result.largest_task_share
                     )
-                }
-            };
-            if let Err(e) = result {
-                failure = Some(e);
+                });
             }
-        })?;
-        if let Some(e) = failure {
-            return Err(e);
+            run.append(&LogEvent::Validation(ValidationLine::new(
+                step,
+                &result,
+                elapsed(),
+            )))?;
         }
         if last_checkpoint.elapsed() >= Duration::from_secs(args.checkpoint_secs) {
-            trainer.save_checkpoint(&dir)?;
+            trainer.save_checkpoint(run.path())?;
             last_checkpoint = Instant::now();
         }
     }
-    trainer.save_checkpoint(&dir)?;
-    save_network(trainer.network(), &config.network, &dir.join("model"))?;
-    append_log(
-        &log,
-        &json!({"event": "end", "step": trainer.step(), "elapsed_s": elapsed()}),
-    )?;
+    trainer.save_checkpoint(run.path())?;
+    save_network(trainer.network(), &config.network, &run.weights())?;
+    run.append(&LogEvent::End {
+        step: trainer.steps_done(),
+        elapsed_s: elapsed(),
+    })?;
     bar.finish_and_clear();
     let v = trainer.validate()?;
     println!(
         "{name}: {} steps; validation welfare {:.3} ({:.2} % of OPT); model in {}",
-        trainer.step(),
+        trainer.steps_done(),
         v.welfare,
         v.percent_of_opt,
-        dir.join("model.mpk").display()
+        run.path().join("model.mpk").display()
     );
     Ok(())
 }
 
 /// Mean welfare of the classical methods on the validation set, for the log.
-fn baselines(config: &TrainConfig) -> Result<serde_json::Value> {
+fn baselines(config: &TrainConfig) -> Result<BTreeMap<String, f64>> {
     let insts = validation_instances(
         config.robots,
         config.network.tasks(),
         config.validation_instances,
     )?;
-    let mut out = serde_json::Map::new();
+    let mut out = BTreeMap::new();
     for m in [
         Method::Opt,
         Method::Da,
@@ -417,9 +324,9 @@ fn baselines(config: &TrainConfig) -> Result<serde_json::Value> {
         for inst in &insts {
             total += inst.welfare(&alloc.allocate(inst)?.assignment);
         }
-        out.insert(m.name().into(), json!(total / insts.len() as f64));
+        out.insert(m.name().to_owned(), total / insts.len() as f64);
     }
-    Ok(serde_json::Value::Object(out))
+    Ok(out)
 }
 
 #[derive(Args)]
@@ -442,50 +349,32 @@ pub struct Curve {
     pub baselines: Vec<(String, f64)>,
 }
 
-/// The events of `dir/log.jsonl`, one JSON value per line.
-fn read_log(dir: &Path) -> Result<Vec<serde_json::Value>> {
-    let path = dir.join("log.jsonl");
-    let text =
-        std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
-    text.lines()
-        .enumerate()
-        .map(|(i, line)| {
-            serde_json::from_str(line)
-                .with_context(|| format!("{}:{}: not JSON", path.display(), i + 1))
-        })
-        .collect()
-}
-
 /// Reads the validation curve from `dir/log.jsonl`.
 pub fn read_curve(dir: &Path) -> Result<Curve> {
+    let run = RunDir::new(dir);
     let (mut label, mut points, mut baselines) =
         (dir.display().to_string(), Vec::new(), Vec::new());
-    for v in read_log(dir)? {
-        match v["event"].as_str() {
-            Some("start") => {
-                let c = &v["config"];
-                let name = dir
-                    .file_name()
-                    .map(|f| f.to_string_lossy().into_owned())
-                    .unwrap_or_default();
+    for event in run.log()? {
+        match event {
+            LogEvent::Start {
+                config,
+                baselines: logged,
+                ..
+            } => {
                 label = format!(
-                    "{name} ({}_{}, N = {})",
-                    c["network"]["net"].as_str().unwrap_or("?"),
-                    c["algo"].as_str().unwrap_or("?"),
-                    c["robots"]
+                    "{} ({}_{}, N = {})",
+                    run.name(),
+                    config.network.name(),
+                    config.algo.name(),
+                    config.robots
                 );
-                for name in ["opt", "greedy", "nearest", "random"] {
-                    if let Some(w) = v["baselines"][name].as_f64() {
-                        baselines.push((name.to_owned(), w));
+                for m in [Method::Opt, Method::Greedy, Method::Nearest, Method::Random] {
+                    if let Some(&w) = logged.get(m.name()) {
+                        baselines.push((m.name().to_owned(), w));
                     }
                 }
             }
-            Some("validation") => {
-                points.push((
-                    v["step"].as_f64().unwrap_or(0.0),
-                    v["welfare"].as_f64().unwrap_or(f64::NAN),
-                ));
-            }
+            LogEvent::Validation(v) => points.push((v.step as f64, v.welfare)),
             _ => {}
         }
     }
@@ -652,24 +541,6 @@ mod tests {
     }
 
     #[test]
-    fn truncating_a_log_keeps_earlier_steps_and_their_clock() {
-        let path = std::env::temp_dir().join(format!("afg-truncate-{}.jsonl", std::process::id()));
-        let lines = [
-            r#"{"event":"start"}"#,
-            r#"{"event":"step","step":10,"elapsed_s":1.0}"#,
-            r#"{"event":"validation","step":20,"elapsed_s":2.5}"#,
-            r#"{"event":"step","step":30,"elapsed_s":4.0}"#,
-        ];
-        std::fs::write(&path, lines.join("\n") + "\n").unwrap();
-        assert_eq!(truncate_log(&path, 20).unwrap(), 2.5);
-        let kept = std::fs::read_to_string(&path).unwrap();
-        assert_eq!(kept, lines[..3].join("\n") + "\n");
-        std::fs::write(&path, lines[0]).unwrap();
-        assert_eq!(truncate_log(&path, 0).unwrap(), 0.0);
-        std::fs::remove_file(&path).unwrap();
-    }
-
-    #[test]
     fn train_writes_log_checkpoint_model_and_a_plottable_curve() {
         let dir = std::env::temp_dir().join(format!("afg-xtask-train-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
@@ -721,6 +592,11 @@ mod tests {
         // Resuming with other settings is refused too.
         let err = xtask(&["train", "--resume", out, "--scale", "20", "--steps", "5"]).unwrap_err();
         assert!(err.to_string().contains("other settings"), "{err}");
+        // A directory another trainer holds is refused.
+        let lock = RunDir::new(&run_dir).lock().unwrap();
+        let err = xtask(&["train", "--resume", out]).unwrap_err();
+        assert!(err.to_string().contains("in use"), "{err}");
+        drop(lock);
         // A truncated checkpoint is a clear error.
         let state = run_dir.join("checkpoint/state.json");
         let text = std::fs::read_to_string(&state).unwrap();
@@ -761,44 +637,41 @@ pub fn run_report(args: ReportArgs) -> Result<()> {
         "| run | N | steps | wall time | final validation welfare | % of OPT | best (step) | collapsed validations |"
     );
     println!("|---|---|---|---|---|---|---|---|");
-    let mut baseline_rows = Vec::new();
+    let mut baseline_rows: Vec<(usize, BTreeMap<String, f64>)> = Vec::new();
     for dir in &args.dirs {
-        let events = read_log(dir)?;
-        let start = events
+        let run = RunDir::new(dir);
+        let events = run.log()?;
+        let Some((config, logged)) = events.iter().find_map(|e| match e {
+            LogEvent::Start {
+                config, baselines, ..
+            } => Some((config, baselines)),
+            _ => None,
+        }) else {
+            bail!("{}: the log has no start event", dir.display());
+        };
+        let vals: Vec<&ValidationLine> = events
             .iter()
-            .find(|e| e["event"] == "start")
-            .context("log has no start event")?;
-        let vals: Vec<&serde_json::Value> = events
-            .iter()
-            .filter(|e| e["event"] == "validation")
+            .filter_map(|e| match e {
+                LogEvent::Validation(v) => Some(v),
+                _ => None,
+            })
             .collect();
-        let last = vals.last().context("log has no validation")?;
+        let last = vals
+            .last()
+            .with_context(|| format!("{}: the log has no validation", dir.display()))?;
         let best = vals
             .iter()
-            .max_by(|a, b| {
-                a["welfare"]
-                    .as_f64()
-                    .unwrap_or(f64::MIN)
-                    .total_cmp(&b["welfare"].as_f64().unwrap_or(f64::MIN))
-            })
+            .max_by(|a, b| a.welfare.total_cmp(&b.welfare))
             .expect("non-empty");
         let wall = events
             .iter()
             .rev()
-            .find_map(|e| e["elapsed_s"].as_f64())
+            .find_map(LogEvent::elapsed_s)
             .unwrap_or(0.0);
-        let c = &start["config"];
-        let n = c["robots"].as_u64().unwrap_or(0);
-        let name = dir
-            .file_name()
-            .map(|f| f.to_string_lossy().into_owned())
-            .unwrap_or_default();
+        let n = config.robots;
         // Validations where most robots took one task (logged since the collapse check
         // exists; "–" for older logs).
-        let flagged: Vec<bool> = vals
-            .iter()
-            .filter_map(|v| v["collapsed"].as_bool())
-            .collect();
+        let flagged: Vec<bool> = vals.iter().filter_map(|v| v.collapsed).collect();
         let collapsed = if flagged.is_empty() {
             "–".to_owned()
         } else {
@@ -809,32 +682,37 @@ pub fn run_report(args: ReportArgs) -> Result<()> {
             )
         };
         println!(
-            "| {name} | {n} | {} | {:.0} min | {:.3} | {:.2} % | {:.3} ({}) | {collapsed} |",
-            last["step"],
+            "| {} | {n} | {} | {:.0} min | {:.3} | {:.2} % | {:.3} ({}) | {collapsed} |",
+            run.name(),
+            last.step,
             wall / 60.0,
-            last["welfare"].as_f64().unwrap_or(f64::NAN),
-            last["percent_of_opt"].as_f64().unwrap_or(f64::NAN),
-            best["welfare"].as_f64().unwrap_or(f64::NAN),
-            best["step"]
+            last.welfare,
+            last.percent_of_opt,
+            best.welfare,
+            best.step
         );
         if !baseline_rows.iter().any(|(m, _)| *m == n) {
-            baseline_rows.push((n, start["baselines"].clone()));
+            baseline_rows.push((n, logged.clone()));
         }
     }
     println!("\nClassical methods on the same validation sets (mean welfare):\n");
-    println!("| N | OPT | DA (GRAPE) | balanced DA | greedy | nearest | random |");
-    println!("|---|---|---|---|---|---|---|");
+    let methods = [
+        Method::Opt,
+        Method::Da,
+        Method::DaBalanced,
+        Method::Greedy,
+        Method::Nearest,
+        Method::Random,
+    ];
+    let header: Vec<&str> = methods.iter().map(|m| m.label()).collect();
+    println!("| N | {} |", header.join(" | "));
+    println!("|---|{}", "---|".repeat(methods.len()));
     for (n, b) in baseline_rows {
-        let f = |k: &str| b[k].as_f64().map_or("–".into(), |v| format!("{v:.3}"));
-        println!(
-            "| {n} | {} | {} | {} | {} | {} | {} |",
-            f("opt"),
-            f("da"),
-            f("da-balanced"),
-            f("greedy"),
-            f("nearest"),
-            f("random")
-        );
+        let cells: Vec<String> = methods
+            .iter()
+            .map(|m| b.get(m.name()).map_or("–".into(), |v| format!("{v:.3}")))
+            .collect();
+        println!("| {n} | {} |", cells.join(" | "));
     }
     Ok(())
 }
@@ -852,7 +730,14 @@ fn git_revision() -> Option<String> {
 
 /// The `cargo xtask train` command line that reproduces a configuration.
 pub fn command_line(c: &TrainConfig, dir: &Path) -> String {
-    let default = TrainConfig::new(c.robots, c.algo, c.network.clone(), c.steps, c.seed);
+    let default = TrainConfig::from_preset(
+        c.preset,
+        c.robots,
+        c.algo,
+        c.network.clone(),
+        c.steps,
+        c.seed,
+    );
     let mut cmd = format!(
         "cargo xtask train --scale {} --algo {} --net {} --steps {} --seed {}",
         c.robots,
@@ -867,16 +752,13 @@ pub fn command_line(c: &TrainConfig, dir: &Path) -> String {
     if c.lr != default.lr {
         cmd += &format!(" --lr {}", c.lr);
     }
-    if !c.lr_decay && c.huber {
-        // (--paper implies it)
+    if !c.lr_decay && default.lr_decay {
         cmd += " --constant-lr";
     }
     if c.n_step != default.n_step {
         cmd += &format!(" --n-step {}", c.n_step);
     }
-    // (--paper sets the sync to 1000)
-    let default_sync = if c.huber { default.target_sync } else { 1000 };
-    if c.target_sync != default_sync {
+    if c.target_sync != default.target_sync {
         cmd += &format!(" --target-sync {}", c.target_sync);
     }
     if c.parallel_envs != default.parallel_envs {
@@ -884,11 +766,11 @@ pub fn command_line(c: &TrainConfig, dir: &Path) -> String {
     }
     let gain_residual =
         matches!(&c.network, NetworkConfig::AfgNet(a) if a.gain_residual == Some(true));
-    if !c.greedy_shaping && c.huber && !gain_residual {
-        // (--paper and --gain-residual imply it)
+    if !c.greedy_shaping && default.greedy_shaping && !gain_residual {
+        // (--gain-residual implies it)
         cmd += " --no-shaping";
     }
-    if c.network.units() != Units::ScaleFree {
+    if c.network.units() != Units::Bounded {
         cmd += &format!(" --units {}", c.network.units().name());
     }
     if let NetworkConfig::AfgNet(a) = &c.network
@@ -896,7 +778,7 @@ pub fn command_line(c: &TrainConfig, dir: &Path) -> String {
     {
         cmd += " --gain-residual";
     }
-    if !c.huber {
+    if c.preset == Preset::Paper {
         cmd += " --paper";
     }
     cmd + &format!(" --out {}", dir.display())
@@ -905,40 +787,34 @@ pub fn command_line(c: &TrainConfig, dir: &Path) -> String {
 /// Writes `dir/manifest.json` from the run's config and log: the command, seed, steps,
 /// wall time, git revision and final validation welfare.
 pub fn write_manifest(dir: &Path) -> Result<()> {
-    let config = read_config(dir)?;
-    let events = read_log(dir)?;
-    let last_validation = events
-        .iter()
-        .rev()
-        .find(|e| e["event"] == "validation")
-        .cloned();
-    let wall = events.iter().rev().find_map(|e| e["elapsed_s"].as_f64());
-    // The revision the run started from, as its log recorded it.
-    let revision = events
-        .iter()
-        .find(|e| e["event"] == "start")
-        .and_then(|e| e["git_revision"].as_str().map(str::to_owned));
+    let run = RunDir::new(dir);
+    let config = run.config()?;
+    let events = run.log()?;
     let relative = dir.strip_prefix(crate::repo_root()).unwrap_or(dir);
-    let manifest = json!({
-        "command": command_line(&config, relative),
-        "seed": config.seed,
-        "steps": config.steps,
-        "wall_time_s": wall,
-        "git_revision": revision,
-        "final_validation": last_validation,
-        "weights": ["model.json", "model.mpk"],
-    });
-    afg_game::io::write_atomic(
-        &dir.join("manifest.json"),
-        serde_json::to_string_pretty(&manifest)?.as_bytes(),
-    )?;
+    let manifest = RunManifest {
+        command: command_line(&config, relative),
+        seed: config.seed,
+        steps: config.steps,
+        wall_time_s: events.iter().rev().find_map(LogEvent::elapsed_s),
+        // The revision the run started from, as its log recorded it.
+        git_revision: events.iter().find_map(|e| match e {
+            LogEvent::Start { git_revision, .. } => git_revision.clone(),
+            _ => None,
+        }),
+        final_validation: events.iter().rev().find_map(|e| match e {
+            LogEvent::Validation(v) => Some(v.clone()),
+            _ => None,
+        }),
+        weights: vec!["model.json".into(), "model.mpk".into()],
+    };
+    run.write_manifest(&manifest)?;
     Ok(())
 }
 
 #[derive(Args)]
 pub struct TrainAllArgs {
     /// Scales to train.
-    #[arg(long, value_delimiter = ',', default_values_t = [20, 60, 100])]
+    #[arg(long, value_delimiter = ',', default_values_t = afg_eval::dataset::TABLE1_SIZES)]
     scales: Vec<usize>,
     /// Retrain models that already exist (their directories are replaced).
     #[arg(long)]
@@ -948,17 +824,21 @@ pub struct TrainAllArgs {
 /// Trains every model the tables use, one after the other, with the default budgets.
 pub fn run_all(args: TrainAllArgs) -> Result<()> {
     for scale in &args.scales {
-        for (net, algo) in [
-            (NetArg::Afgnet, AlgoArg::Ddqn),
-            (NetArg::Afgnet, AlgoArg::Dqn),
-            (NetArg::S2v, AlgoArg::Ddqn),
-        ] {
-            let name = format!(
-                "{}_{}_n{scale}",
-                net.to_possible_value().expect("named").get_name(),
-                algo.to_possible_value().expect("named").get_name()
-            );
-            let dir = crate::repo_root().join("models").join(&name);
+        // The paper's three models (ours are trained by hand, see docs/training.md).
+        for spec in ModelSpec::table1(*scale)
+            .into_iter()
+            .filter(|m| !m.is_ours())
+        {
+            let name = spec.dir_name();
+            let dir = spec.run_dir(&crate::repo_root()).path().to_path_buf();
+            let net = match spec.net {
+                Net::AfgNet => NetArg::Afgnet,
+                Net::S2v => NetArg::S2v,
+            };
+            let algo = match spec.algo {
+                Algo::Dqn => AlgoArg::Dqn,
+                Algo::Ddqn => AlgoArg::Ddqn,
+            };
             if dir.join("model.mpk").exists() && !args.force {
                 eprintln!("{name}: exists, skipped (--force retrains)");
                 continue;

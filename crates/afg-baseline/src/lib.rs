@@ -163,6 +163,26 @@ impl Method {
         }
     }
 
+    /// The label of tables and figures.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::Method;
+    /// assert_eq!(Method::Da.label(), "GRAPE DA");
+    /// assert_eq!("da".parse::<Method>().unwrap().label(), "GRAPE DA");
+    /// ```
+    pub fn label(self) -> &'static str {
+        match self {
+            Method::Opt => "OPT",
+            Method::Da => "GRAPE DA",
+            Method::DaDecentralised => "GRAPE DA, decentralised",
+            Method::DaBalanced => "balanced DA",
+            Method::Greedy => "Greedy",
+            Method::Nearest => "Nearest",
+            Method::Random => "Random",
+        }
+    }
+
     /// The command-line name.
     pub fn name(self) -> &'static str {
         match self {

@@ -4,7 +4,7 @@
 //! `cargo run --release -p afg-learn --example train_tiny`
 
 use afg_graph::Units;
-use afg_learn::{Algo, NetworkConfig, TrainConfig, TrainEvent, Trainer};
+use afg_learn::{Algo, NetworkConfig, TrainConfig, Trainer};
 
 fn main() -> Result<(), afg_learn::LearnError> {
     let network = NetworkConfig::afgnet(3, 0).with_units(Units::ScaleFree);
@@ -15,14 +15,15 @@ fn main() -> Result<(), afg_learn::LearnError> {
     config.validate_every = 50;
     config.greedy_shaping = true;
     let mut trainer = Trainer::new(config)?;
-    trainer.run_until(u64::MAX, |event| {
-        if let TrainEvent::Validation { step, result } = event {
+    while !trainer.is_finished() {
+        let report = trainer.step()?;
+        if let Some(v) = report.validation {
             println!(
-                "step {step:>4}: validation welfare {:.3} ({:.1} % of OPT)",
-                result.welfare, result.percent_of_opt
+                "step {:>4}: validation welfare {:.3} ({:.1} % of OPT)",
+                report.step, v.welfare, v.percent_of_opt
             );
         }
-    })?;
+    }
     let stem = std::env::temp_dir().join("afg_tiny_model");
     afg_learn::save_network(trainer.network(), &trainer.config().network, &stem)?;
     println!(

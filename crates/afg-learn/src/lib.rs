@@ -8,32 +8,38 @@
 
 mod afgnet;
 mod env;
+mod error;
 mod fast;
 mod layers;
 mod network;
 mod policy;
 mod regret;
 mod rollout;
+mod run_dir;
 mod s2v;
 mod targets;
 mod tensors;
 mod train;
+mod weights;
 
 pub use afgnet::{AfgLayer, AfgNet, AfgNetConfig};
 pub use env::{Env, greedy_completion_welfare, n_step_reward};
+pub use error::LearnError;
 pub use fast::{FastPolicy, FastRollout, FastRolloutOutcome};
 pub use layers::{Activation, QHead, linear_of_concat};
 pub use network::{NetworkConfig, QNetwork};
-pub use policy::{LearnError, LearnedPolicy, LearnedRun, load_network, save_network};
+pub use policy::{LearnedPolicy, LearnedRun};
 pub use regret::{RegretStep, q_star, regret_trace};
 pub use rollout::greedy_rollouts;
+pub use run_dir::{LogEvent, RunDir, RunLock, RunManifest, ValidationLine};
 pub use s2v::{S2v, S2vConfig};
 pub use targets::{double_dqn_target, dqn_target, masked_argmax};
 pub use tensors::{DENSE_MAX_NODES, DenseAdjacency, GraphTensors};
 pub use train::{
-    Algo, TrainConfig, TrainEvent, Trainer, Validation, checkpoint_dir, training_instance_seed,
-    validation_instances,
+    Algo, Preset, StepReport, TrainConfig, Trainer, Validation, checkpoint_dir,
+    training_instance_seed, validation_instances,
 };
+pub use weights::{load_network, save_network};
 
 /// The CPU inference back end.
 pub type InferBackend = burn::backend::NdArray<f32>;

@@ -1,202 +1,23 @@
-//! Greedy rollout of a trained Q network as an [`Allocator`], and weight files.
-//!
-//! Weights are stored as two files with one stem: `STEM.json`, a manifest
-//! (`{"format": "afg-weights", "version": 1, "network": {..config..}}`), and
-//! `STEM.mpk`, Burn's named MessagePack record in full precision. Loading checks the
-//! manifest and then every parameter's shape against the configured network.
+//! Greedy rollout of a trained Q network as an [`Allocator`].
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::{Duration, Instant};
 
 use afg_baseline::{AllocError, AllocStats, Allocation, Allocator, CentralisedDa};
-use afg_game::{Assignment, GameError, Instance, Preference};
-use afg_graph::{GraphError, GraphKind, RobotGraph};
-use burn::module::{Module, ModuleVisitor, Param};
-use burn::record::{FullPrecisionSettings, NamedMpkFileRecorder};
-use burn::tensor::Tensor;
-use burn::tensor::backend::Backend;
-use serde::{Deserialize, Serialize};
-use thiserror::Error;
+use afg_game::{Assignment, Instance, Preference};
+use afg_graph::{GraphKind, RobotGraph};
 
-use crate::{FastPolicy, InferBackend, NetworkConfig, QNetwork};
-
-/// Errors of the learning crate.
-#[derive(Debug, Error)]
-pub enum LearnError {
-    /// Invalid instance or assignment.
-    #[error(transparent)]
-    Game(#[from] GameError),
-    /// The robot graph could not be built.
-    #[error(transparent)]
-    Graph(#[from] GraphError),
-    /// An action that the environment does not allow.
-    #[error("invalid action: {0}")]
-    InvalidAction(String),
-    /// Training settings that cannot work.
-    #[error("invalid training configuration: {0}")]
-    InvalidConfig(String),
-    /// A training checkpoint that cannot be used.
-    #[error("{path}: {reason}")]
-    Checkpoint {
-        /// The file.
-        path: String,
-        /// What is wrong.
-        reason: String,
-    },
-    /// Reading or writing a file failed.
-    #[error("{path}: {source}")]
-    Io {
-        /// The file or directory.
-        path: String,
-        /// The operating system's error.
-        #[source]
-        source: std::io::Error,
-    },
-    /// A weight file that cannot be used.
-    #[error("{path}: {reason}")]
-    Weights {
-        /// The file.
-        path: String,
-        /// What is wrong, and what to do.
-        reason: String,
-    },
-}
-
-fn weights_error(path: &Path, reason: impl Into<String>) -> LearnError {
-    LearnError::Weights {
-        path: path.display().to_string(),
-        reason: reason.into(),
-    }
-}
-
-const WEIGHTS_FORMAT: &str = "afg-weights";
-const WEIGHTS_VERSION: u32 = 1;
-
-#[derive(Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct Manifest {
-    format: String,
-    version: u32,
-    network: NetworkConfig,
-}
-
-fn with_extension(stem: &Path, ext: &str) -> PathBuf {
-    let mut s = stem.as_os_str().to_owned();
-    s.push(".");
-    s.push(ext);
-    PathBuf::from(s)
-}
-
-/// Saves `network` (built from `config`) as `stem.json` + `stem.mpk`, each written to a
-/// temporary file first and renamed, so existing weights are never half-overwritten.
-///
-/// # Errors
-/// [`LearnError::Weights`] if a file cannot be written.
-pub fn save_network<B: Backend>(
-    network: QNetwork<B>,
-    config: &NetworkConfig,
-    stem: &Path,
-) -> Result<(), LearnError> {
-    // Burn replaces the extension of the path it is given, so give it one ending in .mpk.
-    let record = with_extension(stem, "mpk");
-    let tmp = with_extension(stem, &format!("{}-tmp.mpk", std::process::id()));
-    let recorder = NamedMpkFileRecorder::<FullPrecisionSettings>::new();
-    network
-        .save_file(tmp.clone(), &recorder)
-        .map_err(|e| weights_error(&record, e.to_string()))?;
-    std::fs::rename(&tmp, &record).map_err(|e| weights_error(&record, e.to_string()))?;
-    let manifest = Manifest {
-        format: WEIGHTS_FORMAT.into(),
-        version: WEIGHTS_VERSION,
-        network: config.clone(),
-    };
-    let json = serde_json::to_string_pretty(&manifest).expect("a manifest always serialises");
-    afg_game::io::write_atomic(&with_extension(stem, "json"), json.as_bytes())?;
-    Ok(())
-}
-
-/// Collects parameter shapes in visiting order.
-struct Shapes(Vec<Vec<usize>>);
-
-impl<B: Backend> ModuleVisitor<B> for Shapes {
-    fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<B, D>>) {
-        self.0.push(param.val().dims().to_vec());
-    }
-}
-
-fn shapes<B: Backend>(network: &QNetwork<B>) -> Vec<Vec<usize>> {
-    let mut v = Shapes(Vec::new());
-    network.visit(&mut v);
-    v.0
-}
-
-/// Loads weights saved by [`save_network`].
-///
-/// # Errors
-/// [`LearnError::Weights`] for a missing or malformed manifest, a manifest of another
-/// format or version, a corrupt or truncated record, or parameters whose shapes differ
-/// from the network the manifest describes.
-pub fn load_network<B: Backend>(
-    stem: &Path,
-    device: &B::Device,
-) -> Result<(NetworkConfig, QNetwork<B>), LearnError> {
-    let manifest_path = with_extension(stem, "json");
-    let text = std::fs::read_to_string(&manifest_path)
-        .map_err(|e| weights_error(&manifest_path, e.to_string()))?;
-    let manifest: Manifest = serde_json::from_str(&text)
-        .map_err(|e| weights_error(&manifest_path, format!("not a weights manifest: {e}")))?;
-    if manifest.format != WEIGHTS_FORMAT || manifest.version != WEIGHTS_VERSION {
-        return Err(weights_error(
-            &manifest_path,
-            format!(
-                "format {} version {}, expected {WEIGHTS_FORMAT} version {WEIGHTS_VERSION}",
-                manifest.format, manifest.version
-            ),
-        ));
-    }
-    let fresh = manifest.network.init::<B>(device);
-    let expected = shapes(&fresh);
-    let recorder = NamedMpkFileRecorder::<FullPrecisionSettings>::new();
-    let record_path = with_extension(stem, "mpk");
-    // Burn panics when a record holds another network variant; report that as an error too.
-    let loaded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        fresh.load_file(record_path.clone(), &recorder, device)
-    }));
-    let network = match loaded {
-        Ok(Ok(network)) => network,
-        Ok(Err(e)) => {
-            return Err(weights_error(
-                &record_path,
-                format!("unreadable weights ({e}); corrupt or truncated?"),
-            ));
-        }
-        Err(_) => {
-            return Err(weights_error(
-                &record_path,
-                "the record holds another kind of network than its manifest says",
-            ));
-        }
-    };
-    if shapes(&network) != expected {
-        return Err(weights_error(
-            &record_path,
-            format!(
-                "parameter shapes differ from the {} network its manifest describes",
-                manifest.network.name()
-            ),
-        ));
-    }
-    Ok((manifest.network, network))
-}
+use crate::{FastPolicy, InferBackend, LearnError, NetworkConfig, QNetwork, load_network};
 
 /// A trained network used greedily: each robot in index order takes the task with the
 /// highest Q value among those with room.
 ///
 /// By default the rollout runs on the fast path ([`FastPolicy`], the same actions as
-/// the Burn network, several times faster); [`LearnedPolicy::exact_burn`] switches to
-/// the Burn reference path. [`LearnedPolicy::block`] evaluates the network once per
-/// block of robots, and [`LearnedPolicy::repair`] finishes with balanced best-response
-/// sweeps so that the result is Def. 3 stable.
+/// the Burn network, several times faster) one robot per network evaluation;
+/// [`LearnedPolicy::with_block`] evaluates the network once per block of robots,
+/// [`LearnedPolicy::exact_burn`] switches to the Burn reference path, and
+/// [`LearnedPolicy::with_repair`] finishes with balanced best-response sweeps so that
+/// the result is Def. 3 stable. Invalid combinations cannot be built.
 ///
 /// # Examples
 /// ```
@@ -204,12 +25,13 @@ pub fn load_network<B: Backend>(
 /// use afg_game::{GeneratorConfig, Preference};
 /// use afg_learn::{LearnedPolicy, NetworkConfig};
 /// let inst = GeneratorConfig::paper(20, 5, 1).generate()?;
-/// let mut policy = LearnedPolicy::new(NetworkConfig::afgnet(5, 0)); // untrained weights
+/// let policy = LearnedPolicy::new(NetworkConfig::afgnet(5, 0)); // untrained weights
 /// let out = policy.allocate(&inst)?;
 /// assert!(out.assignment.is_complete());
-/// (policy.block, policy.repair) = (4, true);
+/// let policy = policy.with_block(4)?.with_repair(true);
 /// let repaired = policy.allocate(&inst)?;
 /// assert!(inst.is_stable(&repaired.assignment, Preference::Balanced));
+/// assert!(LearnedPolicy::new(NetworkConfig::afgnet(5, 0)).with_block(0).is_err());
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 #[derive(Debug)]
@@ -217,14 +39,18 @@ pub struct LearnedPolicy {
     config: NetworkConfig,
     network: QNetwork<InferBackend>,
     fast: FastPolicy,
-    /// The robot graph the network reads (kNN, k = 10 by default).
-    pub graph: GraphKind,
-    /// Robots per network evaluation (1 = the exact greedy rollout).
-    pub block: usize,
-    /// Balanced best-response sweeps after the rollout.
-    pub repair: bool,
-    /// Roll out with the Burn network instead of the fast path (reference; B = 1 only).
-    pub exact_burn: bool,
+    graph: GraphKind,
+    path: RolloutPath,
+    repair: bool,
+}
+
+/// How the rollout evaluates the network.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum RolloutPath {
+    /// The fast path, one evaluation per `block` robots (≥ 1).
+    Fast { block: usize },
+    /// The Burn network, one robot at a time (the reference).
+    ExactBurn,
 }
 
 /// A learned allocation with its cost broken down.
@@ -251,9 +77,8 @@ impl LearnedPolicy {
             config,
             network,
             graph: GraphKind::default(),
-            block: 1,
+            path: RolloutPath::Fast { block: 1 },
             repair: false,
-            exact_burn: false,
         }
     }
 
@@ -272,6 +97,52 @@ impl LearnedPolicy {
         Ok(Self::with_network(config, network))
     }
 
+    /// Evaluates the network once per `block` robots on the fast path (1, the default,
+    /// is the exact greedy rollout).
+    ///
+    /// # Errors
+    /// [`LearnError::InvalidConfig`] for block 0.
+    pub fn with_block(mut self, block: usize) -> Result<Self, LearnError> {
+        if block == 0 {
+            return Err(LearnError::InvalidConfig(
+                "a block holds at least one robot".into(),
+            ));
+        }
+        self.path = RolloutPath::Fast { block };
+        Ok(self)
+    }
+
+    /// Rolls out with the Burn network, one robot at a time (the reference path).
+    pub fn exact_burn(mut self) -> Self {
+        self.path = RolloutPath::ExactBurn;
+        self
+    }
+
+    /// Whether balanced best-response sweeps follow the rollout.
+    pub fn with_repair(mut self, repair: bool) -> Self {
+        self.repair = repair;
+        self
+    }
+
+    /// The robot graph the network reads (kNN, k = 10 by default).
+    pub fn with_graph(mut self, graph: GraphKind) -> Self {
+        self.graph = graph;
+        self
+    }
+
+    /// Robots per network evaluation (1 on the Burn path).
+    pub fn block(&self) -> usize {
+        match self.path {
+            RolloutPath::Fast { block } => block,
+            RolloutPath::ExactBurn => 1,
+        }
+    }
+
+    /// Whether the rollout is repaired.
+    pub fn repairs(&self) -> bool {
+        self.repair
+    }
+
     /// The network's configuration.
     pub fn config(&self) -> &NetworkConfig {
         &self.config
@@ -286,16 +157,14 @@ impl LearnedPolicy {
     ///
     /// # Errors
     /// [`LearnError::InvalidAction`] if the instance's task count differs from the
-    /// network's, [`LearnError::InvalidConfig`] for block 0 or a block above 1 with
-    /// `exact_burn`, and graph errors.
+    /// network's, and graph errors.
     pub fn run(&self, instance: &Instance) -> Result<LearnedRun, LearnError> {
         let start = Instant::now();
-        let (mut assignment, passes) = if self.exact_burn {
-            if self.block != 1 {
-                return Err(LearnError::InvalidConfig(
-                    "the Burn reference path rolls out one robot at a time (block 1)".into(),
-                ));
-            }
+        let (mut assignment, passes) = if let RolloutPath::Fast { block } = self.path {
+            let graph = RobotGraph::build(instance.robots(), self.graph)?;
+            let out = self.fast.rollout(instance, &graph, block)?;
+            (out.assignment, out.passes)
+        } else {
             let mut out = crate::greedy_rollouts(
                 &self.network,
                 self.config.tasks(),
@@ -307,10 +176,6 @@ impl LearnedPolicy {
                 out.pop().expect("one rollout per instance"),
                 instance.num_robots(),
             )
-        } else {
-            let graph = RobotGraph::build(instance.robots(), self.graph)?;
-            let out = self.fast.rollout(instance, &graph, self.block)?;
-            (out.assignment, out.passes)
         };
         let rollout_time = start.elapsed();
         let rollout_welfare = instance.welfare(&assignment);

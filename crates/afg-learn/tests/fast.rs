@@ -222,14 +222,14 @@ fn repair_ends_balanced_stable_and_never_lowers_welfare() {
                 .generate()
                 .unwrap();
             for block in [1, 3, n] {
-                (policy.block, policy.repair) = (block, true);
+                policy = policy.with_block(block).unwrap().with_repair(true);
                 let run = policy.run(&inst).unwrap();
                 assert!(
                     inst.is_stable(&run.assignment, Preference::Balanced),
                     "N = {n}, block {block}"
                 );
                 assert!(inst.welfare(&run.assignment) >= run.rollout_welfare - 1e-9);
-                (policy.block, policy.repair) = (block, false);
+                policy = policy.with_repair(false);
                 let plain = policy.allocate(&inst).unwrap();
                 assert!(
                     (inst.welfare(&plain.assignment) - run.rollout_welfare).abs() < 1e-9,

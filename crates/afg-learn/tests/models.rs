@@ -274,7 +274,7 @@ fn bad_weight_files_are_clear_errors() {
     let mpk = dir.join("net.mpk");
     let json = dir.join("net.json");
 
-    // Weights of another shape: an S2V record under an AFGNet manifest.
+    // Weights of another shape: an S2V record under an AFGNet header.
     let other = dir.join("other");
     let s2v = NetworkConfig::s2v(5, 1);
     save_network(s2v.init::<B>(&Default::default()), &s2v, &other).unwrap();
@@ -282,7 +282,7 @@ fn bad_weight_files_are_clear_errors() {
     let err = load_network::<B>(&stem, &Default::default()).unwrap_err();
     assert!(matches!(err, LearnError::Weights { .. }), "{err}");
 
-    // Another width: d = 32 manifest over d = 64 weights.
+    // Another width: d = 32 header over d = 64 weights.
     save_network(config.init::<B>(&Default::default()), &config, &stem).unwrap();
     let text = std::fs::read_to_string(&json)
         .unwrap()
@@ -298,7 +298,7 @@ fn bad_weight_files_are_clear_errors() {
     let err = load_network::<B>(&stem, &Default::default()).unwrap_err();
     assert!(err.to_string().contains("corrupt or truncated"), "{err}");
 
-    // A manifest of another version, and one that is not JSON.
+    // A header of another version, and one that is not JSON.
     std::fs::write(
         &json,
         "{\"format\":\"afg-weights\",\"version\":7,\"network\":{\"net\":\"s2v\",\"tasks\":5}}",
@@ -310,7 +310,7 @@ fn bad_weight_files_are_clear_errors() {
         load_network::<B>(&stem, &Default::default())
             .unwrap_err()
             .to_string()
-            .contains("not a weights manifest")
+            .contains("not a weights header")
     );
 
     // A network for another M refuses the instance.

@@ -6,7 +6,7 @@ use afg_baseline::{Allocator, Greedy};
 use afg_game::{Assignment, GeneratorConfig, TaskId};
 use afg_graph::Units;
 use afg_learn::{
-    Algo, InferBackend, LearnError, NetworkConfig, QNetwork, TrainConfig, TrainEvent, Trainer,
+    Algo, InferBackend, LearnError, NetworkConfig, QNetwork, TrainConfig, Trainer,
     double_dqn_target, dqn_target, n_step_reward,
 };
 use burn::module::{Module, ModuleVisitor, Param};
@@ -61,15 +61,16 @@ fn smoke_run_has_finite_losses_and_validations() {
     ] {
         let mut t = Trainer::new(tiny(algo, net, 200)).unwrap();
         let (mut losses, mut validations) = (Vec::new(), Vec::new());
-        t.run_until(u64::MAX, |e| match e {
-            TrainEvent::Step { loss, .. } => losses.push(*loss),
-            TrainEvent::Validation { result, .. } => {
+        while !t.is_finished() {
+            let report = t.step().unwrap();
+            losses.push(report.loss);
+            if let Some(result) = report.validation {
                 assert!((0.0..=1.0).contains(&result.largest_task_share));
                 validations.push((result.welfare, result.percent_of_opt))
             }
-        })
-        .unwrap();
-        assert_eq!(t.step(), 200);
+        }
+        assert_eq!(t.steps_done(), 200);
+        assert!(matches!(t.step(), Err(LearnError::InvalidConfig(_))));
         assert_eq!(losses.len(), 200);
         assert!(losses.iter().all(|l| l.is_finite()));
         assert_eq!(validations.len(), 2);
@@ -80,6 +81,31 @@ fn smoke_run_has_finite_losses_and_validations() {
         );
         assert!(t.replay_len() <= 2_000);
     }
+}
+
+fn run_to(trainer: &mut Trainer, steps: u64) {
+    while trainer.steps_done() < steps {
+        trainer.step().unwrap();
+    }
+}
+
+#[test]
+fn a_diverging_run_stops_with_a_clear_error_and_unchanged_weights() {
+    let mut c = tiny(Algo::Dqn, NetworkConfig::afgnet(5, 3), 200);
+    (c.lr, c.lr_decay, c.huber, c.grad_clip) = (1e30, false, false, None);
+    let mut t = Trainer::new(c).unwrap();
+    let err = loop {
+        let before = values(&t.network());
+        match t.step() {
+            Ok(_) => continue,
+            Err(e) => {
+                assert_eq!(values(&t.network()), before, "weights changed");
+                break e;
+            }
+        }
+    };
+    assert!(matches!(err, LearnError::NonFiniteLoss { .. }), "{err}");
+    assert!(err.to_string().contains("lower --lr"), "{err}");
 }
 
 /// Every parameter value, in visiting order.
@@ -100,20 +126,20 @@ fn values(net: &QNetwork<InferBackend>) -> Vec<u32> {
 fn resumed_run_ends_with_bit_identical_weights() {
     let config = tiny(Algo::Ddqn, NetworkConfig::afgnet(5, 2), 60);
     let mut straight = Trainer::new(config.clone()).unwrap();
-    straight.run_until(60, |_| {}).unwrap();
+    run_to(&mut straight, 60);
 
     let dir = temp_dir("resume");
     let mut first = Trainer::new(config).unwrap();
-    first.run_until(25, |_| {}).unwrap();
+    run_to(&mut first, 25);
     first.save_checkpoint(&dir).unwrap();
     drop(first); // "killed"
     let mut resumed = Trainer::resume(&dir).unwrap();
-    assert_eq!(resumed.step(), 25);
-    resumed.run_until(60, |_| {}).unwrap();
+    assert_eq!(resumed.steps_done(), 25);
+    run_to(&mut resumed, 60);
     assert_eq!(values(&resumed.network()), values(&straight.network()));
     // A later checkpoint replaces the earlier one.
     resumed.save_checkpoint(&dir).unwrap();
-    assert_eq!(Trainer::resume(&dir).unwrap().step(), 60);
+    assert_eq!(Trainer::resume(&dir).unwrap().steps_done(), 60);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -125,7 +151,7 @@ fn truncated_or_missing_checkpoints_are_clear_errors() {
         Err(LearnError::Checkpoint { .. })
     ));
     let mut t = Trainer::new(tiny(Algo::Dqn, NetworkConfig::s2v(5, 0), 20)).unwrap();
-    t.run_until(5, |_| {}).unwrap();
+    run_to(&mut t, 5);
     t.save_checkpoint(&dir).unwrap();
     let state = dir.join("checkpoint/state.json");
     let text = std::fs::read_to_string(&state).unwrap();
@@ -214,12 +240,9 @@ fn scale_free_and_shaped_runs_train() {
     c.n_step = 3;
     let mut t = Trainer::new(c).unwrap();
     let mut losses = Vec::new();
-    t.run_until(u64::MAX, |e| {
-        if let TrainEvent::Step { loss, .. } = e {
-            losses.push(*loss)
-        }
-    })
-    .unwrap();
+    while !t.is_finished() {
+        losses.push(t.step().unwrap().loss);
+    }
     assert_eq!(losses.len(), 60);
     assert!(losses.iter().all(|l| l.is_finite()));
     assert_eq!(t.network().units(), Units::ScaleFree);

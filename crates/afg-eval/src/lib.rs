@@ -1,0 +1,15 @@
+//! Evaluation of allocators: the fixed test datasets ([`dataset`]), one way to score an
+//! allocation against the exact optimum ([`Score`], [`evaluate`]), the learned models
+//! of the paper's tables ([`ModelSpec`]) and the numbers the paper reports ([`paper`]).
+//!
+//! Every command that prints "% of OPT" computes it here.
+
+pub mod dataset;
+mod error;
+mod model;
+pub mod paper;
+mod score;
+
+pub use error::EvalError;
+pub use model::{ModelSpec, Net, Variant};
+pub use score::{Score, Summary, evaluate, optima, optimum_welfare};

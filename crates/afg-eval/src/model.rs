@@ -1,0 +1,121 @@
+//! The learned models of the tables, by identity rather than by directory string.
+
+use std::path::Path;
+
+use afg_learn::{Algo, RunDir};
+
+/// The network of a model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Net {
+    /// AFGNet (the paper's network).
+    AfgNet,
+    /// Structure2Vec (the paper's comparison network).
+    S2v,
+}
+
+/// What a model adds to the paper's method.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Variant {
+    /// The paper's network and algorithm (training departures are in its command).
+    Paper,
+    /// Ours: AFGNet with the action's immediate reward added to its Q values.
+    GainResidual,
+}
+
+/// One trained model: network, algorithm, variant and the N it was trained at.
+///
+/// # Examples
+/// ```
+/// use afg_eval::{ModelSpec, Net, Variant};
+/// use afg_learn::Algo;
+/// let m = ModelSpec::new(Net::AfgNet, Algo::Ddqn, Variant::Paper, 60);
+/// assert_eq!(m.dir_name(), "afgnet_ddqn_n60");
+/// assert_eq!(m.label(), "AFGNet_DDQN");
+/// let ours = ModelSpec { variant: Variant::GainResidual, ..m };
+/// assert!(ours.is_ours() && ours.label().ends_with("(ours)"));
+/// assert_eq!(ModelSpec::table1(20).len(), 4);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ModelSpec {
+    /// The network.
+    pub net: Net,
+    /// The bootstrap rule.
+    pub algo: Algo,
+    /// The variant.
+    pub variant: Variant,
+    /// Robots per training instance.
+    pub trained_at: usize,
+}
+
+impl ModelSpec {
+    /// The learned rows of Table I at one scale, in table order: the paper's three
+    /// models, then ours.
+    pub const TABLE1_KINDS: [(Net, Algo, Variant); 4] = [
+        (Net::S2v, Algo::Ddqn, Variant::Paper),
+        (Net::AfgNet, Algo::Dqn, Variant::Paper),
+        (Net::AfgNet, Algo::Ddqn, Variant::Paper),
+        (Net::AfgNet, Algo::Ddqn, Variant::GainResidual),
+    ];
+
+    /// A model.
+    pub const fn new(net: Net, algo: Algo, variant: Variant, trained_at: usize) -> Self {
+        ModelSpec {
+            net,
+            algo,
+            variant,
+            trained_at,
+        }
+    }
+
+    /// The learned rows of Table I trained at `robots`.
+    pub fn table1(robots: usize) -> Vec<ModelSpec> {
+        Self::TABLE1_KINDS
+            .iter()
+            .map(|&(net, algo, variant)| Self::new(net, algo, variant, robots))
+            .collect()
+    }
+
+    /// The paper's AFGNet DDQN trained at `robots` (its headline model).
+    pub const fn afgnet_ddqn(robots: usize) -> Self {
+        Self::new(Net::AfgNet, Algo::Ddqn, Variant::Paper, robots)
+    }
+
+    /// The run directory's name under `models/`, e.g. `afgnet_ddqn_n60`.
+    pub fn dir_name(&self) -> String {
+        let net = match self.net {
+            Net::AfgNet => "afgnet",
+            Net::S2v => "s2v",
+        };
+        let variant = match self.variant {
+            Variant::Paper => "",
+            Variant::GainResidual => "_gain",
+        };
+        format!("{net}_{}{variant}_n{}", self.algo.name(), self.trained_at)
+    }
+
+    /// The run directory under the repository `root`.
+    pub fn run_dir(&self, root: &Path) -> RunDir {
+        RunDir::new(root.join("models").join(self.dir_name()))
+    }
+
+    /// The row label, in the paper's naming (e.g. `AFGNet_DDQN`); ours end in "(ours)".
+    pub fn label(&self) -> String {
+        let net = match self.net {
+            Net::AfgNet => "AFGNet",
+            Net::S2v => "S2V",
+        };
+        let algo = match self.algo {
+            Algo::Dqn => "DQN",
+            Algo::Ddqn => "DDQN",
+        };
+        match self.variant {
+            Variant::Paper => format!("{net}_{algo}"),
+            Variant::GainResidual => format!("{net}_{algo} + gain residual (ours)"),
+        }
+    }
+
+    /// Whether the model is ours (not in the paper); the tables treat ours as optional.
+    pub fn is_ours(&self) -> bool {
+        self.variant != Variant::Paper
+    }
+}

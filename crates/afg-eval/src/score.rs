@@ -1,0 +1,147 @@
+//! Scores of allocations against the exact optimum.
+
+use std::time::Instant;
+
+use afg_baseline::{Allocator, Optimum};
+use afg_game::{Assignment, Instance, Preference};
+use serde::Serialize;
+
+use crate::EvalError;
+
+/// One allocation of one instance, measured against OPT.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Score {
+    /// Welfare of the allocation.
+    pub welfare: f64,
+    /// Welfare of the exact optimum.
+    pub opt_welfare: f64,
+    /// `100 · welfare / opt_welfare`.
+    pub percent_of_opt: f64,
+    /// Share of robots (0..=1) that would move under the balanced preference.
+    pub ns_rate_balanced: f64,
+    /// Share of robots (0..=1) that would move under the selfish preference.
+    pub ns_rate_selfish: f64,
+}
+
+impl Score {
+    /// The score of `assignment` on `instance`, whose optimum has welfare `opt_welfare`.
+    ///
+    /// # Errors
+    /// [`EvalError::BeatsOptimum`] (naming `method`) if the welfare exceeds the
+    /// optimum's beyond rounding: then the optimum is wrong.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::{Allocator, Greedy};
+    /// use afg_eval::{Score, optimum_welfare};
+    /// use afg_game::GeneratorConfig;
+    /// let inst = GeneratorConfig::paper(20, 5, 1).generate()?;
+    /// let greedy = Greedy.allocate(&inst)?.assignment;
+    /// let s = Score::of("greedy", &inst, &greedy, optimum_welfare(&inst)?)?;
+    /// assert!(s.percent_of_opt <= 100.0 + 1e-9 && s.percent_of_opt > 80.0);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn of(
+        method: &str,
+        instance: &Instance,
+        assignment: &Assignment,
+        opt_welfare: f64,
+    ) -> Result<Score, EvalError> {
+        let welfare = instance.welfare(assignment);
+        if welfare > opt_welfare + 1e-9 * opt_welfare.abs().max(1.0) {
+            return Err(EvalError::BeatsOptimum {
+                method: method.to_owned(),
+                welfare,
+                opt: opt_welfare,
+            });
+        }
+        Ok(Score {
+            welfare,
+            opt_welfare,
+            percent_of_opt: 100.0 * welfare / opt_welfare,
+            ns_rate_balanced: instance.ns_rate(assignment, Preference::Balanced),
+            ns_rate_selfish: instance.ns_rate(assignment, Preference::Selfish),
+        })
+    }
+}
+
+/// Welfare of the exact optimum of `instance`.
+///
+/// # Errors
+/// [`EvalError::Alloc`] if the optimum fails (it does not on valid instances).
+pub fn optimum_welfare(instance: &Instance) -> Result<f64, EvalError> {
+    Ok(instance.welfare(&Optimum.allocate(instance)?.assignment))
+}
+
+/// [`optimum_welfare`] of each instance.
+///
+/// # Errors
+/// As [`optimum_welfare`].
+pub fn optima(instances: &[Instance]) -> Result<Vec<f64>, EvalError> {
+    instances.iter().map(optimum_welfare).collect()
+}
+
+/// One allocator on a set of instances: means of the [`Score`]s, NS rates in percent.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Summary {
+    /// The allocator's label.
+    pub method: String,
+    /// Instances evaluated.
+    pub instances: usize,
+    /// Mean welfare.
+    pub welfare: f64,
+    /// Mean of the per-instance % of OPT.
+    pub percent_of_opt: f64,
+    /// Mean balanced NS_rate, in percent.
+    pub ns_rate_balanced: f64,
+    /// Mean selfish NS_rate, in percent.
+    pub ns_rate_selfish: f64,
+    /// Mean wall time of the allocator per instance.
+    pub seconds_per_instance: f64,
+}
+
+/// Runs `allocator` on every instance and summarises its scores; `opt` holds the
+/// optimum's welfare of each instance ([`optima`]).
+///
+/// # Errors
+/// The allocator's errors, and [`EvalError::BeatsOptimum`].
+///
+/// # Examples
+/// ```
+/// use afg_baseline::{Method, Optimum};
+/// use afg_eval::{evaluate, optima};
+/// use afg_game::GeneratorConfig;
+/// let insts = vec![GeneratorConfig::paper(20, 5, 1).generate()?, GeneratorConfig::paper(20, 5, 2).generate()?];
+/// let opt = optima(&insts)?;
+/// let s = evaluate(Method::Opt.label(), &Optimum, &insts, &opt)?;
+/// assert_eq!((s.instances, s.percent_of_opt), (2, 100.0));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn evaluate(
+    label: &str,
+    allocator: &dyn Allocator,
+    instances: &[Instance],
+    opt: &[f64],
+) -> Result<Summary, EvalError> {
+    let (mut welfare, mut pct, mut nsb, mut nss, mut secs) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for (inst, &o) in instances.iter().zip(opt) {
+        let start = Instant::now();
+        let a = allocator.allocate(inst)?.assignment;
+        secs += start.elapsed().as_secs_f64();
+        let s = Score::of(label, inst, &a, o)?;
+        welfare += s.welfare;
+        pct += s.percent_of_opt;
+        nsb += s.ns_rate_balanced;
+        nss += s.ns_rate_selfish;
+    }
+    let k = instances.len().min(opt.len()) as f64;
+    Ok(Summary {
+        method: label.to_owned(),
+        instances: k as usize,
+        welfare: welfare / k,
+        percent_of_opt: pct / k,
+        ns_rate_balanced: 100.0 * nsb / k,
+        ns_rate_selfish: 100.0 * nss / k,
+        seconds_per_instance: secs / k,
+    })
+}

@@ -1,0 +1,375 @@
+//! A training run's directory, the one owner of its files:
+//!
+//! | file | written by | content |
+//! |---|---|---|
+//! | `config.json` | [`RunDir::create`] | the [`TrainConfig`] |
+//! | `log.jsonl` | [`RunDir::append`] | one [`LogEvent`] per line |
+//! | `checkpoint/` | [`Trainer::save_checkpoint`](crate::Trainer::save_checkpoint) | the resumable state |
+//! | `model.json`, `model.mpk` | [`save_network`](crate::save_network) at [`RunDir::weights`] | the final weights |
+//! | `manifest.json` | [`RunDir::write_manifest`] | a [`RunManifest`]: how to rerun it, what it cost |
+//! | `.lock` | [`RunDir::lock`] | held while a trainer writes into the directory |
+
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::{LearnError, TrainConfig, Validation};
+
+/// One line of `log.jsonl`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "event", rename_all = "lowercase")]
+pub enum LogEvent {
+    /// The run started.
+    Start {
+        /// Its settings.
+        config: TrainConfig,
+        /// The git revision it was started from, if known.
+        #[serde(default)]
+        git_revision: Option<String>,
+        /// Mean welfare of the classical methods on the validation set, by method name.
+        #[serde(default)]
+        baselines: BTreeMap<String, f64>,
+    },
+    /// Mean loss over the last ten gradient steps.
+    Step {
+        /// Gradient steps done.
+        step: u64,
+        /// Mean loss of the steps since the previous line.
+        loss: f32,
+        /// ε used for acting.
+        epsilon: f64,
+        /// Seconds of training so far, across resumes.
+        elapsed_s: f64,
+    },
+    /// The greedy policy on the validation set.
+    Validation(ValidationLine),
+    /// The run finished.
+    End {
+        /// Gradient steps done.
+        step: u64,
+        /// Seconds of training in all.
+        elapsed_s: f64,
+    },
+}
+
+/// A validation as logged.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ValidationLine {
+    /// Gradient steps done.
+    pub step: u64,
+    /// Mean welfare.
+    pub welfare: f64,
+    /// Mean of welfare / OPT, in percent.
+    pub percent_of_opt: f64,
+    /// See [`Validation::largest_task_share`] (absent in logs written before it existed).
+    #[serde(default)]
+    pub largest_task_share: Option<f64>,
+    /// See [`Validation::collapsed`] (absent in older logs).
+    #[serde(default)]
+    pub collapsed: Option<bool>,
+    /// Seconds of training so far, across resumes.
+    pub elapsed_s: f64,
+}
+
+impl ValidationLine {
+    /// The log line of `result` at `step`.
+    pub fn new(step: u64, result: &Validation, elapsed_s: f64) -> Self {
+        ValidationLine {
+            step,
+            welfare: result.welfare,
+            percent_of_opt: result.percent_of_opt,
+            largest_task_share: Some(result.largest_task_share),
+            collapsed: Some(result.collapsed()),
+            elapsed_s,
+        }
+    }
+}
+
+impl LogEvent {
+    /// The gradient step of the event (`None` for the start).
+    pub fn step(&self) -> Option<u64> {
+        match self {
+            LogEvent::Start { .. } => None,
+            LogEvent::Step { step, .. } | LogEvent::End { step, .. } => Some(*step),
+            LogEvent::Validation(v) => Some(v.step),
+        }
+    }
+
+    /// Seconds of training when the event was logged (`None` for the start).
+    pub fn elapsed_s(&self) -> Option<f64> {
+        match self {
+            LogEvent::Start { .. } => None,
+            LogEvent::Step { elapsed_s, .. } | LogEvent::End { elapsed_s, .. } => Some(*elapsed_s),
+            LogEvent::Validation(v) => Some(v.elapsed_s),
+        }
+    }
+}
+
+/// How to rerun a finished run and what it cost (`manifest.json`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RunManifest {
+    /// The command line that reproduces the run.
+    pub command: String,
+    /// Seed of everything random in the run.
+    pub seed: u64,
+    /// Gradient steps.
+    pub steps: u64,
+    /// Seconds of training, across resumes.
+    pub wall_time_s: Option<f64>,
+    /// The git revision the run started from.
+    pub git_revision: Option<String>,
+    /// The last validation of the run.
+    pub final_validation: Option<ValidationLine>,
+    /// The weight files, relative to the run directory.
+    pub weights: Vec<String>,
+}
+
+/// A training run's directory (see the module docs for its files).
+///
+/// # Examples
+/// ```
+/// use afg_learn::{Algo, LogEvent, NetworkConfig, RunDir, TrainConfig};
+///
+/// let path = std::env::temp_dir().join(format!("afg-doc-run-{}", std::process::id()));
+/// # let _ = std::fs::remove_dir_all(&path);
+/// let config = TrainConfig::new(20, Algo::Ddqn, NetworkConfig::afgnet(5, 0), 100, 0);
+/// let run = RunDir::create(&path, &config)?;
+/// let _lock = run.lock()?; // a second trainer is now refused
+/// assert!(run.lock().is_err());
+/// run.append(&LogEvent::End { step: 100, elapsed_s: 1.5 })?;
+/// assert_eq!(run.config()?, config);
+/// assert_eq!(run.log()?[0].step(), Some(100));
+/// // A second run into the same directory is refused.
+/// assert!(RunDir::create(&path, &config).is_err());
+/// # drop(_lock);
+/// # std::fs::remove_dir_all(&path)?;
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RunDir {
+    path: PathBuf,
+}
+
+/// Exclusive use of a run directory, released when dropped (or when the process ends).
+#[derive(Debug)]
+pub struct RunLock {
+    file: File,
+    path: PathBuf,
+}
+
+impl Drop for RunLock {
+    fn drop(&mut self) {
+        // Best effort: the lock file is removed, then the lock released with the file.
+        let _ = std::fs::remove_file(&self.path);
+        let _ = self.file.unlock();
+    }
+}
+
+impl RunDir {
+    /// The run directory at `path` (nothing is read or written).
+    pub fn new(path: impl Into<PathBuf>) -> Self {
+        RunDir { path: path.into() }
+    }
+
+    /// A new run directory holding `config`.
+    ///
+    /// # Errors
+    /// [`LearnError::RunFile`] if `path` already holds a run, [`LearnError::Io`] if it
+    /// cannot be written.
+    pub fn create(path: impl Into<PathBuf>, config: &TrainConfig) -> Result<Self, LearnError> {
+        let run = RunDir::new(path);
+        let config_path = run.path.join("config.json");
+        if config_path.exists() {
+            return Err(LearnError::RunFile {
+                path: run.path.display().to_string(),
+                reason: "already holds a training run; resume it or choose another directory"
+                    .into(),
+            });
+        }
+        std::fs::create_dir_all(&run.path).map_err(|source| LearnError::Io {
+            path: run.path.display().to_string(),
+            source,
+        })?;
+        let json = serde_json::to_string_pretty(config).expect("a configuration serialises");
+        afg_game::io::write_atomic(&config_path, json.as_bytes())?;
+        Ok(run)
+    }
+
+    /// The directory.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The directory's name (its last component), or its path.
+    pub fn name(&self) -> String {
+        self.path.file_name().map_or_else(
+            || self.path.display().to_string(),
+            |f| f.to_string_lossy().into_owned(),
+        )
+    }
+
+    /// The stem of the final weights (`model`, for [`crate::load_network`]).
+    pub fn weights(&self) -> PathBuf {
+        self.path.join("model")
+    }
+
+    /// Whether the run has finished and saved its weights.
+    pub fn has_weights(&self) -> bool {
+        self.path.join("model.mpk").exists()
+    }
+
+    /// The checkpoint directory.
+    pub fn checkpoint(&self) -> PathBuf {
+        crate::checkpoint_dir(&self.path)
+    }
+
+    fn file(&self, name: &str) -> PathBuf {
+        self.path.join(name)
+    }
+
+    /// Takes exclusive use of the directory for this process.
+    ///
+    /// # Errors
+    /// [`LearnError::RunInUse`] if another [`RunLock`] holds it, [`LearnError::Io`] if
+    /// the lock file cannot be opened.
+    pub fn lock(&self) -> Result<RunLock, LearnError> {
+        let path = self.file(".lock");
+        let io = |source| LearnError::Io {
+            path: path.display().to_string(),
+            source,
+        };
+        let mut file = std::fs::OpenOptions::new()
+            .create(true)
+            .truncate(false)
+            .write(true)
+            .open(&path)
+            .map_err(io)?;
+        match file.try_lock() {
+            Ok(()) => {}
+            Err(std::fs::TryLockError::WouldBlock) => {
+                return Err(LearnError::RunInUse {
+                    path: self.path.display().to_string(),
+                });
+            }
+            Err(std::fs::TryLockError::Error(e)) => return Err(io(e)),
+        }
+        file.set_len(0).map_err(io)?;
+        writeln!(file, "{}", std::process::id()).map_err(io)?;
+        Ok(RunLock { file, path })
+    }
+
+    /// The run's settings (`config.json`).
+    ///
+    /// # Errors
+    /// [`LearnError::RunFile`] if the directory holds no run or the file is not a
+    /// training configuration.
+    pub fn config(&self) -> Result<TrainConfig, LearnError> {
+        let path = self.file("config.json");
+        let text = std::fs::read_to_string(&path).map_err(|e| LearnError::RunFile {
+            path: path.display().to_string(),
+            reason: format!("no training run here ({e})"),
+        })?;
+        serde_json::from_str(&text).map_err(|e| LearnError::RunFile {
+            path: path.display().to_string(),
+            reason: format!("not a training configuration: {e}"),
+        })
+    }
+
+    /// Appends one event to `log.jsonl`.
+    ///
+    /// # Errors
+    /// [`LearnError::Io`] if the log cannot be written.
+    pub fn append(&self, event: &LogEvent) -> Result<(), LearnError> {
+        let path = self.file("log.jsonl");
+        let io = |source| LearnError::Io {
+            path: path.display().to_string(),
+            source,
+        };
+        let mut f = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(&path)
+            .map_err(io)?;
+        let line = serde_json::to_string(event).expect("an event serialises");
+        writeln!(f, "{line}").map_err(io)
+    }
+
+    /// Every event of `log.jsonl`, in order.
+    ///
+    /// # Errors
+    /// [`LearnError::RunFile`] naming the line that is not an event, or the missing log.
+    pub fn log(&self) -> Result<Vec<LogEvent>, LearnError> {
+        let path = self.file("log.jsonl");
+        let text = std::fs::read_to_string(&path).map_err(|e| LearnError::RunFile {
+            path: path.display().to_string(),
+            reason: e.to_string(),
+        })?;
+        text.lines()
+            .enumerate()
+            .filter(|(_, line)| !line.trim().is_empty())
+            .map(|(i, line)| {
+                serde_json::from_str(line).map_err(|e| LearnError::RunFile {
+                    path: format!("{}:{}", path.display(), i + 1),
+                    reason: format!("not a log event: {e}"),
+                })
+            })
+            .collect()
+    }
+
+    /// Keeps the log's events up to gradient step `step` (a resumed run repeats what
+    /// came after) and returns the last kept `elapsed_s`, from which the resumed run's
+    /// clock goes on. A missing log is an empty one.
+    ///
+    /// # Errors
+    /// As [`RunDir::log`], and [`LearnError::Io`] if the log cannot be rewritten.
+    pub fn truncate_log(&self, step: u64) -> Result<f64, LearnError> {
+        if !self.file("log.jsonl").exists() {
+            return Ok(0.0);
+        }
+        let kept: Vec<LogEvent> = self
+            .log()?
+            .into_iter()
+            .filter(|e| e.step().is_none_or(|s| s <= step))
+            .collect();
+        let elapsed = kept
+            .iter()
+            .filter_map(LogEvent::elapsed_s)
+            .fold(0.0, f64::max);
+        let mut text = String::new();
+        for e in &kept {
+            text += &serde_json::to_string(e).expect("an event serialises");
+            text.push('\n');
+        }
+        afg_game::io::write_atomic(&self.file("log.jsonl"), text.as_bytes())?;
+        Ok(elapsed)
+    }
+
+    /// `manifest.json`.
+    ///
+    /// # Errors
+    /// [`LearnError::RunFile`] if it is missing or not a manifest.
+    pub fn manifest(&self) -> Result<RunManifest, LearnError> {
+        let path = self.file("manifest.json");
+        let text = std::fs::read_to_string(&path).map_err(|e| LearnError::RunFile {
+            path: path.display().to_string(),
+            reason: e.to_string(),
+        })?;
+        serde_json::from_str(&text).map_err(|e| LearnError::RunFile {
+            path: path.display().to_string(),
+            reason: format!("not a run manifest: {e}"),
+        })
+    }
+
+    /// Writes `manifest.json` atomically.
+    ///
+    /// # Errors
+    /// [`LearnError::Io`] if it cannot be written.
+    pub fn write_manifest(&self, manifest: &RunManifest) -> Result<(), LearnError> {
+        let json = serde_json::to_string_pretty(manifest).expect("a manifest serialises");
+        afg_game::io::write_atomic(&self.file("manifest.json"), json.as_bytes())?;
+        Ok(())
+    }
+}

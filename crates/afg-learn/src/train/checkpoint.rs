@@ -1,0 +1,147 @@
+//! Checkpoints: both networks, Adam's moments, the generator, the replay records and
+//! the running episodes, so that a resumed run ends with the same weights as an
+//! uninterrupted one.
+
+use std::path::{Path, PathBuf};
+
+use burn::optim::Optimizer;
+use burn::record::{FullPrecisionSettings, NamedMpkFileRecorder, Recorder};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use super::replay::EpisodeRecord;
+use super::{TrainConfig, Trainer, optimizer};
+use crate::{InferBackend, LearnError, TrainBackend, load_network, save_network};
+
+/// The mutable state of a run, as written to `state.json` in a checkpoint.
+#[derive(Serialize, Deserialize)]
+struct TrainerState {
+    format: String,
+    version: u32,
+    config: TrainConfig,
+    step: u64,
+    next_episode: u64,
+    rng: ChaCha8Rng,
+    replay: Vec<EpisodeRecord>,
+    running: Vec<EpisodeRecord>,
+}
+
+const STATE_FORMAT: &str = "afg-train-state";
+const STATE_VERSION: u32 = 1;
+
+impl Trainer {
+    /// Writes a checkpoint into `dir/checkpoint` atomically: everything goes to
+    /// `dir/checkpoint.new` first, which then replaces the old checkpoint.
+    ///
+    /// # Errors
+    /// [`LearnError::Weights`] or [`LearnError::Io`] if a file cannot be written.
+    pub fn save_checkpoint(&self, dir: &Path) -> Result<(), LearnError> {
+        let fresh = dir.join("checkpoint.new");
+        let io = |path: &Path| {
+            let path = path.display().to_string();
+            move |source| LearnError::Io { path, source }
+        };
+        if fresh.exists() {
+            std::fs::remove_dir_all(&fresh).map_err(io(&fresh))?;
+        }
+        std::fs::create_dir_all(&fresh).map_err(io(&fresh))?;
+        save_network(
+            self.online.clone(),
+            &self.config.network,
+            &fresh.join("online"),
+        )?;
+        save_network(
+            self.target.clone(),
+            &self.config.network,
+            &fresh.join("target"),
+        )?;
+        let optim_path = fresh.join("optim.mpk");
+        NamedMpkFileRecorder::<FullPrecisionSettings>::new()
+            .record(self.optim.to_record(), optim_path.clone())
+            .map_err(|e| LearnError::Weights {
+                path: optim_path.display().to_string(),
+                reason: e.to_string(),
+            })?;
+        let state = TrainerState {
+            format: STATE_FORMAT.into(),
+            version: STATE_VERSION,
+            config: self.config.clone(),
+            step: self.step,
+            next_episode: self.next_episode,
+            rng: self.rng.clone(),
+            replay: self.replay.iter().map(|e| e.record.clone()).collect(),
+            running: self.running.iter().map(|e| e.record.clone()).collect(),
+        };
+        let json = serde_json::to_string(&state).expect("state serialises");
+        afg_game::io::write_atomic(&fresh.join("state.json"), json.as_bytes())?;
+        let current = dir.join("checkpoint");
+        let old = dir.join("checkpoint.old");
+        if current.exists() {
+            if old.exists() {
+                std::fs::remove_dir_all(&old).map_err(io(&old))?;
+            }
+            std::fs::rename(&current, &old).map_err(io(&current))?;
+        }
+        std::fs::rename(&fresh, &current).map_err(io(&fresh))?;
+        if old.exists() {
+            std::fs::remove_dir_all(&old).map_err(io(&old))?;
+        }
+        Ok(())
+    }
+
+    /// Restores a run from `dir/checkpoint`.
+    ///
+    /// # Errors
+    /// [`LearnError::Checkpoint`] for a missing, truncated or foreign checkpoint, and
+    /// [`LearnError::Weights`] for unusable network or optimiser files.
+    pub fn resume(dir: &Path) -> Result<Self, LearnError> {
+        let ckpt = checkpoint_dir(dir);
+        let state_path = ckpt.join("state.json");
+        let bad = |reason: String| LearnError::Checkpoint {
+            path: state_path.display().to_string(),
+            reason,
+        };
+        let text = std::fs::read_to_string(&state_path).map_err(|e| bad(e.to_string()))?;
+        let state: TrainerState =
+            serde_json::from_str(&text).map_err(|e| bad(format!("corrupt or truncated: {e}")))?;
+        if state.format != STATE_FORMAT || state.version != STATE_VERSION {
+            return Err(bad(format!(
+                "format {} version {}, expected {STATE_FORMAT} {STATE_VERSION}",
+                state.format, state.version
+            )));
+        }
+        state.config.check()?;
+        let device = Default::default();
+        let (online_config, online) = load_network::<TrainBackend>(&ckpt.join("online"), &device)?;
+        let (target_config, target) = load_network::<InferBackend>(&ckpt.join("target"), &device)?;
+        if online_config != state.config.network || target_config != state.config.network {
+            return Err(bad(
+                "the saved networks do not match the run's configuration".into(),
+            ));
+        }
+        let optim_path = ckpt.join("optim.mpk");
+        let record = NamedMpkFileRecorder::<FullPrecisionSettings>::new()
+            .load(optim_path.clone(), &device)
+            .map_err(|e| LearnError::Weights {
+                path: optim_path.display().to_string(),
+                reason: format!("corrupt or truncated: {e}"),
+            })?;
+        let optim = optimizer(&state.config).load_record(record);
+        Self::assemble(
+            state.config,
+            online,
+            target,
+            Some(optim),
+            state.rng,
+            state.replay,
+            state.running,
+            state.next_episode,
+            state.step,
+        )
+    }
+}
+
+/// Where [`Trainer::save_checkpoint`] puts the checkpoint of a run directory.
+pub fn checkpoint_dir(dir: &Path) -> PathBuf {
+    dir.join("checkpoint")
+}

@@ -1,0 +1,310 @@
+//! Every setting of a training run, and the seeded instances it trains and validates on.
+
+use afg_game::{GeneratorConfig, Instance};
+use serde::{Deserialize, Serialize};
+
+use crate::{LearnError, NetworkConfig};
+
+/// The bootstrap rule.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Algo {
+    /// `r + max_a Q_target(s', a)`.
+    Dqn,
+    /// `r + Q_target(s', argmax_a Q_online(s', a))`.
+    Ddqn,
+}
+
+impl Algo {
+    /// `dqn` or `ddqn`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Algo::Dqn => "dqn",
+            Algo::Ddqn => "ddqn",
+        }
+    }
+}
+
+/// The family of defaults a configuration starts from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Preset {
+    /// This project's settings ([`TrainConfig::new`]).
+    #[default]
+    Ours,
+    /// The paper's settings where ours differ ([`TrainConfig::paper`]).
+    Paper,
+}
+
+impl Preset {
+    /// `ours` or `paper`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Preset::Ours => "ours",
+            Preset::Paper => "paper",
+        }
+    }
+}
+
+/// Every setting of a training run. Stored in the run directory; `--resume` refuses a
+/// directory whose settings differ from the ones asked for.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrainConfig {
+    /// The defaults this configuration started from (recorded so that a run's command
+    /// line can be rebuilt; files written before it existed load as [`Preset::Ours`]).
+    #[serde(default)]
+    pub preset: Preset,
+    /// Robots per training instance N (M and the network come from `network`).
+    pub robots: usize,
+    /// DQN or Double DQN.
+    pub algo: Algo,
+    /// The network and its initialisation seed.
+    pub network: NetworkConfig,
+    /// Gradient steps.
+    pub steps: u64,
+    /// Transitions per gradient step.
+    pub batch: usize,
+    /// Adam learning rate (at step 0; see `lr_decay`).
+    pub lr: f64,
+    /// Anneal the learning rate linearly from `lr` to `lr / 10` over the run
+    /// ([`TrainConfig::learning_rate`]), so that the final weights settle instead of
+    /// swinging between validations. Files written before it existed load as `false`.
+    #[serde(default)]
+    pub lr_decay: bool,
+    /// Gradient steps between target-network syncs.
+    pub target_sync: u64,
+    /// ε at the start of training.
+    pub eps_start: f64,
+    /// ε after the decay.
+    pub eps_end: f64,
+    /// Fraction of `steps` over which ε decays linearly.
+    pub eps_fraction: f64,
+    /// Episodes run side by side; each acting step adds this many transitions.
+    pub parallel_envs: usize,
+    /// Replay capacity in transitions (oldest episodes are dropped).
+    pub replay_capacity: usize,
+    /// Transitions collected before the first gradient step.
+    pub warmup: usize,
+    /// Steps of reward summed before bootstrapping (1: the paper's one-step target;
+    /// with γ = 1 an n-step target is `r_t + … + r_{t+n-1} + Q(s_{t+n}, ·)`).
+    #[serde(default = "one")]
+    pub n_step: usize,
+    /// Huber loss (δ = 1) instead of the squared error.
+    pub huber: bool,
+    /// Rewards in the network's welfare unit ([`afg_graph::Units::welfare_unit`], the
+    /// task features' unit) instead of raw welfare.
+    pub reward_scaling: bool,
+    /// Potential-based reward shaping (Ng, Harada and Russell, 1999) with the potential
+    /// Φ(s) = W(greedy completion of s) − W(s), the welfare that one-pass greedy would
+    /// still add from s. The shaped reward of steps t..t+n is then
+    /// `W(greedy completion of s_{t+n}) − W(greedy completion of s_t)`, and the network
+    /// learns `Q(s, a) − Φ(s)`: what the policy gains over finishing greedily, O(action
+    /// gaps) instead of O(N). Φ does not depend on the action, so the optimal policy and
+    /// the greedy policy of a learned Q are unchanged. Not in the paper; files written
+    /// before it existed load as `false`.
+    #[serde(default)]
+    pub greedy_shaping: bool,
+    /// Gradient norm clipping.
+    pub grad_clip: Option<f32>,
+    /// Size of the fixed validation set (seeded, disjoint from datasets and training).
+    pub validation_instances: usize,
+    /// Gradient steps between validations.
+    pub validate_every: u64,
+    /// Seed of everything random in the run.
+    pub seed: u64,
+}
+
+impl TrainConfig {
+    /// Defaults for `robots` and a step budget: batch 256, Adam 1e-3 (the paper's 1e-4
+    /// learns too slowly for a CPU budget; docs/training.md), ε 1.0 → 0.05 over
+    /// 10 % of the steps, 16 parallel episodes, Huber loss, reward scaling, greedy
+    /// reward shaping ([`TrainConfig::greedy_shaping`]), gradient
+    /// clipping at norm 10, and a target sync every `clamp(steps / 20, 10, 1000)` steps
+    /// (the paper's c = 1000 assumes 2.5 M steps; a CPU budget needs more syncs).
+    pub fn new(robots: usize, algo: Algo, network: NetworkConfig, steps: u64, seed: u64) -> Self {
+        TrainConfig {
+            preset: Preset::Ours,
+            robots,
+            algo,
+            network,
+            steps,
+            batch: 256,
+            lr: 1e-3,
+            lr_decay: true,
+            target_sync: (steps / 20).clamp(10, 1000),
+            eps_start: 1.0,
+            eps_end: 0.05,
+            eps_fraction: 0.1,
+            parallel_envs: 16,
+            n_step: 1,
+            replay_capacity: 50_000,
+            warmup: 2_048,
+            huber: true,
+            reward_scaling: true,
+            greedy_shaping: true,
+            grad_clip: Some(10.0),
+            validation_instances: 32,
+            validate_every: (steps / 40).max(1),
+            seed,
+        }
+    }
+
+    /// The paper's settings where [`TrainConfig::new`] differs: squared loss, raw
+    /// rewards, no reward shaping, no gradient clipping, a target sync every 1 000
+    /// steps and a constant learning rate of 1e-4 (paper §IV).
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_learn::{Algo, NetworkConfig, Preset, TrainConfig};
+    ///
+    /// let c = TrainConfig::paper(20, Algo::Ddqn, NetworkConfig::afgnet(5, 0), 100, 0);
+    /// assert_eq!((c.preset, c.lr, c.target_sync, c.huber), (Preset::Paper, 1e-4, 1000, false));
+    /// ```
+    pub fn paper(robots: usize, algo: Algo, network: NetworkConfig, steps: u64, seed: u64) -> Self {
+        TrainConfig {
+            preset: Preset::Paper,
+            greedy_shaping: false,
+            huber: false,
+            reward_scaling: false,
+            grad_clip: None,
+            target_sync: 1000,
+            lr: 1e-4,
+            lr_decay: false,
+            ..Self::new(robots, algo, network, steps, seed)
+        }
+    }
+
+    /// The configuration `preset` gives.
+    pub fn from_preset(
+        preset: Preset,
+        robots: usize,
+        algo: Algo,
+        network: NetworkConfig,
+        steps: u64,
+        seed: u64,
+    ) -> Self {
+        match preset {
+            Preset::Ours => Self::new(robots, algo, network, steps, seed),
+            Preset::Paper => Self::paper(robots, algo, network, steps, seed),
+        }
+    }
+
+    /// The default gradient-step budget at a scale: about an hour on one core of this
+    /// project's 2-core reference machine for AFGNet DDQN (measured rates in
+    /// `docs/training.md`); `None` where no budget has been measured.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_learn::TrainConfig;
+    /// assert_eq!(TrainConfig::default_steps(60), Some(2_500));
+    /// assert_eq!(TrainConfig::default_steps(33), None);
+    /// ```
+    pub fn default_steps(robots: usize) -> Option<u64> {
+        match robots {
+            20 => Some(20_000),
+            60 => Some(2_500),
+            100 => Some(1_500),
+            _ => None,
+        }
+    }
+
+    /// Checks the settings.
+    ///
+    /// # Errors
+    /// [`LearnError::InvalidConfig`] naming the first bad setting.
+    pub fn check(&self) -> Result<(), LearnError> {
+        let bad = |what: &str| Err(LearnError::InvalidConfig(what.to_owned()));
+        if self.robots < 2 {
+            return bad("robots must be at least 2");
+        }
+        if self.network.tasks() == 0 || self.network.tasks() > 255 {
+            return bad("the network's task count must be 1..=255");
+        }
+        if self.steps == 0 || self.batch == 0 || self.target_sync == 0 || self.validate_every == 0 {
+            return bad("steps, batch, target_sync and validate_every must be positive");
+        }
+        if !(self.lr.is_finite() && self.lr > 0.0) {
+            return bad("lr must be positive");
+        }
+        let unit = |x: f64| (0.0..=1.0).contains(&x);
+        if !(unit(self.eps_start) && unit(self.eps_end) && unit(self.eps_fraction)) {
+            return bad("eps_start, eps_end and eps_fraction must lie in [0, 1]");
+        }
+        if self.parallel_envs == 0 || self.validation_instances == 0 || self.n_step == 0 {
+            return bad("parallel_envs, validation_instances and n_step must be positive");
+        }
+        if self.replay_capacity < self.robots || self.warmup > self.replay_capacity {
+            return bad("replay_capacity must hold an episode and the warmup");
+        }
+        if matches!(&self.network, NetworkConfig::AfgNet(c) if c.gain_residual == Some(true))
+            && (!self.reward_scaling || self.greedy_shaping)
+        {
+            return bad(
+                "the gain residual is in the features' unit and adds the unshaped reward: it needs reward scaling and no shaping",
+            );
+        }
+        Ok(())
+    }
+
+    /// The learning rate of gradient step `step` (0-based): `lr` constant, or annealed
+    /// linearly to `lr / 10` at the last step when `lr_decay` is set.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_learn::{Algo, NetworkConfig, TrainConfig};
+    ///
+    /// let mut c = TrainConfig::new(20, Algo::Ddqn, NetworkConfig::afgnet(5, 0), 101, 0);
+    /// c.lr = 1e-3;
+    /// assert_eq!(c.learning_rate(0), 1e-3);
+    /// assert!((c.learning_rate(50) - 5.5e-4).abs() < 1e-12);
+    /// assert!((c.learning_rate(100) - 1e-4).abs() < 1e-12);
+    /// c.lr_decay = false;
+    /// assert_eq!(c.learning_rate(100), 1e-3);
+    /// ```
+    pub fn learning_rate(&self, step: u64) -> f64 {
+        if !self.lr_decay || self.steps <= 1 {
+            return self.lr;
+        }
+        let progress = (step as f64 / (self.steps - 1) as f64).min(1.0);
+        self.lr * (1.0 - 0.9 * progress)
+    }
+
+    /// ε at gradient step `step`.
+    pub fn epsilon(&self, step: u64) -> f64 {
+        let horizon = self.eps_fraction * self.steps as f64;
+        let progress = if horizon > 0.0 {
+            (step as f64 / horizon).min(1.0)
+        } else {
+            1.0
+        };
+        self.eps_start + (self.eps_end - self.eps_start) * progress
+    }
+
+    pub(super) fn instance(&self, seed: u64) -> Instance {
+        GeneratorConfig::paper(self.robots, self.network.tasks(), seed)
+            .generate()
+            .expect("checked configuration generates valid instances")
+    }
+}
+
+fn one() -> usize {
+    1
+}
+
+/// Seed of training episode `episode` of a run seeded `run_seed`. Datasets use seeds
+/// below 2^40 and validation sets 2^63 + i, so the three never meet.
+pub fn training_instance_seed(run_seed: u64, episode: u64) -> u64 {
+    (1 << 62) + (run_seed << 32) + episode
+}
+
+/// The fixed validation set: `count` instances with seeds 2^63 + i.
+pub fn validation_instances(
+    robots: usize,
+    tasks: usize,
+    count: usize,
+) -> Result<Vec<Instance>, LearnError> {
+    (0..count as u64)
+        .map(|i| Ok(GeneratorConfig::paper(robots, tasks, (1 << 63) + i).generate()?))
+        .collect()
+}

@@ -1,0 +1,455 @@
+//! DQN and Double DQN training on the sequential allocation MDP, on the CPU.
+//!
+//! - **Experience.** `parallel_envs` episodes run side by side on fresh seeded training
+//!   instances (never the test datasets); one batched forward pass picks ε-greedy
+//!   actions for all of them. Finished episodes enter the replay buffer as compact
+//!   records (instance seed + actions); a transition is an (episode, step) pair whose
+//!   states and reward are rebuilt when it is sampled.
+//! - **Learning.** One gradient step per acting step: Adam on the Huber (or squared)
+//!   error between `Q(s_t, a_t)` and the DQN or Double DQN target, the target network
+//!   synced every `target_sync` steps.
+//! - **Determinism.** Everything random comes from one ChaCha8 generator seeded by
+//!   `seed`; a checkpoint stores its state, the replay records, the running episodes,
+//!   both networks and Adam's moments, so a resumed run ends with the same weights as
+//!   an uninterrupted one.
+
+mod checkpoint;
+mod config;
+mod replay;
+
+use std::collections::VecDeque;
+
+use afg_baseline::{Allocator, Optimum};
+use afg_game::{Instance, RobotId, TaskId};
+use afg_graph::{AllocationState, GraphBatch, GraphKind};
+use burn::module::AutodiffModule;
+use burn::optim::adaptor::OptimizerAdaptor;
+use burn::optim::{Adam, AdamConfig, GradientsParams, Optimizer};
+use burn::tensor::{Int, Tensor, TensorData};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+pub use checkpoint::checkpoint_dir;
+pub use config::{Algo, Preset, TrainConfig, training_instance_seed, validation_instances};
+use replay::{Episode, EpisodeRecord};
+
+use crate::{
+    GraphTensors, InferBackend, LearnError, QNetwork, TrainBackend, double_dqn_target, dqn_target,
+    greedy_rollouts, masked_argmax, n_step_reward,
+};
+
+/// What one call of [`Trainer::step`] did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepReport {
+    /// Gradient steps done, this one included.
+    pub step: u64,
+    /// Loss of this step (finite: a non-finite loss is an error).
+    pub loss: f32,
+    /// ε used for acting.
+    pub epsilon: f64,
+    /// The validation after this step, when one was due (every `validate_every` steps
+    /// and at the last step).
+    pub validation: Option<Validation>,
+}
+
+/// The greedy policy of a network on the validation set.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Validation {
+    /// Mean welfare.
+    pub welfare: f64,
+    /// Mean of welfare / OPT, in percent.
+    pub percent_of_opt: f64,
+    /// Mean over instances of the share of robots on the most common task. Near 1 the
+    /// policy has collapsed onto one task index; OPT's share is far lower (about 0.3 in
+    /// the paper's distribution at M = 5).
+    pub largest_task_share: f64,
+}
+
+impl Validation {
+    /// Share of robots on one task above which a validation counts as collapsed.
+    pub const COLLAPSE_SHARE: f64 = 0.6;
+
+    /// Whether most robots went to one task ([`Validation::COLLAPSE_SHARE`]).
+    pub fn collapsed(&self) -> bool {
+        self.largest_task_share > Self::COLLAPSE_SHARE
+    }
+}
+
+type Optim = OptimizerAdaptor<Adam, QNetwork<TrainBackend>, TrainBackend>;
+
+/// A training run in memory.
+pub struct Trainer {
+    config: TrainConfig,
+    online: QNetwork<TrainBackend>,
+    target: QNetwork<InferBackend>,
+    optim: Optim,
+    rng: ChaCha8Rng,
+    replay: VecDeque<Episode>,
+    running: Vec<Episode>,
+    next_episode: u64,
+    step: u64,
+    validation: Vec<Instance>,
+    validation_opt: Vec<f64>,
+}
+
+fn optimizer(config: &TrainConfig) -> Optim {
+    let clip = config
+        .grad_clip
+        .map(burn::grad_clipping::GradientClippingConfig::Norm);
+    AdamConfig::new().with_grad_clipping(clip).init()
+}
+
+impl Trainer {
+    /// A fresh run.
+    ///
+    /// # Errors
+    /// [`LearnError::InvalidConfig`] for bad settings.
+    pub fn new(config: TrainConfig) -> Result<Self, LearnError> {
+        config.check()?;
+        let device = Default::default();
+        let online = config.network.init::<TrainBackend>(&device);
+        let target = online.valid();
+        let rng = ChaCha8Rng::seed_from_u64(config.seed);
+        Self::assemble(
+            config,
+            online,
+            target,
+            None,
+            rng,
+            Vec::new(),
+            Vec::new(),
+            0,
+            0,
+        )
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn assemble(
+        config: TrainConfig,
+        online: QNetwork<TrainBackend>,
+        target: QNetwork<InferBackend>,
+        optim: Option<Optim>,
+        rng: ChaCha8Rng,
+        replay: Vec<EpisodeRecord>,
+        running: Vec<EpisodeRecord>,
+        next_episode: u64,
+        step: u64,
+    ) -> Result<Self, LearnError> {
+        let validation = validation_instances(
+            config.robots,
+            config.network.tasks(),
+            config.validation_instances,
+        )?;
+        let validation_opt = validation
+            .iter()
+            .map(|inst| {
+                Ok(inst.welfare(
+                    &Optimum
+                        .allocate(inst)
+                        .map_err(|e| LearnError::InvalidConfig(e.to_string()))?
+                        .assignment,
+                ))
+            })
+            .collect::<Result<_, LearnError>>()?;
+        let replay = replay
+            .into_iter()
+            .map(|r| Episode::new(&config, r))
+            .collect::<Result<_, _>>()?;
+        let running = running
+            .into_iter()
+            .map(|r| Episode::new(&config, r))
+            .collect::<Result<_, _>>()?;
+        let optim = optim.unwrap_or_else(|| optimizer(&config));
+        Ok(Trainer {
+            config,
+            online,
+            target,
+            optim,
+            rng,
+            replay,
+            running,
+            next_episode,
+            step,
+            validation,
+            validation_opt,
+        })
+    }
+
+    /// The run's settings.
+    pub fn config(&self) -> &TrainConfig {
+        &self.config
+    }
+
+    /// Gradient steps done.
+    pub fn steps_done(&self) -> u64 {
+        self.step
+    }
+
+    /// Transitions in the replay buffer (bounded by `replay_capacity`).
+    pub fn replay_len(&self) -> usize {
+        self.replay.len() * self.config.robots
+    }
+
+    /// The online network, for inference.
+    pub fn network(&self) -> QNetwork<InferBackend> {
+        self.online.valid()
+    }
+
+    fn reward_unit(&self, inst: &Instance) -> f64 {
+        if self.config.reward_scaling {
+            self.config.network.units().welfare_unit(inst)
+        } else {
+            1.0
+        }
+    }
+
+    /// Advances every running episode by one ε-greedy action.
+    fn act(&mut self, epsilon: f64) -> Result<(), LearnError> {
+        let m = self.config.network.tasks();
+        while self.running.len() < self.config.parallel_envs {
+            let seed = training_instance_seed(self.config.seed, self.next_episode);
+            self.next_episode += 1;
+            self.running.push(Episode::new(
+                &self.config,
+                EpisodeRecord {
+                    seed,
+                    actions: Vec::new(),
+                },
+            )?);
+        }
+        let units = self.config.network.units();
+        let mut batch = GraphBatch::new(m);
+        for ep in &self.running {
+            let t = ep.record.actions.len();
+            let state = AllocationState::with_units(&ep.instance, ep.assignment_after(t), units);
+            batch.push(&ep.graph, &state, RobotId(t as u32));
+        }
+        let device = Default::default();
+        let q: Vec<f32> = self
+            .online
+            .valid()
+            .forward(&GraphTensors::new(&batch, &device))
+            .into_data()
+            .to_vec()
+            .expect("f32");
+        let mut finished = Vec::new();
+        for (e, ep) in self.running.iter_mut().enumerate() {
+            let range = e * m..(e + 1) * m;
+            let mask = &batch.mask[range.clone()];
+            let action = if self.rng.random::<f64>() < epsilon {
+                let open: Vec<usize> = (0..m).filter(|&j| mask[j]).collect();
+                open[self.rng.random_range(0..open.len())]
+            } else {
+                masked_argmax(&q[range], mask).expect("a task has room")
+            };
+            ep.record.actions.push(action as u8);
+            if ep.record.actions.len() == self.config.robots {
+                finished.push(e);
+            }
+        }
+        for &e in finished.iter().rev() {
+            let ep = self.running.remove(e);
+            self.replay.push_back(ep);
+        }
+        while self.replay_len() > self.config.replay_capacity {
+            self.replay.pop_front();
+        }
+        Ok(())
+    }
+
+    /// One gradient step on a sampled batch; returns the loss. A non-finite loss is an
+    /// error and leaves the weights untouched.
+    fn learn(&mut self) -> Result<f32, LearnError> {
+        let (n, m, b) = (
+            self.config.robots,
+            self.config.network.tasks(),
+            self.config.batch,
+        );
+        let total = self.replay_len();
+        let units = self.config.network.units();
+        let mut now = GraphBatch::new(m);
+        let mut next = GraphBatch::new(m);
+        let (mut actions, mut rewards, mut next_row) = (
+            Vec::with_capacity(b),
+            Vec::with_capacity(b),
+            Vec::with_capacity(b),
+        );
+        for _ in 0..b {
+            let k = self.rng.random_range(0..total);
+            let (ep, t) = (&self.replay[k / n], k % n);
+            let (robot, task) = (RobotId(t as u32), TaskId(u32::from(ep.record.actions[t])));
+            let mut a = ep.assignment_after(t);
+            now.push(
+                &ep.graph,
+                &AllocationState::with_units(&ep.instance, a.clone(), units),
+                robot,
+            );
+            actions.push(i64::from(task.0));
+            // n-step return: the rewards of steps t..end, then bootstrap from s_end.
+            let end = (t + self.config.n_step).min(n);
+            let taken: Vec<TaskId> = ep.record.actions[t..end]
+                .iter()
+                .map(|&j| TaskId(u32::from(j)))
+                .collect();
+            let reward = n_step_reward(&ep.instance, &mut a, t, &taken, self.config.greedy_shaping);
+            rewards.push((reward / self.reward_unit(&ep.instance)) as f32);
+            next_row.push((end < n).then(|| {
+                next.push(
+                    &ep.graph,
+                    &AllocationState::with_units(&ep.instance, a, units),
+                    RobotId(end as u32),
+                );
+                next.num_graphs() - 1
+            }));
+        }
+        let device = Default::default();
+        let (next_target, next_online) = if next.num_graphs() > 0 {
+            let g = GraphTensors::<InferBackend>::new(&next, &device);
+            let target: Vec<f32> = self.target.forward(&g).into_data().to_vec().expect("f32");
+            let online: Vec<f32> = match self.config.algo {
+                Algo::Ddqn => self
+                    .online
+                    .valid()
+                    .forward(&g)
+                    .into_data()
+                    .to_vec()
+                    .expect("f32"),
+                Algo::Dqn => Vec::new(),
+            };
+            (target, online)
+        } else {
+            (Vec::new(), Vec::new())
+        };
+        let targets: Vec<f32> = (0..b)
+            .map(|i| match next_row[i] {
+                None => rewards[i],
+                Some(row) => {
+                    let range = row * m..(row + 1) * m;
+                    let mask = &next.mask[range.clone()];
+                    match self.config.algo {
+                        Algo::Dqn => dqn_target(rewards[i], &next_target[range], mask, false),
+                        Algo::Ddqn => double_dqn_target(
+                            rewards[i],
+                            &next_online[range.clone()],
+                            &next_target[range],
+                            mask,
+                            false,
+                        ),
+                    }
+                }
+            })
+            .collect();
+        let g = GraphTensors::<TrainBackend>::new(&now, &device);
+        let action_index =
+            Tensor::<TrainBackend, 2, Int>::from_data(TensorData::new(actions, [b, 1]), &device);
+        let q_sa = self.online.forward(&g).gather(1, action_index);
+        let y = Tensor::<TrainBackend, 2>::from_data(TensorData::new(targets, [b, 1]), &device);
+        let diff = q_sa - y;
+        let loss = if self.config.huber {
+            // huber(x) = q²/2 + (|x| - q) with q = min(|x|, 1).
+            let abs = diff.abs();
+            let quad = abs.clone().clamp_max(1.0);
+            (quad.clone().powi_scalar(2) * 0.5 + (abs - quad)).mean()
+        } else {
+            diff.powi_scalar(2).mean()
+        };
+        let loss_value: f32 = loss.clone().into_scalar();
+        if !loss_value.is_finite() {
+            return Err(LearnError::NonFiniteLoss {
+                step: self.step + 1,
+                loss: loss_value,
+            });
+        }
+        let grads = GradientsParams::from_grads(loss.backward(), &self.online);
+        let lr = self.config.learning_rate(self.step);
+        self.online = self.optim.step(lr, self.online.clone(), grads);
+        Ok(loss_value)
+    }
+
+    /// The greedy policy of the current network on the validation set.
+    ///
+    /// # Errors
+    /// Graph errors (none for valid configurations).
+    pub fn validate(&self) -> Result<Validation, LearnError> {
+        let device = Default::default();
+        let assignments = greedy_rollouts(
+            &self.online.valid(),
+            self.config.network.tasks(),
+            &self.validation,
+            GraphKind::default(),
+            &device,
+        )?;
+        let k = self.validation.len() as f64;
+        let welfare: Vec<f64> = self
+            .validation
+            .iter()
+            .zip(&assignments)
+            .map(|(i, a)| i.welfare(a))
+            .collect();
+        let mean = welfare.iter().sum::<f64>() / k;
+        let pct = welfare
+            .iter()
+            .zip(&self.validation_opt)
+            .map(|(w, o)| 100.0 * w / o)
+            .sum::<f64>()
+            / k;
+        let largest_task_share = assignments
+            .iter()
+            .map(|a| {
+                let largest = a.sizes().iter().copied().max().unwrap_or(0);
+                largest as f64 / a.num_robots().max(1) as f64
+            })
+            .sum::<f64>()
+            / k;
+        Ok(Validation {
+            welfare: mean,
+            percent_of_opt: pct,
+            largest_task_share,
+        })
+    }
+
+    /// Whether every configured gradient step is done.
+    pub fn is_finished(&self) -> bool {
+        self.step >= self.config.steps
+    }
+
+    /// Acts until the replay buffer allows a gradient step, takes it, and validates when
+    /// a validation is due.
+    ///
+    /// # Errors
+    /// [`LearnError::NonFiniteLoss`] when the loss is NaN or infinite (the weights are
+    /// left as they were, so the last checkpoint stays the last good state),
+    /// [`LearnError::InvalidConfig`] when the run is already finished, and graph errors
+    /// (none for valid configurations).
+    pub fn step(&mut self) -> Result<StepReport, LearnError> {
+        if self.is_finished() {
+            return Err(LearnError::InvalidConfig(format!(
+                "the run is finished: all {} steps are done",
+                self.config.steps
+            )));
+        }
+        let epsilon = self.config.epsilon(self.step);
+        loop {
+            self.act(epsilon)?;
+            if self.replay_len() >= self.config.warmup.max(1) {
+                break;
+            }
+        }
+        let loss = self.learn()?;
+        self.step += 1;
+        if self.step.is_multiple_of(self.config.target_sync) {
+            self.target = self.online.valid();
+        }
+        let validation = (self.step.is_multiple_of(self.config.validate_every)
+            || self.step == self.config.steps)
+            .then(|| self.validate())
+            .transpose()?;
+        Ok(StepReport {
+            step: self.step,
+            loss,
+            epsilon,
+            validation,
+        })
+    }
+}

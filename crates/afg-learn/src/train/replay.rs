@@ -1,0 +1,44 @@
+//! Episodes as the replay buffer keeps them: the instance seed and the actions taken;
+//! instances and graphs are rebuilt from the seed.
+
+use afg_game::{Assignment, Instance, RobotId, TaskId};
+use afg_graph::{GraphKind, RobotGraph};
+use serde::{Deserialize, Serialize};
+
+use super::TrainConfig;
+use crate::LearnError;
+
+/// One episode as stored: the instance seed and the actions taken.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub(super) struct EpisodeRecord {
+    pub(super) seed: u64,
+    pub(super) actions: Vec<u8>,
+}
+
+/// An episode with its instance and graph rebuilt (not stored in checkpoints).
+pub(super) struct Episode {
+    pub(super) record: EpisodeRecord,
+    pub(super) instance: Instance,
+    pub(super) graph: RobotGraph,
+}
+
+impl Episode {
+    pub(super) fn new(config: &TrainConfig, record: EpisodeRecord) -> Result<Self, LearnError> {
+        let instance = config.instance(record.seed);
+        let graph = RobotGraph::build(instance.robots(), GraphKind::default())?;
+        Ok(Episode {
+            record,
+            instance,
+            graph,
+        })
+    }
+
+    /// The assignment after the first `t` actions.
+    pub(super) fn assignment_after(&self, t: usize) -> Assignment {
+        let mut a = Assignment::unassigned(self.instance.num_robots(), self.instance.num_tasks());
+        for (i, &task) in self.record.actions[..t].iter().enumerate() {
+            a.set(RobotId(i as u32), Some(TaskId(u32::from(task))));
+        }
+        a
+    }
+}

@@ -1,0 +1,143 @@
+//! Weight files of a Q network.
+//!
+//! Weights are stored as two files with one stem: `STEM.json`, a header
+//! (`{"format": "afg-weights", "version": 1, "network": {..config..}}`), and
+//! `STEM.mpk`, Burn's named MessagePack record in full precision. Loading checks the
+//! header and then every parameter's shape against the configured network.
+
+use std::path::{Path, PathBuf};
+
+use burn::module::{Module, ModuleVisitor, Param};
+use burn::record::{FullPrecisionSettings, NamedMpkFileRecorder};
+use burn::tensor::Tensor;
+use burn::tensor::backend::Backend;
+use serde::{Deserialize, Serialize};
+
+use crate::{LearnError, NetworkConfig, QNetwork};
+
+fn weights_error(path: &Path, reason: impl Into<String>) -> LearnError {
+    LearnError::Weights {
+        path: path.display().to_string(),
+        reason: reason.into(),
+    }
+}
+
+const WEIGHTS_FORMAT: &str = "afg-weights";
+const WEIGHTS_VERSION: u32 = 1;
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct WeightsHeader {
+    format: String,
+    version: u32,
+    network: NetworkConfig,
+}
+
+fn with_extension(stem: &Path, ext: &str) -> PathBuf {
+    let mut s = stem.as_os_str().to_owned();
+    s.push(".");
+    s.push(ext);
+    PathBuf::from(s)
+}
+
+/// Saves `network` (built from `config`) as `stem.json` + `stem.mpk`, each written to a
+/// temporary file first and renamed, so existing weights are never half-overwritten.
+///
+/// # Errors
+/// [`LearnError::Weights`] if a file cannot be written.
+pub fn save_network<B: Backend>(
+    network: QNetwork<B>,
+    config: &NetworkConfig,
+    stem: &Path,
+) -> Result<(), LearnError> {
+    // Burn replaces the extension of the path it is given, so give it one ending in .mpk.
+    let record = with_extension(stem, "mpk");
+    let tmp = with_extension(stem, &format!("{}-tmp.mpk", std::process::id()));
+    let recorder = NamedMpkFileRecorder::<FullPrecisionSettings>::new();
+    network
+        .save_file(tmp.clone(), &recorder)
+        .map_err(|e| weights_error(&record, e.to_string()))?;
+    std::fs::rename(&tmp, &record).map_err(|e| weights_error(&record, e.to_string()))?;
+    let header = WeightsHeader {
+        format: WEIGHTS_FORMAT.into(),
+        version: WEIGHTS_VERSION,
+        network: config.clone(),
+    };
+    let json = serde_json::to_string_pretty(&header).expect("a header always serialises");
+    afg_game::io::write_atomic(&with_extension(stem, "json"), json.as_bytes())?;
+    Ok(())
+}
+
+/// Collects parameter shapes in visiting order.
+struct Shapes(Vec<Vec<usize>>);
+
+impl<B: Backend> ModuleVisitor<B> for Shapes {
+    fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<B, D>>) {
+        self.0.push(param.val().dims().to_vec());
+    }
+}
+
+fn shapes<B: Backend>(network: &QNetwork<B>) -> Vec<Vec<usize>> {
+    let mut v = Shapes(Vec::new());
+    network.visit(&mut v);
+    v.0
+}
+
+/// Loads weights saved by [`save_network`].
+///
+/// # Errors
+/// [`LearnError::Weights`] for a missing or malformed header, a header of another
+/// format or version, a corrupt or truncated record, or parameters whose shapes differ
+/// from the network the header describes.
+pub fn load_network<B: Backend>(
+    stem: &Path,
+    device: &B::Device,
+) -> Result<(NetworkConfig, QNetwork<B>), LearnError> {
+    let header_path = with_extension(stem, "json");
+    let text = std::fs::read_to_string(&header_path)
+        .map_err(|e| weights_error(&header_path, e.to_string()))?;
+    let header: WeightsHeader = serde_json::from_str(&text)
+        .map_err(|e| weights_error(&header_path, format!("not a weights header: {e}")))?;
+    if header.format != WEIGHTS_FORMAT || header.version != WEIGHTS_VERSION {
+        return Err(weights_error(
+            &header_path,
+            format!(
+                "format {} version {}, expected {WEIGHTS_FORMAT} version {WEIGHTS_VERSION}",
+                header.format, header.version
+            ),
+        ));
+    }
+    let fresh = header.network.init::<B>(device);
+    let expected = shapes(&fresh);
+    let recorder = NamedMpkFileRecorder::<FullPrecisionSettings>::new();
+    let record_path = with_extension(stem, "mpk");
+    // Burn panics when a record holds another network variant; report that as an error too.
+    let loaded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        fresh.load_file(record_path.clone(), &recorder, device)
+    }));
+    let network = match loaded {
+        Ok(Ok(network)) => network,
+        Ok(Err(e)) => {
+            return Err(weights_error(
+                &record_path,
+                format!("unreadable weights ({e}); corrupt or truncated?"),
+            ));
+        }
+        Err(_) => {
+            return Err(weights_error(
+                &record_path,
+                "the record holds another kind of network than its header says",
+            ));
+        }
+    };
+    if shapes(&network) != expected {
+        return Err(weights_error(
+            &record_path,
+            format!(
+                "parameter shapes differ from the {} network its header describes",
+                header.network.name()
+            ),
+        ));
+    }
+    Ok((header.network, network))
+}

@@ -1,0 +1,205 @@
+//! Run directories: typed logs (old and new lines), truncation on resume, manifests,
+//! exclusive use, and every committed run read back.
+
+use std::path::{Path, PathBuf};
+
+use afg_learn::{
+    Algo, LearnError, LogEvent, NetworkConfig, Preset, RunDir, RunManifest, TrainConfig,
+    Validation, ValidationLine,
+};
+
+fn fresh(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("afg-rundir-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+fn config() -> TrainConfig {
+    TrainConfig::new(20, Algo::Ddqn, NetworkConfig::afgnet(5, 0), 100, 0)
+}
+
+#[test]
+fn events_round_trip_and_old_validation_lines_still_read() {
+    let dir = fresh("log");
+    let run = RunDir::create(&dir, &config()).unwrap();
+    let validation = Validation {
+        welfare: 12.5,
+        percent_of_opt: 97.0,
+        largest_task_share: 0.7,
+    };
+    let events = vec![
+        LogEvent::Start {
+            config: config(),
+            git_revision: Some("abc".into()),
+            baselines: [("opt".to_owned(), 13.0)].into_iter().collect(),
+        },
+        LogEvent::Step {
+            step: 10,
+            loss: 0.25,
+            epsilon: 0.5,
+            elapsed_s: 1.0,
+        },
+        LogEvent::Validation(ValidationLine::new(20, &validation, 2.5)),
+        LogEvent::End {
+            step: 20,
+            elapsed_s: 3.0,
+        },
+    ];
+    for e in &events {
+        run.append(e).unwrap();
+    }
+    assert_eq!(run.log().unwrap(), events);
+    let LogEvent::Validation(v) = &events[2] else {
+        unreachable!()
+    };
+    assert_eq!(v.collapsed, Some(true)); // 0.7 > COLLAPSE_SHARE
+    // A line from before the collapse check existed.
+    let old = r#"{"elapsed_s":5.0,"event":"validation","percent_of_opt":48.6,"step":30,"welfare":1.0127}"#;
+    let parsed: LogEvent = serde_json::from_str(old).unwrap();
+    assert_eq!(
+        parsed,
+        LogEvent::Validation(ValidationLine {
+            step: 30,
+            welfare: 1.0127,
+            percent_of_opt: 48.6,
+            largest_task_share: None,
+            collapsed: None,
+            elapsed_s: 5.0
+        })
+    );
+    // A line that is not an event is named by its line number.
+    std::fs::write(
+        dir.join("log.jsonl"),
+        format!("{}\n{{\"event\":\"teleport\"}}\n", old),
+    )
+    .unwrap();
+    let err = run.log().unwrap_err();
+    assert!(err.to_string().contains("log.jsonl:2"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn truncating_a_log_keeps_earlier_steps_and_their_clock() {
+    let dir = fresh("truncate");
+    let run = RunDir::create(&dir, &config()).unwrap();
+    assert_eq!(run.truncate_log(0).unwrap(), 0.0); // no log yet
+    let lines = [
+        format!(
+            r#"{{"event":"start","config":{}}}"#,
+            serde_json::to_string(&config()).unwrap()
+        ),
+        r#"{"event":"step","step":10,"loss":0.5,"epsilon":1.0,"elapsed_s":1.0}"#.to_owned(),
+        r#"{"event":"validation","step":20,"welfare":1.0,"percent_of_opt":50.0,"elapsed_s":2.5}"#
+            .to_owned(),
+        r#"{"event":"step","step":30,"loss":0.5,"epsilon":1.0,"elapsed_s":4.0}"#.to_owned(),
+    ];
+    std::fs::write(dir.join("log.jsonl"), lines.join("\n") + "\n").unwrap();
+    assert_eq!(run.truncate_log(20).unwrap(), 2.5);
+    let kept = run.log().unwrap();
+    assert_eq!(kept.len(), 3);
+    assert_eq!(kept.last().unwrap().step(), Some(20));
+    assert!(matches!(kept[0], LogEvent::Start { .. }));
+    assert_eq!(run.truncate_log(0).unwrap(), 0.0);
+    assert_eq!(run.log().unwrap().len(), 1);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_directory_holds_one_run_and_one_trainer_at_a_time() {
+    let dir = fresh("lock");
+    let run = RunDir::create(&dir, &config()).unwrap();
+    let err = RunDir::create(&dir, &config()).unwrap_err();
+    assert!(err.to_string().contains("already holds"), "{err}");
+    let lock = run.lock().unwrap();
+    assert!(matches!(
+        RunDir::new(&dir).lock(),
+        Err(LearnError::RunInUse { .. })
+    ));
+    drop(lock);
+    assert!(!dir.join(".lock").exists(), "the lock file is removed");
+    let _again = RunDir::new(&dir).lock().unwrap();
+    // Missing and foreign files are clear errors.
+    let empty = RunDir::new(fresh("empty"));
+    assert!(
+        empty
+            .config()
+            .unwrap_err()
+            .to_string()
+            .contains("no training run")
+    );
+    std::fs::write(dir.join("config.json"), "{\"robots\": 3}").unwrap();
+    assert!(
+        run.config()
+            .unwrap_err()
+            .to_string()
+            .contains("not a training configuration")
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn manifests_round_trip() {
+    let dir = fresh("manifest");
+    let run = RunDir::create(&dir, &config()).unwrap();
+    assert!(run.manifest().is_err());
+    let manifest = RunManifest {
+        command: "cargo xtask train --scale 20".into(),
+        seed: 0,
+        steps: 100,
+        wall_time_s: Some(60.0),
+        git_revision: None,
+        final_validation: None,
+        weights: vec!["model.json".into(), "model.mpk".into()],
+    };
+    run.write_manifest(&manifest).unwrap();
+    assert_eq!(run.manifest().unwrap(), manifest);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn presets_are_recorded_and_old_configs_read_as_ours() {
+    let paper = TrainConfig::paper(20, Algo::Dqn, NetworkConfig::s2v(5, 0), 100, 0);
+    let text = serde_json::to_string(&paper).unwrap();
+    assert!(text.contains("\"preset\":\"paper\""));
+    let back: TrainConfig = serde_json::from_str(&text).unwrap();
+    assert_eq!(back, paper);
+    let mut old: serde_json::Value = serde_json::to_value(config()).unwrap();
+    old.as_object_mut().unwrap().remove("preset");
+    let back: TrainConfig = serde_json::from_value(old).unwrap();
+    assert_eq!(back.preset, Preset::Ours);
+}
+
+/// Every committed run directory (models/ and models/ablations/).
+fn committed_runs() -> Vec<PathBuf> {
+    let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models");
+    let mut runs = Vec::new();
+    for parent in [models.clone(), models.join("ablations")] {
+        for entry in std::fs::read_dir(parent).unwrap() {
+            let path = entry.unwrap().path();
+            if path.join("config.json").exists() {
+                runs.push(path);
+            }
+        }
+    }
+    runs
+}
+
+#[test]
+fn every_committed_run_reads_back_typed() {
+    let runs = committed_runs();
+    assert!(runs.len() >= 10, "{} runs", runs.len());
+    for path in runs {
+        let run = RunDir::new(&path);
+        let config = run.config().unwrap();
+        let log = run.log().unwrap();
+        assert!(
+            matches!(&log[0], LogEvent::Start { config: c, .. } if *c == config),
+            "{}",
+            path.display()
+        );
+        if path.join("manifest.json").exists() {
+            let manifest = run.manifest().unwrap();
+            assert_eq!(manifest.steps, config.steps, "{}", path.display());
+        }
+    }
+}
