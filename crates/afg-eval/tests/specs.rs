@@ -1,0 +1,44 @@
+//! The model identities against the committed models and the paper's tables.
+
+use std::collections::HashSet;
+use std::path::Path;
+
+use afg_eval::{ModelSpec, dataset, paper};
+
+fn root() -> &'static Path {
+    Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
+}
+
+#[test]
+fn every_paper_model_of_table1_is_committed_with_its_own_directory_and_label() {
+    let (mut dirs, mut labels) = (HashSet::new(), HashSet::new());
+    for n in dataset::TABLE1_SIZES {
+        for spec in ModelSpec::table1(n) {
+            assert!(dirs.insert(spec.dir_name()), "{}", spec.dir_name());
+            labels.insert(spec.label());
+            let paper_welfare = paper::table1(n).unwrap().welfare_of(&spec);
+            if spec.is_ours() {
+                assert!(paper_welfare.is_none());
+                continue;
+            }
+            assert!(paper_welfare.is_some());
+            let run = spec.run_dir(root());
+            assert!(run.has_weights(), "{} is not committed", spec.dir_name());
+            let config = run.config().unwrap();
+            assert_eq!((config.robots, config.algo), (n, spec.algo));
+        }
+    }
+    // Labels name a model kind; the scale is the table's.
+    assert_eq!(labels.len(), ModelSpec::TABLE1_KINDS.len());
+}
+
+#[test]
+fn the_paper_tables_cover_the_dataset_sizes() {
+    for n in dataset::TABLE1_SIZES {
+        assert!(paper::table1(n).is_some(), "{n}");
+    }
+    for n in dataset::TABLE2_SIZES {
+        assert!(paper::table2(n).is_some(), "{n}");
+    }
+    assert!(paper::table1(500).is_none() && paper::table2(20).is_none());
+}
