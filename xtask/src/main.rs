@@ -1,6 +1,7 @@
 //! `cargo xtask <command>`: the project's jobs — datasets, solving, benchmarks.
 
 mod bench;
+mod curves;
 mod datasets;
 mod plain;
 mod realloc;
@@ -52,9 +53,9 @@ pub enum Command {
     /// Train a Q network with DQN or Double DQN (resumable, seeded, with validation curves).
     Train(train::TrainArgs),
     /// Draw validation curves of training runs as an SVG (Fig. 1 style).
-    PlotCurves(train::PlotArgs),
+    PlotCurves(curves::PlotArgs),
     /// Summarise finished training runs against the classical methods (Markdown).
-    TrainingReport(train::ReportArgs),
+    TrainingReport(curves::ReportArgs),
     /// Train every model the tables use (AFGNet DDQN/DQN and S2V DDQN at N = 20, 60, 100).
     TrainAll(train::TrainAllArgs),
     /// Robots leave an optimally allocated instance: warm-start reallocation against OPT from scratch.
@@ -75,8 +76,8 @@ fn main() -> Result<()> {
         Command::BenchModels(args) => bench::run_models(args),
         Command::BenchScale(args) => scale::run(args),
         Command::Train(args) => train::run(args),
-        Command::PlotCurves(args) => train::run_plot(args),
-        Command::TrainingReport(args) => train::run_report(args),
+        Command::PlotCurves(args) => curves::run_plot(args),
+        Command::TrainingReport(args) => curves::run_report(args),
         Command::TrainAll(args) => train::run_all(args),
         Command::Manifest(args) => train::run_manifest(args),
         Command::Regret(args) => regret::run(args),

@@ -290,7 +290,7 @@ fn write_outputs(root: &Path, res: &Results, tables: &str, quick: bool) -> Resul
             .filter(|p| p.join("log.jsonl").exists())
             .collect();
         if !dirs.is_empty() {
-            crate::train::plot_curves(
+            crate::curves::plot_curves(
                 &dirs,
                 &docs.join("figures").join(format!("fig1_n{n}.svg")),
                 &format!("Fig. 1 — N = {n}: validation welfare (dashed: classical methods)"),
