@@ -29,13 +29,13 @@ pub const ALLOCATOR_NAME: &str = if cfg!(feature = "mimalloc") {
 /// afg project tasks. Run `cargo xtask <command> --help` for each command's options.
 #[derive(Parser)]
 #[command(name = "cargo xtask", version, about)]
-pub struct Cli {
+struct Cli {
     #[command(subcommand)]
-    pub command: Command,
+    command: Command,
 }
 
 #[derive(Subcommand)]
-pub enum Command {
+enum Command {
     /// The main job: Tables I and II, Fig. 1 and docs/RESULTS.md from committed datasets and weights.
     ReproduceTables(tables::TablesArgs),
     /// Write the fixed test datasets under datasets/ (or verify them with --check).
