@@ -236,14 +236,7 @@ pub fn run_report(args: ReportArgs) -> Result<()> {
         }
     }
     println!("\nClassical methods on the same validation sets (mean welfare):\n");
-    let methods = [
-        Method::Opt,
-        Method::Da,
-        Method::DaBalanced,
-        Method::Greedy,
-        Method::Nearest,
-        Method::Random,
-    ];
+    let methods = Method::CENTRALISED;
     let header: Vec<&str> = methods.iter().map(|m| m.label()).collect();
     println!("| N | {} |", header.join(" | "));
     println!("|---|{}", "---|".repeat(methods.len()));

@@ -162,7 +162,9 @@ pub fn run(args: SolveArgs) -> Result<()> {
                 .with_repair(args.repair);
             let policy = match (args.exact_burn, args.block) {
                 (true, Some(b)) if b != 1 => {
-                    anyhow::bail!("--exact-burn rolls out one robot at a time (no --block)")
+                    anyhow::bail!(
+                        "--exact-burn rolls out one robot at a time (block 1); drop --block"
+                    )
                 }
                 (true, _) => policy.exact_burn(),
                 (false, block) => policy.with_block(block.unwrap_or(1))?,

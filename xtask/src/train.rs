@@ -311,14 +311,7 @@ fn baselines(config: &TrainConfig) -> Result<BTreeMap<String, f64>> {
         config.validation_instances,
     )?;
     let mut out = BTreeMap::new();
-    for m in [
-        Method::Opt,
-        Method::Da,
-        Method::DaBalanced,
-        Method::Greedy,
-        Method::Nearest,
-        Method::Random,
-    ] {
+    for m in Method::CENTRALISED {
         let alloc = m.allocator(0);
         let mut total = 0.0;
         for inst in &insts {

@@ -150,6 +150,16 @@ impl Method {
         Method::Random,
     ];
 
+    /// The centralised methods, OPT first: those a training log compares against.
+    pub const CENTRALISED: [Method; 6] = [
+        Method::Opt,
+        Method::Da,
+        Method::DaBalanced,
+        Method::Greedy,
+        Method::Nearest,
+        Method::Random,
+    ];
+
     /// The allocator; `seed` is used by the randomised methods.
     pub fn allocator(self, seed: u64) -> Box<dyn Allocator> {
         match self {
