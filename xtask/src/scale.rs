@@ -111,7 +111,7 @@ fn run_case(case: Case) -> Result<Outcome> {
         }
         None => {
             let policy = match &case.model {
-                Some(dir) => LearnedPolicy::load(&dir.join("model"))
+                Some(dir) => LearnedPolicy::load(&afg_learn::RunDir::new(dir).weights())
                     .with_context(|| format!("loading {}", dir.display()))?,
                 None => LearnedPolicy::new(NetworkConfig::afgnet(case.tasks, 0)),
             };

@@ -127,8 +127,9 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
         }
         // The N = 60 model at the other scales (the paper's "Pretrain_60" at N = 20, 100).
         let pretrained = ModelSpec::afgnet_ddqn(PRETRAINED_AT);
-        if n != PRETRAINED_AT && pretrained.run_dir(root).has_weights() {
-            let policy = LearnedPolicy::load(&pretrained.run_dir(root).weights())?;
+        let pretrained_run = pretrained.run_dir(root);
+        if n != PRETRAINED_AT && pretrained_run.has_weights() {
+            let policy = LearnedPolicy::load(&pretrained_run.weights())?;
             let label = format!("{} trained at N = {PRETRAINED_AT}", pretrained.label());
             rows.push(evaluate(&label, &policy, &insts, &opt)?);
         }
@@ -281,8 +282,9 @@ fn write_outputs(root: &Path, res: &Results, tables: &str, quick: bool) -> Resul
         let dirs: Vec<PathBuf> = ModelSpec::table1(n)
             .iter()
             .filter(|m| !m.is_ours())
-            .map(|m| m.run_dir(root).path().to_path_buf())
-            .filter(|p| p.join("log.jsonl").exists())
+            .map(|m| m.run_dir(root))
+            .filter(|run| run.has_log())
+            .map(|run| run.path().to_path_buf())
             .collect();
         if !dirs.is_empty() {
             crate::curves::plot_curves(
@@ -417,7 +419,7 @@ fn models_table(root: &Path) -> Result<String> {
             let spec = ModelSpec::new(kind.0, kind.1, kind.2, n);
             let label = spec.label();
             let run = spec.run_dir(root);
-            if !run.path().join("manifest.json").exists() {
+            if !run.has_manifest() {
                 continue;
             }
             let manifest = run.manifest()?;

@@ -298,7 +298,7 @@ pub fn run(args: TrainArgs) -> Result<()> {
         trainer.steps_done(),
         v.welfare,
         v.percent_of_opt,
-        run.path().join("model.mpk").display()
+        run.weights().display()
     );
     Ok(())
 }
@@ -549,7 +549,7 @@ pub fn write_manifest(dir: &Path) -> Result<()> {
             LogEvent::Validation(v) => Some(v.clone()),
             _ => None,
         }),
-        weights: vec!["model.json".into(), "model.mpk".into()],
+        weights: RunDir::WEIGHT_FILES.map(str::to_owned).to_vec(),
     };
     run.write_manifest(&manifest)?;
     Ok(())
@@ -574,7 +574,7 @@ pub fn run_all(args: TrainAllArgs) -> Result<()> {
             .filter(|m| !m.is_ours())
         {
             let name = spec.dir_name();
-            let dir = spec.run_dir(&crate::repo_root()).path().to_path_buf();
+            let run_dir = spec.run_dir(&crate::repo_root());
             let net = match spec.net {
                 Net::AfgNet => NetArg::Afgnet,
                 Net::S2v => NetArg::S2v,
@@ -583,10 +583,11 @@ pub fn run_all(args: TrainAllArgs) -> Result<()> {
                 Algo::Dqn => AlgoArg::Dqn,
                 Algo::Ddqn => AlgoArg::Ddqn,
             };
-            if dir.join("model.mpk").exists() && !args.force {
+            if run_dir.has_weights() && !args.force {
                 eprintln!("{name}: exists, skipped (--force retrains)");
                 continue;
             }
+            let dir = run_dir.path().to_path_buf();
             if dir.exists() {
                 std::fs::remove_dir_all(&dir)?;
             }

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use afg_baseline::{Allocator, Greedy, Optimum};
 use afg_game::GeneratorConfig;
-use afg_learn::LearnedPolicy;
+use afg_learn::{LearnedPolicy, RunDir};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
@@ -16,7 +16,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .unwrap_or_else(|| "models/afgnet_ddqn_n20".into());
     let robots: usize = args.next().map_or(Ok(60), |s| s.parse())?;
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let policy = LearnedPolicy::load(&root.join(&model).join("model"))?;
+    let policy = LearnedPolicy::load(&RunDir::new(root.join(&model)).weights())?;
     let instance = GeneratorConfig::paper(robots, policy.config().tasks(), 7).generate()?;
     let opt = instance.welfare(&Optimum.allocate(&instance)?.assignment);
     for (name, allocator) in [

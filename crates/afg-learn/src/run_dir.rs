@@ -65,10 +65,10 @@ pub struct ValidationLine {
     /// Mean of welfare / OPT, in percent.
     pub percent_of_opt: f64,
     /// See [`Validation::largest_task_share`] (absent in logs written before it existed).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub largest_task_share: Option<f64>,
     /// See [`Validation::collapsed`] (absent in older logs).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub collapsed: Option<bool>,
     /// Seconds of training so far, across resumes.
     pub elapsed_s: f64,
@@ -169,6 +169,9 @@ impl Drop for RunLock {
 }
 
 impl RunDir {
+    /// The files of the final weights, relative to the directory.
+    pub const WEIGHT_FILES: [&'static str; 2] = ["model.json", "model.mpk"];
+
     /// The run directory at `path` (nothing is read or written).
     pub fn new(path: impl Into<PathBuf>) -> Self {
         RunDir { path: path.into() }
@@ -218,7 +221,17 @@ impl RunDir {
 
     /// Whether the run has finished and saved its weights.
     pub fn has_weights(&self) -> bool {
-        self.path.join("model.mpk").exists()
+        Self::WEIGHT_FILES.iter().all(|f| self.file(f).exists())
+    }
+
+    /// Whether the run has a log.
+    pub fn has_log(&self) -> bool {
+        self.file("log.jsonl").exists()
+    }
+
+    /// Whether the run has a manifest.
+    pub fn has_manifest(&self) -> bool {
+        self.file("manifest.json").exists()
     }
 
     /// The checkpoint directory.
@@ -228,6 +241,23 @@ impl RunDir {
 
     fn file(&self, name: &str) -> PathBuf {
         self.path.join(name)
+    }
+
+    /// Reads the JSON file `name` as a `T`; `missing` says what a missing file means,
+    /// `kind` what the file should be.
+    fn read_json<T: serde::de::DeserializeOwned>(
+        &self,
+        name: &str,
+        missing: &str,
+        kind: &str,
+    ) -> Result<T, LearnError> {
+        let path = self.file(name);
+        let bad = |reason| LearnError::RunFile {
+            path: path.display().to_string(),
+            reason,
+        };
+        let text = std::fs::read_to_string(&path).map_err(|e| bad(format!("{missing} ({e})")))?;
+        serde_json::from_str(&text).map_err(|e| bad(format!("not {kind}: {e}")))
     }
 
     /// Takes exclusive use of the directory for this process.
@@ -267,15 +297,11 @@ impl RunDir {
     /// [`LearnError::RunFile`] if the directory holds no run or the file is not a
     /// training configuration.
     pub fn config(&self) -> Result<TrainConfig, LearnError> {
-        let path = self.file("config.json");
-        let text = std::fs::read_to_string(&path).map_err(|e| LearnError::RunFile {
-            path: path.display().to_string(),
-            reason: format!("no training run here ({e})"),
-        })?;
-        serde_json::from_str(&text).map_err(|e| LearnError::RunFile {
-            path: path.display().to_string(),
-            reason: format!("not a training configuration: {e}"),
-        })
+        self.read_json(
+            "config.json",
+            "no training run here",
+            "a training configuration",
+        )
     }
 
     /// Appends one event to `log.jsonl`.
@@ -302,6 +328,11 @@ impl RunDir {
     /// # Errors
     /// [`LearnError::RunFile`] naming the line that is not an event, or the missing log.
     pub fn log(&self) -> Result<Vec<LogEvent>, LearnError> {
+        Ok(self.log_lines()?.into_iter().map(|(_, e)| e).collect())
+    }
+
+    /// Every non-blank line of `log.jsonl` as written, with its event.
+    fn log_lines(&self) -> Result<Vec<(String, LogEvent)>, LearnError> {
         let path = self.file("log.jsonl");
         let text = std::fs::read_to_string(&path).map_err(|e| LearnError::RunFile {
             path: path.display().to_string(),
@@ -311,39 +342,35 @@ impl RunDir {
             .enumerate()
             .filter(|(_, line)| !line.trim().is_empty())
             .map(|(i, line)| {
-                serde_json::from_str(line).map_err(|e| LearnError::RunFile {
+                let event = serde_json::from_str(line).map_err(|e| LearnError::RunFile {
                     path: format!("{}:{}", path.display(), i + 1),
                     reason: format!("not a log event: {e}"),
-                })
+                })?;
+                Ok((line.to_owned(), event))
             })
             .collect()
     }
 
-    /// Keeps the log's events up to gradient step `step` (a resumed run repeats what
-    /// came after) and returns the last kept `elapsed_s`, from which the resumed run's
-    /// clock goes on. A missing log is an empty one.
+    /// Keeps the log's lines up to gradient step `step`, as they were written (a resumed
+    /// run repeats what came after), and returns the last kept `elapsed_s`, from which
+    /// the resumed run's clock goes on. A missing log is an empty one.
     ///
     /// # Errors
     /// As [`RunDir::log`], and [`LearnError::Io`] if the log cannot be rewritten.
     pub fn truncate_log(&self, step: u64) -> Result<f64, LearnError> {
-        if !self.file("log.jsonl").exists() {
+        if !self.has_log() {
             return Ok(0.0);
         }
-        let kept: Vec<LogEvent> = self
-            .log()?
-            .into_iter()
-            .filter(|e| e.step().is_none_or(|s| s <= step))
-            .collect();
-        let elapsed = kept
-            .iter()
-            .filter_map(LogEvent::elapsed_s)
-            .fold(0.0, f64::max);
-        let mut text = String::new();
-        for e in &kept {
-            text += &serde_json::to_string(e).expect("an event serialises");
-            text.push('\n');
+        let (mut kept, mut elapsed) = (String::new(), 0.0f64);
+        for (line, event) in self.log_lines()? {
+            if event.step().is_some_and(|s| s > step) {
+                continue;
+            }
+            elapsed = elapsed.max(event.elapsed_s().unwrap_or(0.0));
+            kept.push_str(&line);
+            kept.push('\n');
         }
-        afg_game::io::write_atomic(&self.file("log.jsonl"), text.as_bytes())?;
+        afg_game::io::write_atomic(&self.file("log.jsonl"), kept.as_bytes())?;
         Ok(elapsed)
     }
 
@@ -352,15 +379,7 @@ impl RunDir {
     /// # Errors
     /// [`LearnError::RunFile`] if it is missing or not a manifest.
     pub fn manifest(&self) -> Result<RunManifest, LearnError> {
-        let path = self.file("manifest.json");
-        let text = std::fs::read_to_string(&path).map_err(|e| LearnError::RunFile {
-            path: path.display().to_string(),
-            reason: e.to_string(),
-        })?;
-        serde_json::from_str(&text).map_err(|e| LearnError::RunFile {
-            path: path.display().to_string(),
-            reason: format!("not a run manifest: {e}"),
-        })
+        self.read_json("manifest.json", "no manifest", "a run manifest")
     }
 
     /// Writes `manifest.json` atomically.

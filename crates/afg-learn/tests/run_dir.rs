@@ -95,6 +95,11 @@ fn truncating_a_log_keeps_earlier_steps_and_their_clock() {
     ];
     std::fs::write(dir.join("log.jsonl"), lines.join("\n") + "\n").unwrap();
     assert_eq!(run.truncate_log(20).unwrap(), 2.5);
+    // The kept lines are the lines as written, not re-serialised events.
+    assert_eq!(
+        std::fs::read_to_string(dir.join("log.jsonl")).unwrap(),
+        lines[..3].join("\n") + "\n"
+    );
     let kept = run.log().unwrap();
     assert_eq!(kept.len(), 3);
     assert_eq!(kept.last().unwrap().step(), Some(20));
