@@ -4,6 +4,7 @@ mod bench;
 mod curves;
 mod datasets;
 mod plain;
+mod price;
 mod realloc;
 mod regret;
 mod scale;
@@ -56,6 +57,8 @@ enum Command {
     PlotCurves(curves::PlotArgs),
     /// Summarise finished training runs against the classical methods (Markdown).
     TrainingReport(curves::ReportArgs),
+    /// Train the price-structured model (ours) by regression on the exact Q* (DAgger).
+    TrainPrice(price::PriceArgs),
     /// Train every model the tables use (AFGNet DDQN/DQN and S2V DDQN at N = 20, 60, 100).
     TrainAll(train::TrainAllArgs),
     /// Robots leave an optimally allocated instance: warm-start reallocation against OPT from scratch.
@@ -78,6 +81,7 @@ fn main() -> Result<()> {
         Command::Train(args) => train::run(args),
         Command::PlotCurves(args) => curves::run_plot(args),
         Command::TrainingReport(args) => curves::run_report(args),
+        Command::TrainPrice(args) => price::run(args),
         Command::TrainAll(args) => train::run_all(args),
         Command::Manifest(args) => train::run_manifest(args),
         Command::Regret(args) => regret::run(args),

@@ -26,6 +26,10 @@ pub struct SolveArgs {
     /// Learned policy: balanced best-response sweeps after the rollout (Def. 3 stable result).
     #[arg(long)]
     pub(crate) repair: bool,
+    /// Price model (a directory holding price.json): every robot uses the prices of the
+    /// empty state instead of the current one.
+    #[arg(long)]
+    pub(crate) one_shot: bool,
     /// Learned policy: roll out with the Burn network (the slow reference path).
     #[arg(long)]
     pub(crate) exact_burn: bool,
@@ -156,7 +160,26 @@ pub fn run(args: SolveArgs) -> Result<()> {
     }
     let (name, method): (String, Box<dyn Allocator>) = match (&args.method, &args.model) {
         (Some(m), _) => (m.to_string(), m.allocator(args.seed)),
+        (None, Some(dir)) if dir.join(crate::price::MODEL_FILE).exists() => {
+            if args.block.is_some() || args.repair || args.exact_burn {
+                anyhow::bail!(
+                    "--block, --repair and --exact-burn apply to Q networks, not price models"
+                );
+            }
+            let mode = if args.one_shot {
+                afg_learn::PriceMode::OneShot
+            } else {
+                afg_learn::PriceMode::Sequential
+            };
+            let policy = afg_learn::PricePolicy::load(&dir.join(crate::price::MODEL_FILE), mode)?;
+            (dir.display().to_string(), Box::new(policy))
+        }
         (None, Some(dir)) => {
+            if args.one_shot {
+                anyhow::bail!(
+                    "--one-shot applies to price models (a directory holding price.json)"
+                );
+            }
             let policy = afg_learn::LearnedPolicy::load(&afg_learn::RunDir::new(dir).weights())
                 .with_context(|| format!("loading the policy in {}", dir.display()))?
                 .with_repair(args.repair);

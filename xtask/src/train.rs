@@ -92,6 +92,14 @@ pub struct TrainArgs {
     /// wins).
     #[arg(long)]
     paper: bool,
+    /// Warm start: begin from the final weights of this run directory (same network and
+    /// units) instead of fresh ones, e.g. a model trained at N = 60 for a run at N = 100.
+    /// Not in the paper. Usually with a small --eps-start.
+    #[arg(long)]
+    init_from: Option<PathBuf>,
+    /// ε at the start (default 1.0, decaying to 0.05 over the first tenth of the run).
+    #[arg(long)]
+    eps_start: Option<f64>,
     /// Run directory: config.json, log.jsonl, checkpoint/, and model.{json,mpk} at the end.
     #[arg(long, conflicts_with = "resume")]
     out: Option<PathBuf>,
@@ -159,6 +167,10 @@ impl TrainArgs {
         if let Some(k) = self.parallel_envs {
             c.parallel_envs = k;
         }
+        if let Some(e) = self.eps_start {
+            c.eps_start = e;
+        }
+        c.init_from = self.init_from.clone();
         // The gain residual adds the unshaped reward to Q: it implies no shaping.
         if self.no_shaping || self.gain_residual {
             c.greedy_shaping = false;
@@ -183,6 +195,8 @@ impl TrainArgs {
             || self.no_shaping
             || self.gain_residual
             || self.paper
+            || self.init_from.is_some()
+            || self.eps_start.is_some()
     }
 }
 
@@ -352,6 +366,7 @@ mod tests {
             "--scale 60 --units bounded",
             "--scale 20 --paper --target-sync 50",
             "--scale 60 --no-shaping",
+            "--scale 100 --init-from models/afgnet_ddqn_n60 --eps-start 0.1",
         ] {
             let argv = ["cargo xtask", "train"]
                 .into_iter()
@@ -525,6 +540,12 @@ pub fn command_line(c: &TrainConfig, dir: &Path) -> String {
     if c.preset == Preset::Paper {
         cmd += " --paper";
     }
+    if c.eps_start != default.eps_start {
+        cmd += &format!(" --eps-start {}", c.eps_start);
+    }
+    if let Some(from) = &c.init_from {
+        cmd += &format!(" --init-from {}", from.display());
+    }
     cmd + &format!(" --out {}", dir.display())
 }
 
@@ -607,6 +628,8 @@ pub fn run_all(args: TrainAllArgs) -> Result<()> {
                 no_shaping: false,
                 gain_residual: false,
                 paper: false,
+                init_from: None,
+                eps_start: None,
                 out: Some(dir),
                 resume: None,
                 checkpoint_secs: 300,

@@ -30,111 +30,16 @@
 //!
 //! Nothing inside the step loop allocates; memory is O(N·(d + M) + edges).
 
-use std::ops::Range;
 use std::time::{Duration, Instant};
 
 use afg_game::{Assignment, Instance, RobotId, TaskId};
 use afg_graph::{RobotGraph, Units, join_gain, write_task_column};
-use burn::nn::Linear;
 use burn::tensor::backend::Backend;
-use faer::linalg::matmul::matmul;
-use faer::{Accum, MatMut, MatRef, Par};
+use faer::{Accum, MatMut, MatRef};
 
+use crate::dense::{Dense, side_by_side};
 use crate::layers::QHead;
 use crate::{Activation, LearnError, NetworkConfig, QNetwork, masked_argmax};
-
-/// A linear layer as a row-major `[inputs, outputs]` matrix and a bias (`x W + b`,
-/// Burn's convention).
-#[derive(Clone, Debug, PartialEq)]
-struct Dense {
-    weight: Vec<f32>,
-    bias: Vec<f32>,
-    inputs: usize,
-    outputs: usize,
-}
-
-fn to_vec<B: Backend, const D: usize>(t: burn::tensor::Tensor<B, D>) -> Vec<f32> {
-    t.into_data()
-        .convert::<f32>()
-        .to_vec()
-        .expect("float parameters convert to f32")
-}
-
-impl Dense {
-    fn from_burn<B: Backend>(linear: &Linear<B>) -> Self {
-        let [inputs, outputs] = linear.weight.val().dims();
-        let bias = linear
-            .bias
-            .as_ref()
-            .map_or_else(|| vec![0.0; outputs], |b| to_vec(b.val()));
-        Dense {
-            weight: to_vec(linear.weight.val()),
-            bias,
-            inputs,
-            outputs,
-        }
-    }
-
-    /// The rows `rows` of the weight (the part of the layer that reads those inputs),
-    /// with a zero bias.
-    fn rows(&self, rows: Range<usize>) -> Dense {
-        Dense {
-            weight: self.weight[rows.start * self.outputs..rows.end * self.outputs].to_vec(),
-            bias: vec![0.0; self.outputs],
-            inputs: rows.len(),
-            outputs: self.outputs,
-        }
-    }
-
-    /// The rows `rows` of the weight with the layer's own bias: the part that reads
-    /// those inputs, plus the constant term.
-    fn rows_with_bias(&self, rows: Range<usize>) -> Dense {
-        Dense {
-            bias: self.bias.clone(),
-            ..self.rows(rows)
-        }
-    }
-
-    /// Row `r` of the weight: the layer's response to input `r`.
-    fn row(&self, r: usize) -> &[f32] {
-        &self.weight[r * self.outputs..(r + 1) * self.outputs]
-    }
-
-    /// `out = x W` for a row-major `[rows, inputs]` x, into `out` (`[rows, outputs]`,
-    /// any row stride via `MatMut`), replacing or adding.
-    fn product_into(&self, x: MatRef<'_, f32>, out: MatMut<'_, f32>, accum: Accum) {
-        let w = MatRef::from_row_major_slice(&self.weight, self.inputs, self.outputs);
-        matmul(out, accum, x, w, 1.0, Par::Seq);
-    }
-
-    /// `out = b + x W` for one input row (a vector–matrix product).
-    fn apply_row(&self, x: &[f32], out: &mut [f32]) {
-        out.copy_from_slice(&self.bias);
-        for (&xi, w) in x.iter().zip(self.weight.chunks_exact(self.outputs)) {
-            if xi != 0.0 {
-                for (o, &wi) in out.iter_mut().zip(w) {
-                    *o += xi * wi;
-                }
-            }
-        }
-    }
-}
-
-/// Two weight matrices side by side: `[A | B]`, `[inputs, a + b]`.
-fn side_by_side(a: &Dense, b: &Dense) -> Dense {
-    assert_eq!(a.inputs, b.inputs);
-    let mut weight = Vec::with_capacity(a.inputs * (a.outputs + b.outputs));
-    for r in 0..a.inputs {
-        weight.extend_from_slice(a.row(r));
-        weight.extend_from_slice(b.row(r));
-    }
-    Dense {
-        weight,
-        bias: vec![0.0; a.outputs + b.outputs],
-        inputs: a.inputs,
-        outputs: a.outputs + b.outputs,
-    }
-}
 
 /// The Q head: `Q = out(σ(hidden [σ(θ7 pooled) || δ_actor]))`.
 #[derive(Clone, Debug, PartialEq)]

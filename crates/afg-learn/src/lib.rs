@@ -7,12 +7,14 @@
 //! evaluates, and a user with a GPU back end can swap one in.
 
 mod afgnet;
+mod dense;
 mod env;
 mod error;
 mod fast;
 mod layers;
 mod network;
 mod policy;
+mod price;
 mod regret;
 mod rollout;
 mod run_dir;
@@ -29,6 +31,10 @@ pub use fast::{FastPolicy, FastRollout, FastRolloutOutcome};
 pub use layers::{Activation, QHead, linear_of_concat};
 pub use network::{NetworkConfig, QNetwork};
 pub use policy::{LearnedPolicy, LearnedRun};
+pub use price::{
+    PRICE_INPUTS, PriceMlp, PriceMode, PriceModel, PriceNet, PriceNetConfig, PricePolicy,
+    PriceRound, PriceState, PriceTrainConfig, PriceTrainer, TASK_FEATURES, task_inputs,
+};
 pub use regret::{RegretStep, q_star, regret_trace};
 pub use rollout::greedy_rollouts;
 pub use run_dir::{LogEvent, RunDir, RunLock, RunManifest, ValidationLine};

@@ -59,6 +59,16 @@ impl NetworkConfig {
         }
     }
 
+    /// Whether `other` is this network up to the seed of its initial weights (so that
+    /// weights of one can start the other).
+    pub fn same_shape(&self, other: &Self) -> bool {
+        let unseeded = |c: &Self| match c.clone() {
+            NetworkConfig::AfgNet(a) => NetworkConfig::AfgNet(a.with_seed(0)),
+            NetworkConfig::S2v(s) => NetworkConfig::S2v(s.with_seed(0)),
+        };
+        unseeded(self) == unseeded(other)
+    }
+
     /// Short name: `afgnet` or `s2v`.
     pub fn name(&self) -> &'static str {
         match self {

@@ -113,6 +113,11 @@ pub struct TrainConfig {
     pub validate_every: u64,
     /// Seed of everything random in the run.
     pub seed: u64,
+    /// Start from the weights of another run (its directory, relative to where the
+    /// trainer runs) instead of fresh ones: a warm start, e.g. from a model trained at
+    /// another N. The network configuration must be the same. Not in the paper.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub init_from: Option<std::path::PathBuf>,
 }
 
 impl TrainConfig {
@@ -147,6 +152,7 @@ impl TrainConfig {
             validation_instances: 32,
             validate_every: (steps / 40).max(1),
             seed,
+            init_from: None,
         }
     }
 

@@ -104,11 +104,28 @@ impl Trainer {
     /// A fresh run.
     ///
     /// # Errors
-    /// [`LearnError::InvalidConfig`] for bad settings.
+    /// [`LearnError::InvalidConfig`] for bad settings; [`LearnError::Weights`] if
+    /// `init_from` names weights that cannot be read or belong to another network.
     pub fn new(config: TrainConfig) -> Result<Self, LearnError> {
         config.check()?;
         let device = Default::default();
-        let online = config.network.init::<TrainBackend>(&device);
+        let online = match &config.init_from {
+            None => config.network.init::<TrainBackend>(&device),
+            Some(dir) => {
+                let stem = crate::RunDir::new(dir).weights();
+                let (network, weights) = crate::load_network::<TrainBackend>(&stem, &device)?;
+                if !network.same_shape(&config.network) {
+                    return Err(LearnError::Weights {
+                        path: stem.display().to_string(),
+                        reason: format!(
+                            "a warm start needs the same network: the run asks for {:?}, the weights are {:?}",
+                            config.network, network
+                        ),
+                    });
+                }
+                weights
+            }
+        };
         let target = online.valid();
         let rng = ChaCha8Rng::seed_from_u64(config.seed);
         Self::assemble(

@@ -1,0 +1,263 @@
+//! The price-structured allocator (ours, not in the paper).
+//!
+//! The welfare problem is a min-cost flow, so LP duality gives per-task prices π such
+//! that every robot of an optimal assignment takes `argmin_j [β d(i, j) − π_j]`;
+//! Nearest is that rule with π = 0. The model learns π as a function of the state:
+//! `Q(s, a) = π_a(s) − β d(t, a)`, where `π_a(s)` is one MLP shared by all tasks
+//! ([`PriceMlp`]) reading per-task summaries of the state ([`PriceState`]): the task's
+//! members, reward and the demand of the robots still to act. The output layer starts
+//! at zero, so the untrained model is exactly Nearest. It is trained by regression on
+//! the exact `Q*` of the sequential MDP ([`crate::q_star`]), on states its own rollouts
+//! visit (DAgger, Ross et al. 2011; [`PriceTrainer`]).
+//!
+//! Two ways to allocate ([`PriceMode`]):
+//! - *sequential*, in the paper's MDP: robots in index order, each taking the best
+//!   `Q(s, a)` with the prices of the current state. O(N · M · h²).
+//! - *one-shot*: the prices of the empty state, once; then every robot takes
+//!   `argmin_j [β d(i, j) − π_j]` among the tasks with room. O(N · M) plus one network
+//!   pass per task.
+//!
+//! Every input is per task, so the same weights serve any M.
+
+mod features;
+mod net;
+mod train;
+
+use std::path::Path;
+
+use afg_baseline::{AllocError, AllocStats, Allocation, Allocator};
+use afg_game::{Instance, RobotId, TaskId};
+use serde::{Deserialize, Serialize};
+
+pub use features::{PriceState, TASK_FEATURES, task_inputs};
+pub use net::{PRICE_INPUTS, PriceMlp, PriceNet, PriceNetConfig};
+pub use train::{PriceRound, PriceTrainConfig, PriceTrainer};
+
+use crate::{LearnError, masked_argmax};
+
+/// How a [`PricePolicy`] allocates (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PriceMode {
+    /// Prices of the current state at every step.
+    Sequential,
+    /// Prices of the empty state for every robot.
+    OneShot,
+}
+
+impl PriceMode {
+    /// `sequential` or `one-shot`.
+    pub fn name(self) -> &'static str {
+        match self {
+            PriceMode::Sequential => "sequential",
+            PriceMode::OneShot => "one-shot",
+        }
+    }
+}
+
+/// A trained price model and the settings it was trained with, as saved in a file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PriceModel {
+    format: String,
+    version: u32,
+    /// The settings of the training run.
+    pub training: PriceTrainConfig,
+    /// The weights.
+    pub mlp: PriceMlp,
+}
+
+const PRICE_FORMAT: &str = "afg-price-model";
+const PRICE_VERSION: u32 = 1;
+
+impl PriceModel {
+    /// A model with these weights, trained with `training`.
+    pub fn new(training: PriceTrainConfig, mlp: PriceMlp) -> Self {
+        PriceModel {
+            format: PRICE_FORMAT.into(),
+            version: PRICE_VERSION,
+            training,
+            mlp,
+        }
+    }
+
+    /// Writes the model as JSON (temporary file, then rename).
+    ///
+    /// # Errors
+    /// [`LearnError::Weights`] if the file cannot be written.
+    pub fn save(&self, path: &Path) -> Result<(), LearnError> {
+        let json = serde_json::to_string(self).expect("a price model always serialises");
+        afg_game::io::write_atomic(path, json.as_bytes())?;
+        Ok(())
+    }
+
+    /// Reads a model written by [`PriceModel::save`].
+    ///
+    /// # Errors
+    /// [`LearnError::Weights`] for an unreadable or malformed file, another format or
+    /// version, or weights whose shapes or values do not fit the recorded network.
+    pub fn load(path: &Path) -> Result<Self, LearnError> {
+        let error = |reason: String| LearnError::Weights {
+            path: path.display().to_string(),
+            reason,
+        };
+        let text = std::fs::read_to_string(path).map_err(|e| error(e.to_string()))?;
+        let model: PriceModel = serde_json::from_str(&text)
+            .map_err(|e| error(format!("not a price model (truncated?): {e}")))?;
+        if model.format != PRICE_FORMAT || model.version != PRICE_VERSION {
+            return Err(error(format!(
+                "format {} version {}, expected {PRICE_FORMAT} version {PRICE_VERSION}",
+                model.format, model.version
+            )));
+        }
+        if !model.mlp.has_shape(model.training.network.hidden) {
+            return Err(error(format!(
+                "the weights are not those of a price network of width {} (or not finite)",
+                model.training.network.hidden
+            )));
+        }
+        Ok(model)
+    }
+}
+
+/// The price model as an [`Allocator`].
+///
+/// # Examples
+/// ```
+/// use afg_baseline::{Allocator, Nearest};
+/// use afg_game::GeneratorConfig;
+/// use afg_learn::{PriceMlp, PriceMode, PriceNetConfig, PricePolicy};
+/// // An untrained model has every price at 0: it is Nearest.
+/// let net = PriceNetConfig { hidden: 16, seed: 0 }.init::<afg_learn::InferBackend>(&Default::default());
+/// let policy = PricePolicy::new(PriceMlp::from_burn(&net), PriceMode::Sequential);
+/// let inst = GeneratorConfig::paper(50, 5, 2).generate()?;
+/// assert_eq!(
+///     policy.allocate(&inst)?.assignment,
+///     Nearest.allocate(&inst)?.assignment
+/// );
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Clone, Debug)]
+pub struct PricePolicy {
+    mlp: PriceMlp,
+    mode: PriceMode,
+}
+
+impl PricePolicy {
+    /// A policy with these weights.
+    pub fn new(mlp: PriceMlp, mode: PriceMode) -> Self {
+        PricePolicy { mlp, mode }
+    }
+
+    /// The policy of a saved model.
+    ///
+    /// # Errors
+    /// See [`PriceModel::load`].
+    pub fn load(path: &Path, mode: PriceMode) -> Result<Self, LearnError> {
+        Ok(PricePolicy::new(PriceModel::load(path)?.mlp, mode))
+    }
+
+    /// How it allocates.
+    pub fn mode(&self) -> PriceMode {
+        self.mode
+    }
+
+    /// The task robot `t` takes in `state` with prices `prices`: the best
+    /// `π_a − β d(t, a)` among tasks with room.
+    fn choose(
+        state: &PriceState<'_>,
+        robot: RobotId,
+        prices: &[f32],
+        q: &mut [f32],
+        mask: &mut [bool],
+    ) -> Option<TaskId> {
+        let inst = state.instance();
+        for j in inst.task_ids() {
+            q[j.index()] = prices[j.index()] - state.cost(robot, j) as f32;
+            mask[j.index()] = state.assignment().has_room(inst, robot, j);
+        }
+        masked_argmax(q, mask).map(|j| TaskId(j as u32))
+    }
+
+    /// The greedy rollout of this policy.
+    pub fn rollout<'a>(&self, instance: &'a Instance) -> Result<PriceState<'a>, AllocError> {
+        let m = instance.num_tasks();
+        let mut state = PriceState::new(instance);
+        let mut features = vec![0.0; m * TASK_FEATURES];
+        let (mut prices, mut q, mut mask) = (vec![0.0; m], vec![0.0; m], vec![false; m]);
+        state.features(&mut features);
+        self.mlp.prices(&features, &mut prices);
+        for robot in instance.robot_ids() {
+            if self.mode == PriceMode::Sequential && robot.index() > 0 {
+                state.features(&mut features);
+                self.mlp.prices(&features, &mut prices);
+            }
+            let task =
+                Self::choose(&state, robot, &prices, &mut q, &mut mask).ok_or_else(|| {
+                    AllocError::InvalidParameter(format!("no task has room for robot {robot}"))
+                })?;
+            state.assign(robot, task);
+        }
+        Ok(state)
+    }
+}
+
+impl Allocator for PricePolicy {
+    fn name(&self) -> String {
+        format!("price-{}", self.mode.name())
+    }
+
+    fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
+        let start = std::time::Instant::now();
+        let state = self.rollout(instance)?;
+        Ok(Allocation {
+            assignment: state.assignment().clone(),
+            stats: AllocStats {
+                iterations: instance.num_robots() as u64,
+                wall_time: start.elapsed(),
+                ..AllocStats::default()
+            },
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_saved_model_loads_back_and_bad_files_are_refused() {
+        let dir = std::env::temp_dir().join(format!("afg-price-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let config = PriceTrainConfig::new(20, 5, 1);
+        let net = config
+            .network
+            .init::<crate::InferBackend>(&Default::default());
+        let model = PriceModel::new(config, PriceMlp::from_burn(&net));
+        let path = dir.join("model.json");
+        model.save(&path).unwrap();
+        assert_eq!(PriceModel::load(&path).unwrap(), model);
+
+        let text = std::fs::read_to_string(&path).unwrap();
+        std::fs::write(&path, &text[..text.len() / 2]).unwrap();
+        assert!(matches!(
+            PriceModel::load(&path),
+            Err(LearnError::Weights { .. })
+        ));
+
+        let mut other = model.clone();
+        other.training.network.hidden += 1;
+        other.save(&path).unwrap();
+        let err = PriceModel::load(&path).unwrap_err().to_string();
+        assert!(err.contains("width"), "{err}");
+
+        std::fs::write(&path, text.replace("afg-price-model", "afg-weights")).unwrap();
+        assert!(
+            PriceModel::load(&path)
+                .unwrap_err()
+                .to_string()
+                .contains("format")
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

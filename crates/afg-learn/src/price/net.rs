@@ -1,0 +1,194 @@
+//! The price network: one small MLP shared by every task, from a task's inputs to its
+//! price π_j; `Q(s, a) = π_a(s) − β d(t, a)`.
+
+use burn::module::{Module, Param};
+use burn::nn::Linear;
+use burn::tensor::activation::relu;
+use burn::tensor::backend::Backend;
+use burn::tensor::{Tensor, TensorData};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use super::features::{TASK_FEATURES, task_inputs};
+use crate::dense::Dense;
+use crate::layers::seeded_linear;
+
+/// Width of a task's network input: its features and the mean of all tasks' features.
+pub const PRICE_INPUTS: usize = 2 * TASK_FEATURES;
+
+/// Shape and seed of a [`PriceNet`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PriceNetConfig {
+    /// Width of the two hidden layers.
+    pub hidden: usize,
+    /// Seed of the weight initialisation.
+    pub seed: u64,
+}
+
+impl PriceNetConfig {
+    /// Builds the network: hidden layers drawn from `seed`, the output layer zero, so
+    /// that every price is 0 and the untrained policy is Nearest.
+    pub fn init<B: Backend>(&self, device: &B::Device) -> PriceNet<B> {
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
+        let h = self.hidden;
+        let zeros = |shape: [usize; 2]| {
+            Tensor::<B, 2>::from_data(TensorData::zeros::<f32, _>(shape), device)
+        };
+        PriceNet {
+            input: seeded_linear(&mut rng, PRICE_INPUTS, h, device),
+            hidden: seeded_linear(&mut rng, h, h, device),
+            output: Linear {
+                weight: Param::from_tensor(zeros([h, 1])),
+                bias: Some(Param::from_tensor(zeros([1, 1]).reshape([1]))),
+            },
+        }
+    }
+}
+
+/// The price MLP in Burn (for training): `π = out(relu(hidden(relu(input(x)))))`.
+#[derive(Module, Debug)]
+pub struct PriceNet<B: Backend> {
+    /// `PRICE_INPUTS → h`.
+    pub input: Linear<B>,
+    /// `h → h`.
+    pub hidden: Linear<B>,
+    /// `h → 1`, zero at initialisation.
+    pub output: Linear<B>,
+}
+
+impl<B: Backend> PriceNet<B> {
+    /// Prices of a batch of tasks.
+    ///
+    /// # Shapes
+    /// `inputs: [R, PRICE_INPUTS]` → `[R]`
+    pub fn forward(&self, inputs: Tensor<B, 2>) -> Tensor<B, 1> {
+        let x = relu(self.input.forward(inputs));
+        let x = relu(self.hidden.forward(x));
+        let rows = x.dims()[0];
+        self.output.forward(x).reshape([rows])
+    }
+}
+
+/// The price MLP as plain matrices, for inference without Burn (the only form saved).
+///
+/// # Examples
+/// ```
+/// use afg_learn::{PriceMlp, PriceNetConfig, TASK_FEATURES};
+/// let config = PriceNetConfig { hidden: 16, seed: 0 };
+/// let mlp = PriceMlp::from_burn(&config.init::<afg_learn::InferBackend>(&Default::default()));
+/// let mut prices = vec![1.0; 5];
+/// mlp.prices(&vec![0.5; 5 * TASK_FEATURES], &mut prices);
+/// assert_eq!(prices, vec![0.0; 5]); // untrained: all prices 0 (Nearest)
+/// ```
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PriceMlp {
+    layers: [Dense; 3],
+}
+
+impl PriceMlp {
+    /// Copies the weights of a Burn network.
+    pub fn from_burn<B: Backend>(net: &PriceNet<B>) -> Self {
+        PriceMlp {
+            layers: [
+                Dense::from_burn(&net.input),
+                Dense::from_burn(&net.hidden),
+                Dense::from_burn(&net.output),
+            ],
+        }
+    }
+
+    /// Builds the Burn network with these weights (to continue training).
+    pub fn to_burn<B: Backend>(&self, device: &B::Device) -> PriceNet<B> {
+        let linear = |d: &Dense| Linear {
+            weight: Param::from_tensor(Tensor::from_data(
+                TensorData::new(d.weight.clone(), [d.inputs, d.outputs]),
+                device,
+            )),
+            bias: Some(Param::from_tensor(Tensor::from_data(
+                TensorData::new(d.bias.clone(), [d.outputs]),
+                device,
+            ))),
+        };
+        PriceNet {
+            input: linear(&self.layers[0]),
+            hidden: linear(&self.layers[1]),
+            output: linear(&self.layers[2]),
+        }
+    }
+
+    /// Width of the hidden layers.
+    pub fn hidden(&self) -> usize {
+        self.layers[0].outputs
+    }
+
+    /// Whether the layer shapes are those of a price network of width `hidden`
+    /// (checked when a file is loaded).
+    pub fn has_shape(&self, hidden: usize) -> bool {
+        let shapes = [(PRICE_INPUTS, hidden), (hidden, hidden), (hidden, 1)];
+        self.layers.iter().zip(shapes).all(|(d, (i, o))| {
+            d.inputs == i
+                && d.outputs == o
+                && d.weight.len() == i * o
+                && d.bias.len() == o
+                && d.weight.iter().chain(&d.bias).all(|w| w.is_finite())
+        })
+    }
+
+    /// The price of every task from [`super::PriceState::features`] (`[M, TASK_FEATURES]`)
+    /// into `prices` (`[M]`). Allocates two rows of scratch.
+    pub fn prices(&self, features: &[f32], prices: &mut [f32]) {
+        let mut inputs = vec![0.0; 2 * features.len()];
+        task_inputs(features, &mut inputs);
+        let h = self.hidden();
+        let (mut a, mut b) = (vec![0.0; h], vec![0.0; h]);
+        let mut out = [0.0f32];
+        for (input, price) in inputs.chunks_exact(PRICE_INPUTS).zip(prices.iter_mut()) {
+            self.layers[0].apply_row(input, &mut a);
+            a.iter_mut().for_each(|x| *x = x.max(0.0));
+            self.layers[1].apply_row(&a, &mut b);
+            b.iter_mut().for_each(|x| *x = x.max(0.0));
+            self.layers[2].apply_row(&b, &mut out);
+            *price = out[0];
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::InferBackend;
+    use crate::dense::to_vec;
+
+    #[test]
+    fn plain_and_burn_forward_agree_and_round_trip() {
+        let device = Default::default();
+        let config = PriceNetConfig { hidden: 8, seed: 3 };
+        let mut net = config.init::<InferBackend>(&device);
+        // Give the output layer weights so the comparison is not 0 = 0.
+        net.output = seeded_linear(&mut ChaCha8Rng::seed_from_u64(9), 8, 1, &device);
+        let mlp = PriceMlp::from_burn(&net);
+        let features: Vec<f32> = (0..3 * TASK_FEATURES)
+            .map(|i| (i as f32 * 0.37).sin())
+            .collect();
+        let mut plain = vec![0.0; 3];
+        mlp.prices(&features, &mut plain);
+        let mut inputs = vec![0.0; 2 * features.len()];
+        task_inputs(&features, &mut inputs);
+        let x = Tensor::<InferBackend, 2>::from_data(
+            TensorData::new(inputs, [3, PRICE_INPUTS]),
+            &device,
+        );
+        let burn = to_vec(net.forward(x));
+        for (p, q) in plain.iter().zip(&burn) {
+            assert!((p - q).abs() < 1e-5, "{p} vs {q}");
+        }
+        assert!(plain.iter().any(|p| p.abs() > 1e-3));
+        assert_eq!(
+            PriceMlp::from_burn(&mlp.to_burn::<InferBackend>(&device)),
+            mlp
+        );
+        assert!(mlp.has_shape(8) && !mlp.has_shape(16));
+    }
+}

@@ -1,0 +1,441 @@
+//! Training the price model by regression on the exact Q\*, on the states its own
+//! rollouts visit (DAgger).
+//!
+//! Each round rolls out `episodes_per_round` fresh instances. At every step the exact
+//! `Q*(s_t, a)` of every task is computed ([`crate::q_star`], M min-cost flows), and the
+//! acting robot follows the expert (the best Q\*) with probability `expert_decay^round`,
+//! otherwise the current model (with a random task instead in a share `explore` of the
+//! steps). Every visited state is kept (up to `buffer_states`, oldest dropped), and
+//! `steps_per_round` Adam steps fit the model's action values to Q\* on random batches:
+//! the loss is the squared error of the *centred* values (each minus its mean over the
+//! tasks with room), since the policy only compares actions of one state.
+
+use afg_baseline::{Allocator, Optimum};
+use afg_game::{GeneratorConfig, Instance};
+use burn::optim::adaptor::OptimizerAdaptor;
+use burn::optim::{Adam, AdamConfig, GradientsParams, Optimizer};
+use burn::tensor::{Tensor, TensorData};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use super::features::{PriceState, TASK_FEATURES, task_inputs};
+use super::net::{PRICE_INPUTS, PriceMlp, PriceNet, PriceNetConfig};
+use super::{PriceMode, PriceModel, PricePolicy};
+use crate::{
+    LearnError, TrainBackend, masked_argmax, q_star, training_instance_seed, validation_instances,
+};
+
+/// Every setting of a price-model training run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PriceTrainConfig {
+    /// Robots per training instance N.
+    pub robots: usize,
+    /// Tasks per training instance M.
+    pub tasks: usize,
+    /// The network and its initialisation seed.
+    pub network: PriceNetConfig,
+    /// DAgger rounds.
+    pub rounds: usize,
+    /// Instances rolled out per round.
+    pub episodes_per_round: usize,
+    /// Adam steps per round.
+    pub steps_per_round: usize,
+    /// States per Adam step.
+    pub batch: usize,
+    /// Adam learning rate at the start; it falls linearly to a tenth over the run.
+    pub lr: f64,
+    /// Share of the model's own steps replaced by a random task.
+    pub explore: f64,
+    /// The expert acts with probability `expert_decay^round`.
+    pub expert_decay: f64,
+    /// States kept for training (oldest dropped).
+    pub buffer_states: usize,
+    /// Size of the fixed validation set (the same seeds as the DQN trainer's).
+    pub validation_instances: usize,
+    /// Seed of everything random in the run.
+    pub seed: u64,
+}
+
+impl PriceTrainConfig {
+    /// The defaults (docs/price.md): width 64, 40 rounds of 32 instances and 100 Adam
+    /// steps of 256 states, lr 1e-3, 10 % exploration, expert share halved each round.
+    pub fn new(robots: usize, tasks: usize, seed: u64) -> Self {
+        PriceTrainConfig {
+            robots,
+            tasks,
+            network: PriceNetConfig { hidden: 64, seed },
+            rounds: 40,
+            episodes_per_round: 32,
+            steps_per_round: 100,
+            batch: 256,
+            lr: 1e-3,
+            explore: 0.1,
+            expert_decay: 0.5,
+            buffer_states: 200_000,
+            validation_instances: 32,
+            seed,
+        }
+    }
+
+    fn validate(&self) -> Result<(), LearnError> {
+        let bad = |what: &str| Err(LearnError::InvalidConfig(what.to_string()));
+        if self.robots == 0 || self.tasks == 0 {
+            return bad("N and M must be at least 1");
+        }
+        if self.network.hidden == 0 || self.rounds == 0 || self.episodes_per_round == 0 {
+            return bad("width, rounds and episodes per round must be at least 1");
+        }
+        if self.batch == 0 || self.buffer_states == 0 || self.validation_instances == 0 {
+            return bad("batch, buffer and validation set must be at least 1");
+        }
+        if !(self.lr.is_finite() && self.lr > 0.0) {
+            return bad("the learning rate must be positive and finite");
+        }
+        if !((0.0..=1.0).contains(&self.explore) && (0.0..=1.0).contains(&self.expert_decay)) {
+            return bad("explore and expert_decay must lie in [0, 1]");
+        }
+        Ok(())
+    }
+}
+
+/// What one round did.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PriceRound {
+    /// Rounds done (1 after the first).
+    pub round: usize,
+    /// States in the buffer.
+    pub states: usize,
+    /// Probability that the expert acted in this round's rollouts.
+    pub expert_share: f64,
+    /// Mean training loss of the round's steps (β units squared).
+    pub loss: f64,
+    /// Validation welfare of the sequential policy, % of OPT (sum over instances).
+    pub sequential: f64,
+    /// The same for the one-shot policy.
+    pub one_shot: f64,
+}
+
+/// Visited states: per state, the features, the acting robot's costs, the centred-free
+/// Q\* targets and which tasks had room.
+struct Buffer {
+    features: Vec<f32>,
+    costs: Vec<f32>,
+    targets: Vec<f32>,
+    room: Vec<f32>,
+    tasks: usize,
+    capacity: usize,
+    len: usize,
+    next: usize,
+}
+
+impl Buffer {
+    fn new(tasks: usize, capacity: usize) -> Self {
+        Buffer {
+            features: Vec::new(),
+            costs: Vec::new(),
+            targets: Vec::new(),
+            room: Vec::new(),
+            tasks,
+            capacity,
+            len: 0,
+            next: 0,
+        }
+    }
+
+    fn push(&mut self, features: &[f32], costs: &[f32], targets: &[f32], room: &[f32]) {
+        let (m, k) = (self.tasks, TASK_FEATURES);
+        if self.len < self.capacity {
+            self.features.extend_from_slice(features);
+            self.costs.extend_from_slice(costs);
+            self.targets.extend_from_slice(targets);
+            self.room.extend_from_slice(room);
+            self.len += 1;
+        } else {
+            let i = self.next;
+            self.features[i * m * k..(i + 1) * m * k].copy_from_slice(features);
+            self.costs[i * m..(i + 1) * m].copy_from_slice(costs);
+            self.targets[i * m..(i + 1) * m].copy_from_slice(targets);
+            self.room[i * m..(i + 1) * m].copy_from_slice(room);
+        }
+        self.next = (self.next + 1) % self.capacity;
+    }
+}
+
+type Optim = OptimizerAdaptor<Adam, PriceNet<TrainBackend>, TrainBackend>;
+
+/// A price-model training run (see the module docs).
+///
+/// # Examples
+/// ```
+/// use afg_learn::{PriceTrainConfig, PriceTrainer};
+/// let mut config = PriceTrainConfig::new(12, 3, 0);
+/// (config.rounds, config.episodes_per_round, config.steps_per_round) = (2, 2, 3);
+/// config.validation_instances = 2;
+/// let mut trainer = PriceTrainer::new(config)?;
+/// let first = trainer.round()?;
+/// assert_eq!((first.round, first.states, first.expert_share), (1, 24, 1.0));
+/// trainer.round()?;
+/// assert!(trainer.is_finished());
+/// # Ok::<(), afg_learn::LearnError>(())
+/// ```
+pub struct PriceTrainer {
+    config: PriceTrainConfig,
+    net: PriceNet<TrainBackend>,
+    optim: Optim,
+    buffer: Buffer,
+    rng: ChaCha8Rng,
+    round: usize,
+    episodes: u64,
+    validation: Vec<Instance>,
+    optimum: f64,
+}
+
+impl PriceTrainer {
+    /// A fresh run.
+    ///
+    /// # Errors
+    /// [`LearnError::InvalidConfig`] for a setting out of range.
+    pub fn new(config: PriceTrainConfig) -> Result<Self, LearnError> {
+        config.validate()?;
+        let validation =
+            validation_instances(config.robots, config.tasks, config.validation_instances)?;
+        let optimum = validation
+            .iter()
+            .map(|inst| Optimum.allocate(inst).map(|a| inst.welfare(&a.assignment)))
+            .sum::<Result<f64, _>>()
+            .map_err(|e| LearnError::InvalidConfig(e.to_string()))?;
+        Ok(PriceTrainer {
+            net: config.network.init(&Default::default()),
+            optim: AdamConfig::new().init(),
+            buffer: Buffer::new(config.tasks, config.buffer_states),
+            rng: ChaCha8Rng::seed_from_u64(config.seed),
+            round: 0,
+            episodes: 0,
+            validation,
+            optimum,
+            config,
+        })
+    }
+
+    /// The settings.
+    pub fn config(&self) -> &PriceTrainConfig {
+        &self.config
+    }
+
+    /// Whether every round has run.
+    pub fn is_finished(&self) -> bool {
+        self.round >= self.config.rounds
+    }
+
+    /// The current weights as a saveable model.
+    pub fn model(&self) -> PriceModel {
+        PriceModel::new(self.config.clone(), PriceMlp::from_burn(&self.net))
+    }
+
+    /// One round: roll out, fit, validate.
+    ///
+    /// # Errors
+    /// [`LearnError::NonFiniteLoss`] if the loss stops being finite (the weights of the
+    /// step that produced it are discarded); errors of the instance generator.
+    pub fn round(&mut self) -> Result<PriceRound, LearnError> {
+        let expert_share = self.config.expert_decay.powi(self.round as i32);
+        let mlp = PriceMlp::from_burn(&self.net);
+        for _ in 0..self.config.episodes_per_round {
+            let seed = training_instance_seed(self.config.seed, self.episodes);
+            self.episodes += 1;
+            let inst =
+                GeneratorConfig::paper(self.config.robots, self.config.tasks, seed).generate()?;
+            self.collect(&inst, &mlp, expert_share)?;
+        }
+        let mut loss = 0.0;
+        for _ in 0..self.config.steps_per_round {
+            loss += self.step()?;
+        }
+        self.round += 1;
+        let mlp = PriceMlp::from_burn(&self.net);
+        let score = |mode| -> Result<f64, LearnError> {
+            let policy = PricePolicy::new(mlp.clone(), mode);
+            let mut total = 0.0;
+            for inst in &self.validation {
+                let state = policy
+                    .rollout(inst)
+                    .map_err(|e| LearnError::InvalidAction(e.to_string()))?;
+                total += inst.welfare(state.assignment());
+            }
+            Ok(100.0 * total / self.optimum)
+        };
+        Ok(PriceRound {
+            round: self.round,
+            states: self.buffer.len,
+            expert_share,
+            loss: loss / self.config.steps_per_round.max(1) as f64,
+            sequential: score(PriceMode::Sequential)?,
+            one_shot: score(PriceMode::OneShot)?,
+        })
+    }
+
+    /// Rolls out one instance, storing every state with its Q\* targets.
+    fn collect(
+        &mut self,
+        inst: &Instance,
+        mlp: &PriceMlp,
+        expert_share: f64,
+    ) -> Result<(), LearnError> {
+        let m = inst.num_tasks();
+        let mut state = PriceState::new(inst);
+        let mut features = vec![0.0; m * TASK_FEATURES];
+        let (mut prices, mut costs) = (vec![0.0f32; m], vec![0.0f32; m]);
+        let (mut targets, mut room, mut q) = (vec![0.0f32; m], vec![0.0f32; m], vec![0.0f32; m]);
+        let mut mask = vec![false; m];
+        for robot in inst.robot_ids() {
+            state.features(&mut features);
+            let star = q_star(inst, state.assignment(), robot)?;
+            for j in inst.task_ids() {
+                costs[j.index()] = state.cost(robot, j) as f32;
+                let value = star[j.index()];
+                mask[j.index()] = value.is_some();
+                room[j.index()] = f32::from(u8::from(value.is_some()));
+                targets[j.index()] = value.map_or(0.0, |v| (v / state.unit()) as f32);
+            }
+            self.buffer.push(&features, &costs, &targets, &room);
+            let draw: f64 = self.rng.random();
+            let action = if draw < expert_share {
+                masked_argmax(&targets, &mask)
+            } else if self.rng.random::<f64>() < self.config.explore {
+                let open: Vec<usize> = (0..m).filter(|&j| mask[j]).collect();
+                (!open.is_empty()).then(|| open[self.rng.random_range(0..open.len())])
+            } else {
+                mlp.prices(&features, &mut prices);
+                for j in 0..m {
+                    q[j] = prices[j] - costs[j];
+                }
+                masked_argmax(&q, &mask)
+            };
+            let action = action.ok_or_else(|| {
+                LearnError::InvalidAction(format!("no task has room for robot {robot}"))
+            })?;
+            state.assign(robot, afg_game::TaskId(action as u32));
+        }
+        Ok(())
+    }
+
+    /// One Adam step on a random batch; returns its loss.
+    fn step(&mut self) -> Result<f64, LearnError> {
+        let (m, k, b) = (self.config.tasks, TASK_FEATURES, self.config.batch);
+        let mut inputs = vec![0.0f32; b * m * PRICE_INPUTS];
+        let (mut costs, mut targets, mut room) =
+            (vec![0.0; b * m], vec![0.0; b * m], vec![0.0; b * m]);
+        for s in 0..b {
+            let i = self.rng.random_range(0..self.buffer.len);
+            task_inputs(
+                &self.buffer.features[i * m * k..(i + 1) * m * k],
+                &mut inputs[s * m * PRICE_INPUTS..(s + 1) * m * PRICE_INPUTS],
+            );
+            costs[s * m..(s + 1) * m].copy_from_slice(&self.buffer.costs[i * m..(i + 1) * m]);
+            targets[s * m..(s + 1) * m].copy_from_slice(&self.buffer.targets[i * m..(i + 1) * m]);
+            room[s * m..(s + 1) * m].copy_from_slice(&self.buffer.room[i * m..(i + 1) * m]);
+        }
+        let device = Default::default();
+        let tensor = |v: Vec<f32>, shape: [usize; 2]| {
+            Tensor::<TrainBackend, 2>::from_data(TensorData::new(v, shape), &device)
+        };
+        let x = tensor(inputs, [b * m, PRICE_INPUTS]);
+        let (c, y, w) = (
+            tensor(costs, [b, m]),
+            tensor(targets, [b, m]),
+            tensor(room, [b, m]),
+        );
+        let q = self.net.forward(x).reshape([b, m]) - c;
+        let open = w.clone().sum_dim(1);
+        let centre = |v: Tensor<TrainBackend, 2>| {
+            let mean = (v.clone() * w.clone()).sum_dim(1) / open.clone();
+            v - mean
+        };
+        let error = (centre(q) - centre(y)) * w.clone();
+        let loss = error.powf_scalar(2.0).sum() / w.sum();
+        let value = f64::from(loss.clone().into_scalar());
+        if !value.is_finite() {
+            return Err(LearnError::NonFiniteLoss {
+                step: (self.round * self.config.steps_per_round) as u64,
+                loss: value as f32,
+            });
+        }
+        let total = (self.config.rounds * self.config.steps_per_round).max(1) as f64;
+        let done = (self.round * self.config.steps_per_round) as f64;
+        let lr = self.config.lr * (1.0 - 0.9 * (done / total).min(1.0));
+        let grads = GradientsParams::from_grads(loss.backward(), &self.net);
+        self.net = self.optim.step(lr, self.net.clone(), grads);
+        Ok(value)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tiny() -> PriceTrainConfig {
+        let mut config = PriceTrainConfig::new(12, 3, 4);
+        (
+            config.rounds,
+            config.episodes_per_round,
+            config.steps_per_round,
+        ) = (3, 3, 20);
+        config.validation_instances = 3;
+        config
+    }
+
+    #[test]
+    fn same_seed_same_weights() {
+        let run = || {
+            let mut t = PriceTrainer::new(tiny()).unwrap();
+            while !t.is_finished() {
+                t.round().unwrap();
+            }
+            t.model()
+        };
+        let (a, b) = (run(), run());
+        assert_eq!(a, b);
+        assert_ne!(
+            a.mlp,
+            PriceTrainer::new(tiny()).unwrap().model().mlp,
+            "it learned nothing"
+        );
+    }
+
+    #[test]
+    fn bad_settings_are_refused() {
+        for change in [
+            |c: &mut PriceTrainConfig| c.robots = 0,
+            |c: &mut PriceTrainConfig| c.lr = f64::NAN,
+            |c: &mut PriceTrainConfig| c.explore = 1.5,
+            |c: &mut PriceTrainConfig| c.batch = 0,
+        ] {
+            let mut config = tiny();
+            change(&mut config);
+            assert!(matches!(
+                PriceTrainer::new(config),
+                Err(LearnError::InvalidConfig(_))
+            ));
+        }
+    }
+
+    /// Fitting Q\* on the states of one instance lowers the loss: the gradient points
+    /// the right way.
+    #[test]
+    fn the_loss_falls_on_a_fixed_set() {
+        let mut config = tiny();
+        config.lr = 3e-3;
+        let mut t = PriceTrainer::new(config).unwrap();
+        let inst = GeneratorConfig::paper(12, 3, 77).generate().unwrap();
+        let mlp = PriceMlp::from_burn(&t.net);
+        t.collect(&inst, &mlp, 1.0).unwrap();
+        let first = t.step().unwrap();
+        let mut last = first;
+        for _ in 0..150 {
+            last = t.step().unwrap();
+        }
+        assert!(last < 0.5 * first, "{first} → {last}");
+    }
+}

@@ -1,0 +1,139 @@
+//! `cargo xtask train-price`: the price-structured model (ours), trained on the exact Q*.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use afg_learn::{PriceRound, PriceTrainConfig, PriceTrainer};
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use serde::{Deserialize, Serialize};
+
+/// File names of a price-model run directory.
+pub const MODEL_FILE: &str = "price.json";
+const LOG_FILE: &str = "log.jsonl";
+const SUMMARY_FILE: &str = "summary.json";
+
+#[derive(Args)]
+pub struct PriceArgs {
+    /// Robots per training instance N.
+    #[arg(long, default_value_t = 60)]
+    scale: usize,
+    /// Tasks per training instance M.
+    #[arg(long, default_value_t = 5)]
+    tasks: usize,
+    /// DAgger rounds (each: roll out, fit, validate).
+    #[arg(long)]
+    rounds: Option<usize>,
+    /// Instances rolled out per round.
+    #[arg(long)]
+    episodes: Option<usize>,
+    /// Adam steps per round.
+    #[arg(long)]
+    steps: Option<usize>,
+    /// States per Adam step.
+    #[arg(long)]
+    batch: Option<usize>,
+    /// Adam learning rate at the start (falls linearly to a tenth).
+    #[arg(long)]
+    lr: Option<f64>,
+    /// Width of the two hidden layers.
+    #[arg(long)]
+    hidden: Option<usize>,
+    /// The expert acts with probability DECAY^round in the rollouts.
+    #[arg(long)]
+    expert_decay: Option<f64>,
+    /// Seed of everything random in the run.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Run directory: price.json (weights and settings), log.jsonl (one line per round),
+    /// summary.json (the command and its wall time). An existing model is not overwritten
+    /// unless --force is given.
+    #[arg(long)]
+    out: PathBuf,
+    /// Replace an existing model in --out.
+    #[arg(long)]
+    force: bool,
+}
+
+/// What `summary.json` records: enough to rerun the run and to say what it cost.
+#[derive(Serialize, Deserialize)]
+pub struct PriceSummary {
+    /// The command that reproduces the run.
+    pub command: String,
+    /// Wall time of the whole run.
+    pub wall_s: f64,
+    /// The last round.
+    pub last: PriceRound,
+}
+
+fn command_line(args: &PriceArgs) -> String {
+    let mut c = format!(
+        "cargo xtask train-price --scale {} --tasks {} --seed {}",
+        args.scale, args.tasks, args.seed
+    );
+    let options: [(&str, Option<String>); 7] = [
+        ("rounds", args.rounds.map(|v| v.to_string())),
+        ("episodes", args.episodes.map(|v| v.to_string())),
+        ("steps", args.steps.map(|v| v.to_string())),
+        ("batch", args.batch.map(|v| v.to_string())),
+        ("lr", args.lr.map(|v| v.to_string())),
+        ("hidden", args.hidden.map(|v| v.to_string())),
+        ("expert-decay", args.expert_decay.map(|v| v.to_string())),
+    ];
+    for (name, value) in options {
+        if let Some(v) = value {
+            c += &format!(" --{name} {v}");
+        }
+    }
+    c + &format!(" --out {}", args.out.display())
+}
+
+pub fn run(args: PriceArgs) -> Result<()> {
+    let model_path = args.out.join(MODEL_FILE);
+    if model_path.exists() && !args.force {
+        bail!(
+            "{} exists; pass --force to replace it",
+            model_path.display()
+        );
+    }
+    let mut config = PriceTrainConfig::new(args.scale, args.tasks, args.seed);
+    config.rounds = args.rounds.unwrap_or(config.rounds);
+    config.episodes_per_round = args.episodes.unwrap_or(config.episodes_per_round);
+    config.steps_per_round = args.steps.unwrap_or(config.steps_per_round);
+    config.batch = args.batch.unwrap_or(config.batch);
+    config.lr = args.lr.unwrap_or(config.lr);
+    config.network.hidden = args.hidden.unwrap_or(config.network.hidden);
+    config.expert_decay = args.expert_decay.unwrap_or(config.expert_decay);
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let start = Instant::now();
+    let mut trainer = PriceTrainer::new(config)?;
+    let bar = crate::progress(trainer.config().rounds as u64, "train-price");
+    let mut log = String::new();
+    let mut last = None;
+    while !trainer.is_finished() {
+        let round = trainer.round()?;
+        bar.inc(1);
+        bar.println(format!(
+            "round {:>3}  states {:>7}  expert {:.3}  loss {:.5}  sequential {:.2} %  one-shot {:.2} %",
+            round.round, round.states, round.expert_share, round.loss, round.sequential, round.one_shot
+        ));
+        log += &serde_json::to_string(&round)?;
+        log.push('\n');
+        afg_game::io::write_atomic(&args.out.join(LOG_FILE), log.as_bytes())?;
+        last = Some(round);
+    }
+    bar.finish_and_clear();
+    trainer.model().save(&model_path)?;
+    let summary = PriceSummary {
+        command: command_line(&args),
+        wall_s: start.elapsed().as_secs_f64(),
+        last: last.expect("at least one round"),
+    };
+    afg_game::io::write_atomic(
+        &args.out.join(SUMMARY_FILE),
+        serde_json::to_string_pretty(&summary)?.as_bytes(),
+    )?;
+    println!("wrote {} ({:.0} s)", model_path.display(), summary.wall_s);
+    Ok(())
+}
