@@ -1,15 +1,18 @@
 //! `cargo xtask train-price`: the price-structured model (ours), trained on the exact Q*.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use afg_learn::{PriceRound, PriceTrainConfig, PriceTrainer};
+use afg_baseline::{Allocator, Method};
+use afg_eval::{PriceSpec, Summary, evaluate, optima};
+use afg_game::Instance;
+use afg_learn::{PriceMode, PriceModel, PricePolicy, PriceRound, PriceTrainConfig, PriceTrainer};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use serde::{Deserialize, Serialize};
 
-/// File names of a price-model run directory.
-pub const MODEL_FILE: &str = "price.json";
+/// File names of a price-model run directory (besides the model's own,
+/// `PriceModel::FILE_NAME`).
 const LOG_FILE: &str = "log.jsonl";
 const SUMMARY_FILE: &str = "summary.json";
 
@@ -42,6 +45,10 @@ pub struct PriceArgs {
     /// The expert acts with probability DECAY^round in the rollouts.
     #[arg(long)]
     expert_decay: Option<f64>,
+    /// Weight of the one-shot loss (the empty state's prices against the exact ones);
+    /// 0 trains on Q* alone.
+    #[arg(long)]
+    one_shot_weight: Option<f64>,
     /// Seed of everything random in the run.
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -71,7 +78,7 @@ fn command_line(args: &PriceArgs) -> String {
         "cargo xtask train-price --scale {} --tasks {} --seed {}",
         args.scale, args.tasks, args.seed
     );
-    let options: [(&str, Option<String>); 7] = [
+    let options: [(&str, Option<String>); 8] = [
         ("rounds", args.rounds.map(|v| v.to_string())),
         ("episodes", args.episodes.map(|v| v.to_string())),
         ("steps", args.steps.map(|v| v.to_string())),
@@ -79,6 +86,10 @@ fn command_line(args: &PriceArgs) -> String {
         ("lr", args.lr.map(|v| v.to_string())),
         ("hidden", args.hidden.map(|v| v.to_string())),
         ("expert-decay", args.expert_decay.map(|v| v.to_string())),
+        (
+            "one-shot-weight",
+            args.one_shot_weight.map(|v| v.to_string()),
+        ),
     ];
     for (name, value) in options {
         if let Some(v) = value {
@@ -89,7 +100,7 @@ fn command_line(args: &PriceArgs) -> String {
 }
 
 pub fn run(args: PriceArgs) -> Result<()> {
-    let model_path = args.out.join(MODEL_FILE);
+    let model_path = args.out.join(PriceModel::FILE_NAME);
     if model_path.exists() && !args.force {
         bail!(
             "{} exists; pass --force to replace it",
@@ -104,6 +115,7 @@ pub fn run(args: PriceArgs) -> Result<()> {
     config.lr = args.lr.unwrap_or(config.lr);
     config.network.hidden = args.hidden.unwrap_or(config.network.hidden);
     config.expert_decay = args.expert_decay.unwrap_or(config.expert_decay);
+    config.one_shot_weight = args.one_shot_weight.unwrap_or(config.one_shot_weight);
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     let start = Instant::now();
@@ -136,4 +148,137 @@ pub fn run(args: PriceArgs) -> Result<()> {
     )?;
     println!("wrote {} ({:.0} s)", model_path.display(), summary.wall_s);
     Ok(())
+}
+
+/// The committed price model's rows (both modes) on `insts`; none while it is not
+/// trained (it is ours, so optional).
+pub fn rows(root: &Path, insts: &[Instance], opt: &[f64]) -> Result<Vec<Summary>> {
+    let mut rows = Vec::new();
+    for spec in PriceSpec::committed() {
+        if spec.model_path(root).exists() {
+            let policy = spec.load(root)?;
+            rows.push(evaluate(&spec.label(), &policy, insts, opt)?);
+        }
+    }
+    Ok(rows)
+}
+
+/// One ablation of the price model: what it was trained with, and where it lives.
+struct Ablation {
+    label: &'static str,
+    /// Directory under the repository root; `None` for the untrained model (Nearest).
+    dir: Option<&'static str>,
+}
+
+const ABLATIONS: [Ablation; 4] = [
+    Ablation {
+        label: "untrained (all prices 0: Nearest) — the structure alone",
+        dir: None,
+    },
+    Ablation {
+        label: "Q* regression on the expert's states only (no DAgger, no one-shot loss)",
+        dir: Some("models/ablations/price_n60_expert"),
+    },
+    Ablation {
+        label: "Q* regression with DAgger, no one-shot loss",
+        dir: Some("models/ablations/price_n60_qstar"),
+    },
+    Ablation {
+        label: "Q* regression with DAgger + one-shot price loss (the committed model)",
+        dir: Some("models/price_n60"),
+    },
+];
+
+/// The scales of the ablation table.
+const ABLATION_SIZES: [usize; 4] = [20, 60, 100, 1000];
+
+/// One row of the ablation table: % of OPT, sequential and one-shot, per scale.
+#[derive(Serialize)]
+pub struct AblationRow {
+    pub method: String,
+    pub command: Option<String>,
+    /// `(N, sequential, one-shot)`.
+    pub percent_of_opt: Vec<(usize, f64, f64)>,
+}
+
+/// The ablation rows whose models are committed, on the first `instances` of each
+/// test set.
+pub fn ablation(root: &Path, instances: usize) -> Result<Vec<AblationRow>> {
+    let mut sets = Vec::new();
+    for n in ABLATION_SIZES {
+        let insts: Vec<Instance> = crate::datasets::load(n)?
+            .into_iter()
+            .take(instances)
+            .collect();
+        let opt = optima(&insts)?;
+        sets.push((n, insts, opt));
+    }
+    let mut rows = Vec::new();
+    for a in &ABLATIONS {
+        let (policies, command): (Vec<Box<dyn Allocator>>, _) = match a.dir {
+            None => (vec![Method::Nearest.allocator(0)], None),
+            Some(dir) => {
+                let path = root.join(dir).join(PriceModel::FILE_NAME);
+                if !path.exists() {
+                    continue;
+                }
+                let summary: PriceSummary = serde_json::from_str(
+                    &std::fs::read_to_string(root.join(dir).join(SUMMARY_FILE))
+                        .with_context(|| format!("{dir} has a model but no {SUMMARY_FILE}"))?,
+                )?;
+                let modes = [PriceMode::Sequential, PriceMode::OneShot];
+                let policies = modes
+                    .into_iter()
+                    .map(|m| Ok(Box::new(PricePolicy::load(&path, m)?) as Box<dyn Allocator>))
+                    .collect::<Result<_>>()?;
+                (policies, Some(summary.command))
+            }
+        };
+        let mut percent_of_opt = Vec::new();
+        for (n, insts, opt) in &sets {
+            let score = |p: &dyn Allocator| -> Result<f64> {
+                Ok(evaluate(a.label, p, insts, opt)?.percent_of_opt)
+            };
+            let sequential = score(policies[0].as_ref())?;
+            let one_shot = match policies.get(1) {
+                Some(p) => score(p.as_ref())?,
+                None => sequential,
+            };
+            percent_of_opt.push((*n, sequential, one_shot));
+        }
+        rows.push(AblationRow {
+            method: a.label.to_owned(),
+            command,
+            percent_of_opt,
+        });
+    }
+    Ok(rows)
+}
+
+/// The ablation table in Markdown (inside the block that `--verify` checks).
+pub fn ablation_markdown(rows: &[AblationRow], instances: usize) -> String {
+    let mut s = format!(
+        "### The price model (ours): what each part adds — % of OPT, sequential / one-shot, first {instances} instances of each test set\n\n| method |"
+    );
+    for n in ABLATION_SIZES {
+        s += &format!(" N = {n} sequential | N = {n} one-shot |");
+    }
+    s += "\n|---|";
+    s += &"---|".repeat(2 * ABLATION_SIZES.len());
+    s.push('\n');
+    for r in rows {
+        s += &format!("| {} |", r.method);
+        for (_, seq, one) in &r.percent_of_opt {
+            s += &format!(" {seq:.2} % | {one:.2} % |");
+        }
+        s.push('\n');
+    }
+    s += "\nCommands: ";
+    let commands: Vec<String> = rows
+        .iter()
+        .filter_map(|r| r.command.as_ref().map(|c| format!("`{c}`")))
+        .collect();
+    s += &commands.join(", ");
+    s += ".\n\n";
+    s
 }

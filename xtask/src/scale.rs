@@ -1,5 +1,6 @@
-//! `cargo xtask bench-scale`: the learned policy (fast path, block rollout, repair)
-//! against OPT, GRAPE DA and greedy from N = 100 to 100 000, with the peak memory of
+//! `cargo xtask bench-scale`: the learned policy (fast path, block rollout, repair) and
+//! the price model (ours, no repair) against OPT, GRAPE DA and greedy from N = 100 to
+//! 100 000, with the peak memory of
 //! each run. Every case runs in its own child process (this binary with `--case`), so
 //! the peak resident set size it reports belongs to that case alone.
 
@@ -7,9 +8,10 @@ use std::path::PathBuf;
 use std::process::Command;
 use std::time::{Duration, Instant};
 
+use afg_baseline::Allocator;
 use afg_baseline::Method;
 use afg_game::{GeneratorConfig, Instance};
-use afg_learn::{LearnedPolicy, NetworkConfig};
+use afg_learn::{LearnedPolicy, NetworkConfig, PriceMode, PriceModel, PricePolicy};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use serde::{Deserialize, Serialize};
@@ -38,6 +40,10 @@ pub struct ScaleArgs {
     /// Trained run directory used for M = 5; other M use untrained weights (timing only).
     #[arg(long, default_value = "models/afgnet_ddqn_n20")]
     model: PathBuf,
+    /// Price model (ours) run at every M, both modes, without repair; skipped if the
+    /// directory holds no price.json.
+    #[arg(long, default_value = "models/price_n60")]
+    price_model: PathBuf,
     /// Seed of the instances (one per N and M).
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -63,6 +69,9 @@ struct Case {
     exact_burn: bool,
     #[serde(default)]
     model: Option<PathBuf>,
+    /// The price model's file and mode, instead of the Q network.
+    #[serde(default)]
+    price: Option<(PathBuf, PriceMode)>,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -103,13 +112,20 @@ fn run_case(case: Case) -> Result<Outcome> {
         repair_seconds: None,
         peak_rss_mib: None,
     };
-    match case.method {
-        Some(method) => {
+    match (case.method, &case.price) {
+        (_, Some((path, mode))) => {
+            let policy = PricePolicy::load(path, *mode)?;
+            let start = Instant::now();
+            let assignment = policy.allocate(&inst)?.assignment;
+            out.seconds = start.elapsed().as_secs_f64();
+            out.welfare = inst.welfare(&assignment);
+        }
+        (Some(method), None) => {
             let alloc = method.allocator(case.seed).allocate(&inst)?;
             out.seconds = alloc.stats.wall_time.as_secs_f64();
             out.welfare = inst.welfare(&alloc.assignment);
         }
-        None => {
+        (None, None) => {
             let policy = match &case.model {
                 Some(dir) => LearnedPolicy::load(&afg_learn::RunDir::new(dir).weights())
                     .with_context(|| format!("loading {}", dir.display()))?,
@@ -164,7 +180,17 @@ fn cases(args: &ScaleArgs) -> Vec<Case> {
                 block: 1,
                 exact_burn: false,
                 model: (tasks == 5).then(|| args.model.clone()),
+                price: None,
             };
+            let price = args.price_model.join(PriceModel::FILE_NAME);
+            if price.exists() {
+                for mode in [PriceMode::Sequential, PriceMode::OneShot] {
+                    cases.push(Case {
+                        price: Some((price.clone(), mode)),
+                        ..base.clone()
+                    });
+                }
+            }
             for method in [Method::Opt, Method::Da, Method::DaBalanced, Method::Greedy] {
                 cases.push(Case {
                     method: Some(method),
@@ -194,6 +220,9 @@ fn cases(args: &ScaleArgs) -> Vec<Case> {
 }
 
 fn label(case: &Case) -> String {
+    if let Some((_, mode)) = &case.price {
+        return format!("price model (ours), {}, no repair", mode.name());
+    }
     match (case.method, case.exact_burn) {
         (Some(m), _) => m.to_string(),
         (None, true) => "learned, Burn path".into(),
@@ -244,7 +273,8 @@ pub fn run(args: ScaleArgs) -> Result<()> {
             })
             .map_or(f64::NAN, |p| p.welfare);
         let percent = |w: f64| format!("{:.2} %", 100.0 * w / opt);
-        let trained = if o.case.method.is_none() && o.case.model.is_none() {
+        let trained = if o.case.method.is_none() && o.case.model.is_none() && o.case.price.is_none()
+        {
             " (untrained)"
         } else {
             ""

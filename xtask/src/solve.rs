@@ -160,7 +160,7 @@ pub fn run(args: SolveArgs) -> Result<()> {
     }
     let (name, method): (String, Box<dyn Allocator>) = match (&args.method, &args.model) {
         (Some(m), _) => (m.to_string(), m.allocator(args.seed)),
-        (None, Some(dir)) if dir.join(crate::price::MODEL_FILE).exists() => {
+        (None, Some(dir)) if dir.join(afg_learn::PriceModel::FILE_NAME).exists() => {
             if args.block.is_some() || args.repair || args.exact_burn {
                 anyhow::bail!(
                     "--block, --repair and --exact-burn apply to Q networks, not price models"
@@ -171,7 +171,8 @@ pub fn run(args: SolveArgs) -> Result<()> {
             } else {
                 afg_learn::PriceMode::Sequential
             };
-            let policy = afg_learn::PricePolicy::load(&dir.join(crate::price::MODEL_FILE), mode)?;
+            let policy =
+                afg_learn::PricePolicy::load(&dir.join(afg_learn::PriceModel::FILE_NAME), mode)?;
             (dir.display().to_string(), Box::new(policy))
         }
         (None, Some(dir)) => {

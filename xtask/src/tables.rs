@@ -43,6 +43,8 @@ struct Results {
     quick: bool,
     table1: Vec<(usize, Vec<Summary>)>,
     table2: Vec<(usize, Vec<Summary>)>,
+    price_ablation: Vec<crate::price::AblationRow>,
+    price_ablation_instances: usize,
     missing_models: Vec<String>,
 }
 
@@ -133,6 +135,7 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
             let label = format!("{} trained at N = {PRETRAINED_AT}", pretrained.label());
             rows.push(evaluate(&label, &policy, &insts, &opt)?);
         }
+        rows.extend(crate::price::rows(root, &insts, &opt)?);
         rows.extend(classical_rows(n, &insts, &opt)?);
         bar.inc(1);
         table1.push((n, rows));
@@ -146,6 +149,7 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
         let opt = optima(&insts)?;
         let mut rows = Vec::new();
         rows.extend(classical_rows(n, &insts, &opt)?);
+        rows.extend(crate::price::rows(root, &insts, &opt)?);
         let few = t2_learned.min(insts.len());
         for variant in [Variant::Paper, Variant::GainResidual] {
             for trained in dataset::TABLE1_SIZES {
@@ -178,14 +182,22 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
         quick,
         table1,
         table2,
+        price_ablation: crate::price::ablation(root, t1_instances)?,
+        price_ablation_instances: t1_instances,
         missing_models: missing,
     })
 }
 
 fn row_line(r: &Summary, paper: &str) -> String {
     format!(
-        "| {} | {:.2} | {:.2} % | {:.1} % | {:.1} % | {} |",
-        r.method, r.welfare, r.percent_of_opt, r.ns_rate_balanced, r.ns_rate_selfish, paper
+        "| {} | {:.2} | {:.2} % | {:.1} % | {:.1} % | {} | {} |",
+        r.method,
+        r.welfare,
+        r.percent_of_opt,
+        r.ns_rate_balanced,
+        r.ns_rate_selfish,
+        crate::bench::fmt_time(std::time::Duration::from_secs_f64(r.seconds_per_instance)),
+        paper
     )
 }
 
@@ -205,9 +217,9 @@ fn markdown_tables(res: &Results) -> String {
         );
         let _ = writeln!(
             s,
-            "| method | welfare | % of OPT | NS_rate balanced | NS_rate selfish | paper welfare |"
+            "| method | welfare | % of OPT | NS_rate balanced | NS_rate selfish | time / instance | paper welfare |"
         );
-        let _ = writeln!(s, "|---|---|---|---|---|---|");
+        let _ = writeln!(s, "|---|---|---|---|---|---|---|");
         for r in rows {
             let model = ModelSpec::table1(*n)
                 .into_iter()
@@ -225,7 +237,7 @@ fn markdown_tables(res: &Results) -> String {
     }
     let _ = writeln!(
         s,
-        "The learned rows keep the paper's networks and algorithms; where their training departs from the paper (units of the inputs and rewards, reward shaping, loss, learning rate, target sync) is in each model's command under \"The committed models\" in docs/RESULTS.md, and explained in docs/training.md.\n"
+        "The learned rows keep the paper's networks and algorithms; where their training departs from the paper (units of the inputs and rewards, reward shaping, loss, learning rate, target sync) is in each model's command under \"The committed models\" in docs/RESULTS.md, and explained in docs/training.md. The rows marked (ours) are not the paper's method: the price model (docs/price.md) is a per-task price network trained by regression on the exact Q* of the sequential MDP, run without any repair.\n"
     );
     let _ = writeln!(
         s,
@@ -263,6 +275,9 @@ fn markdown_tables(res: &Results) -> String {
             );
         }
         let _ = writeln!(s);
+    }
+    if !res.price_ablation.is_empty() {
+        s += &crate::price::ablation_markdown(&res.price_ablation, res.price_ablation_instances);
     }
     if !res.missing_models.is_empty() {
         let _ = writeln!(

@@ -11,5 +11,5 @@ pub mod paper;
 mod score;
 
 pub use error::EvalError;
-pub use model::{ModelSpec, Net, Variant};
+pub use model::{ModelSpec, Net, PriceSpec, Variant};
 pub use score::{Score, Summary, evaluate, optima, optimum_welfare};

@@ -119,3 +119,69 @@ impl ModelSpec {
         self.variant != Variant::Paper
     }
 }
+
+/// The price-structured model (ours, [`afg_learn::PricePolicy`]) trained at one N, in
+/// one of its two modes.
+///
+/// # Examples
+/// ```
+/// use afg_eval::PriceSpec;
+/// use afg_learn::PriceMode;
+/// let s = PriceSpec::new(60, PriceMode::OneShot);
+/// assert_eq!(s.dir_name(), "price_n60");
+/// assert_eq!(s.label(), "Price model, one-shot, trained at N = 60 (ours)");
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PriceSpec {
+    /// Robots per training instance.
+    pub trained_at: usize,
+    /// Sequential or one-shot.
+    pub mode: afg_learn::PriceMode,
+}
+
+impl PriceSpec {
+    /// The N the committed price model is trained at.
+    pub const TRAINED_AT: usize = 60;
+
+    /// A model.
+    pub const fn new(trained_at: usize, mode: afg_learn::PriceMode) -> Self {
+        PriceSpec { trained_at, mode }
+    }
+
+    /// Both modes of the committed model, sequential first.
+    pub fn committed() -> [PriceSpec; 2] {
+        [
+            Self::new(Self::TRAINED_AT, afg_learn::PriceMode::Sequential),
+            Self::new(Self::TRAINED_AT, afg_learn::PriceMode::OneShot),
+        ]
+    }
+
+    /// The run directory's name under `models/` (both modes share one model).
+    pub fn dir_name(&self) -> String {
+        format!("price_n{}", self.trained_at)
+    }
+
+    /// The model file under the repository `root`.
+    pub fn model_path(&self, root: &Path) -> std::path::PathBuf {
+        root.join("models")
+            .join(self.dir_name())
+            .join(afg_learn::PriceModel::FILE_NAME)
+    }
+
+    /// The row label; ends in "(ours)".
+    pub fn label(&self) -> String {
+        format!(
+            "Price model, {}, trained at N = {} (ours)",
+            self.mode.name(),
+            self.trained_at
+        )
+    }
+
+    /// The policy of the committed weights under `root`.
+    ///
+    /// # Errors
+    /// See [`afg_learn::PriceModel::load`].
+    pub fn load(&self, root: &Path) -> Result<afg_learn::PricePolicy, afg_learn::LearnError> {
+        afg_learn::PricePolicy::load(&self.model_path(root), self.mode)
+    }
+}

@@ -42,3 +42,35 @@ fn the_paper_tables_cover_the_dataset_sizes() {
     }
     assert!(paper::table1(500).is_none() && paper::table2(20).is_none());
 }
+
+/// The committed price model, sequential and without repair, is above GRAPE DA and
+/// greedy on the first instances of every test set, and its one-shot mode above Random
+/// (the bars of the tables, on a sample small enough for a test).
+#[test]
+fn the_committed_price_model_beats_da_and_greedy_at_every_scale() {
+    use afg_baseline::Method;
+    use afg_eval::{PriceSpec, evaluate, optima};
+    let [sequential, one_shot] = PriceSpec::committed();
+    let (sequential, one_shot) = (
+        sequential.load(root()).unwrap(),
+        one_shot.load(root()).unwrap(),
+    );
+    for n in dataset::SIZES {
+        let insts: Vec<_> = dataset::load(root(), n)
+            .unwrap()
+            .into_iter()
+            .take(10)
+            .collect();
+        let opt = optima(&insts).unwrap();
+        let score = |a: &dyn afg_baseline::Allocator| {
+            evaluate("", a, &insts, &opt).unwrap().percent_of_opt
+        };
+        let ours = score(&sequential);
+        for method in [Method::Da, Method::Greedy] {
+            let theirs = score(method.allocator(0).as_ref());
+            assert!(ours > theirs, "N = {n}: {ours} against {method} {theirs}");
+        }
+        let random = score(Method::Random.allocator(0).as_ref());
+        assert!(score(&one_shot) > random, "N = {n}");
+    }
+}

@@ -71,6 +71,9 @@ const PRICE_FORMAT: &str = "afg-price-model";
 const PRICE_VERSION: u32 = 1;
 
 impl PriceModel {
+    /// The model's file name in a run directory.
+    pub const FILE_NAME: &str = "price.json";
+
     /// A model with these weights, trained with `training`.
     pub fn new(training: PriceTrainConfig, mlp: PriceMlp) -> Self {
         PriceModel {

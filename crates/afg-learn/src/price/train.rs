@@ -52,6 +52,10 @@ pub struct PriceTrainConfig {
     pub expert_decay: f64,
     /// States kept for training (oldest dropped).
     pub buffer_states: usize,
+    /// Weight of the one-shot loss: the squared error of the centred prices of each
+    /// training instance's empty state against its exact prices
+    /// ([`afg_baseline::Optimum::with_prices`]); 0 trains on Q\* alone.
+    pub one_shot_weight: f64,
     /// Size of the fixed validation set (the same seeds as the DQN trainer's).
     pub validation_instances: usize,
     /// Seed of everything random in the run.
@@ -74,6 +78,7 @@ impl PriceTrainConfig {
             explore: 0.1,
             expert_decay: 0.5,
             buffer_states: 200_000,
+            one_shot_weight: 1.0,
             validation_instances: 32,
             seed,
         }
@@ -92,6 +97,9 @@ impl PriceTrainConfig {
         }
         if !(self.lr.is_finite() && self.lr > 0.0) {
             return bad("the learning rate must be positive and finite");
+        }
+        if !(self.one_shot_weight.is_finite() && self.one_shot_weight >= 0.0) {
+            return bad("the one-shot weight must be finite and not negative");
         }
         if !((0.0..=1.0).contains(&self.explore) && (0.0..=1.0).contains(&self.expert_decay)) {
             return bad("explore and expert_decay must lie in [0, 1]");
@@ -163,6 +171,13 @@ impl Buffer {
     }
 }
 
+/// Empty states of the training instances with their exact prices (one per instance).
+struct Initial {
+    features: Vec<f32>,
+    prices: Vec<f32>,
+    len: usize,
+}
+
 type Optim = OptimizerAdaptor<Adam, PriceNet<TrainBackend>, TrainBackend>;
 
 /// A price-model training run (see the module docs).
@@ -185,6 +200,7 @@ pub struct PriceTrainer {
     net: PriceNet<TrainBackend>,
     optim: Optim,
     buffer: Buffer,
+    initial: Initial,
     rng: ChaCha8Rng,
     round: usize,
     episodes: u64,
@@ -210,6 +226,11 @@ impl PriceTrainer {
             net: config.network.init(&Default::default()),
             optim: AdamConfig::new().init(),
             buffer: Buffer::new(config.tasks, config.buffer_states),
+            initial: Initial {
+                features: Vec::new(),
+                prices: Vec::new(),
+                len: 0,
+            },
             rng: ChaCha8Rng::seed_from_u64(config.seed),
             round: 0,
             episodes: 0,
@@ -289,6 +310,15 @@ impl PriceTrainer {
         let (mut prices, mut costs) = (vec![0.0f32; m], vec![0.0f32; m]);
         let (mut targets, mut room, mut q) = (vec![0.0f32; m], vec![0.0f32; m], vec![0.0f32; m]);
         let mut mask = vec![false; m];
+        if self.config.one_shot_weight > 0.0 && self.initial.len < self.config.buffer_states {
+            state.features(&mut features);
+            let (_, prices) = Optimum.with_prices(inst);
+            self.initial.features.extend_from_slice(&features);
+            self.initial
+                .prices
+                .extend(prices.iter().map(|p| (p / state.unit()) as f32));
+            self.initial.len += 1;
+        }
         for robot in inst.robot_ids() {
             state.features(&mut features);
             let star = q_star(inst, state.assignment(), robot)?;
@@ -354,7 +384,10 @@ impl PriceTrainer {
             v - mean
         };
         let error = (centre(q) - centre(y)) * w.clone();
-        let loss = error.powf_scalar(2.0).sum() / w.sum();
+        let mut loss = error.powf_scalar(2.0).sum() / w.sum();
+        if self.config.one_shot_weight > 0.0 && self.initial.len > 0 {
+            loss = loss + self.one_shot_loss() * self.config.one_shot_weight;
+        }
         let value = f64::from(loss.clone().into_scalar());
         if !value.is_finite() {
             return Err(LearnError::NonFiniteLoss {
@@ -368,6 +401,34 @@ impl PriceTrainer {
         let grads = GradientsParams::from_grads(loss.backward(), &self.net);
         self.net = self.optim.step(lr, self.net.clone(), grads);
         Ok(value)
+    }
+}
+
+impl PriceTrainer {
+    /// Squared error of the centred prices of random empty states against their exact
+    /// prices (a quarter batch of instances).
+    fn one_shot_loss(&mut self) -> Tensor<TrainBackend, 1> {
+        let (m, k) = (self.config.tasks, TASK_FEATURES);
+        let b = (self.config.batch / 4).max(1);
+        let mut inputs = vec![0.0f32; b * m * PRICE_INPUTS];
+        let mut prices = vec![0.0f32; b * m];
+        for s in 0..b {
+            let i = self.rng.random_range(0..self.initial.len);
+            task_inputs(
+                &self.initial.features[i * m * k..(i + 1) * m * k],
+                &mut inputs[s * m * PRICE_INPUTS..(s + 1) * m * PRICE_INPUTS],
+            );
+            prices[s * m..(s + 1) * m].copy_from_slice(&self.initial.prices[i * m..(i + 1) * m]);
+        }
+        let device = &Default::default();
+        let x = Tensor::<TrainBackend, 2>::from_data(
+            TensorData::new(inputs, [b * m, PRICE_INPUTS]),
+            device,
+        );
+        let y = Tensor::<TrainBackend, 2>::from_data(TensorData::new(prices, [b, m]), device);
+        let p = self.net.forward(x).reshape([b, m]);
+        let centre = |v: Tensor<TrainBackend, 2>| v.clone() - v.mean_dim(1);
+        (centre(p) - centre(y)).powf_scalar(2.0).mean()
     }
 }
 
