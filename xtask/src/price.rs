@@ -150,11 +150,17 @@ pub fn run(args: PriceArgs) -> Result<()> {
     Ok(())
 }
 
-/// The committed price model's rows (both modes) on `insts`; none while it is not
-/// trained (it is ours, so optional).
-pub fn rows(root: &Path, insts: &[Instance], opt: &[f64]) -> Result<Vec<Summary>> {
+/// The committed price model's rows (both modes, and from N = 500 on the sequential
+/// mode with prices once per N/100 robots) on `insts`; none while it is not trained (it
+/// is ours, so optional).
+pub fn rows(root: &Path, n: usize, insts: &[Instance], opt: &[f64]) -> Result<Vec<Summary>> {
     let mut rows = Vec::new();
-    for spec in PriceSpec::committed() {
+    let [sequential, one_shot] = PriceSpec::committed();
+    let blocked = (n >= 500).then(|| sequential.with_block(n / 100));
+    for spec in [Some(sequential), blocked, Some(one_shot)]
+        .into_iter()
+        .flatten()
+    {
         if spec.model_path(root).exists() {
             let policy = spec.load(root)?;
             rows.push(evaluate(&spec.label(), &policy, insts, opt)?);

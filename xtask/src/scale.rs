@@ -114,7 +114,7 @@ fn run_case(case: Case) -> Result<Outcome> {
     };
     match (case.method, &case.price) {
         (_, Some((path, mode))) => {
-            let policy = PricePolicy::load(path, *mode)?;
+            let policy = PricePolicy::load(path, *mode)?.with_block(case.block)?;
             let start = Instant::now();
             let assignment = policy.allocate(&inst)?.assignment;
             out.seconds = start.elapsed().as_secs_f64();
@@ -184,9 +184,15 @@ fn cases(args: &ScaleArgs) -> Vec<Case> {
             };
             let price = args.price_model.join(PriceModel::FILE_NAME);
             if price.exists() {
-                for mode in [PriceMode::Sequential, PriceMode::OneShot] {
+                let modes = [
+                    (PriceMode::Sequential, 1),
+                    (PriceMode::Sequential, robots.div_ceil(100)),
+                    (PriceMode::OneShot, 1),
+                ];
+                for (mode, block) in modes {
                     cases.push(Case {
                         price: Some((price.clone(), mode)),
+                        block,
                         ..base.clone()
                     });
                 }
@@ -221,7 +227,12 @@ fn cases(args: &ScaleArgs) -> Vec<Case> {
 
 fn label(case: &Case) -> String {
     if let Some((_, mode)) = &case.price {
-        return format!("price model (ours), {}, no repair", mode.name());
+        let block = if case.block > 1 {
+            format!(", prices every {} robots", case.block)
+        } else {
+            String::new()
+        };
+        return format!("price model (ours), {}{block}, no repair", mode.name());
     }
     match (case.method, case.exact_burn) {
         (Some(m), _) => m.to_string(),

@@ -20,7 +20,8 @@ pub struct SolveArgs {
     /// model.mpk), e.g. models/afgnet_ddqn_n20.
     #[arg(long, group = "allocator")]
     pub(crate) model: Option<PathBuf>,
-    /// Learned policy: robots per network evaluation [default: 1, the exact greedy rollout].
+    /// Learned policy (Q network or sequential price model): robots per network evaluation
+    /// [default: 1, the exact greedy rollout].
     #[arg(long)]
     pub(crate) block: Option<usize>,
     /// Learned policy: balanced best-response sweeps after the rollout (Def. 3 stable result).
@@ -161,10 +162,11 @@ pub fn run(args: SolveArgs) -> Result<()> {
     let (name, method): (String, Box<dyn Allocator>) = match (&args.method, &args.model) {
         (Some(m), _) => (m.to_string(), m.allocator(args.seed)),
         (None, Some(dir)) if dir.join(afg_learn::PriceModel::FILE_NAME).exists() => {
-            if args.block.is_some() || args.repair || args.exact_burn {
-                anyhow::bail!(
-                    "--block, --repair and --exact-burn apply to Q networks, not price models"
-                );
+            if args.repair || args.exact_burn {
+                anyhow::bail!("--repair and --exact-burn apply to Q networks, not price models");
+            }
+            if args.one_shot && args.block.is_some() {
+                anyhow::bail!("--block applies to the sequential mode; drop --one-shot or --block");
             }
             let mode = if args.one_shot {
                 afg_learn::PriceMode::OneShot
@@ -172,7 +174,8 @@ pub fn run(args: SolveArgs) -> Result<()> {
                 afg_learn::PriceMode::Sequential
             };
             let policy =
-                afg_learn::PricePolicy::load(&dir.join(afg_learn::PriceModel::FILE_NAME), mode)?;
+                afg_learn::PricePolicy::load(&dir.join(afg_learn::PriceModel::FILE_NAME), mode)?
+                    .with_block(args.block.unwrap_or(1))?;
             (dir.display().to_string(), Box::new(policy))
         }
         (None, Some(dir)) => {

@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use afg_baseline::{Allocator, Method, Optimum};
-use afg_eval::{ModelSpec, Summary, Variant, dataset, evaluate, optima, paper};
+use afg_eval::{ModelSpec, Net, Summary, Variant, dataset, evaluate, optima, paper};
 use afg_game::Instance;
 use afg_learn::LearnedPolicy;
 use anyhow::{Context, Result, bail};
@@ -32,8 +32,7 @@ pub struct TablesArgs {
     root: Option<PathBuf>,
 }
 
-/// The training scale of the model the paper transfers to other N ("Pretrain_60").
-const PRETRAINED_AT: usize = 60;
+const PRETRAINED_AT: usize = ModelSpec::PRETRAINED_AT;
 
 const BEGIN: &str = "<!-- reproduce-tables:begin -->";
 const END: &str = "<!-- reproduce-tables:end -->";
@@ -135,7 +134,16 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
             let label = format!("{} trained at N = {PRETRAINED_AT}", pretrained.label());
             rows.push(evaluate(&label, &policy, &insts, &opt)?);
         }
-        rows.extend(crate::price::rows(root, &insts, &opt)?);
+        // The same model trained further at this N (a warm start), where one exists.
+        let warm = ModelSpec {
+            variant: Variant::WarmStart,
+            ..ModelSpec::afgnet_ddqn(n)
+        };
+        if warm.run_dir(root).has_weights() {
+            let policy = LearnedPolicy::load(&warm.run_dir(root).weights())?;
+            rows.push(evaluate(&warm.label(), &policy, &insts, &opt)?);
+        }
+        rows.extend(crate::price::rows(root, n, &insts, &opt)?);
         rows.extend(classical_rows(n, &insts, &opt)?);
         bar.inc(1);
         table1.push((n, rows));
@@ -149,7 +157,7 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
         let opt = optima(&insts)?;
         let mut rows = Vec::new();
         rows.extend(classical_rows(n, &insts, &opt)?);
-        rows.extend(crate::price::rows(root, &insts, &opt)?);
+        rows.extend(crate::price::rows(root, n, &insts, &opt)?);
         let few = t2_learned.min(insts.len());
         for variant in [Variant::Paper, Variant::GainResidual] {
             for trained in dataset::TABLE1_SIZES {
@@ -429,7 +437,8 @@ fn models_table(root: &Path) -> Result<String> {
          | model | N | steps | learning rate | wall time | final validation, % of OPT | command |\n\
          |---|---|---|---|---|---|---|\n",
     );
-    for kind in ModelSpec::TABLE1_KINDS {
+    let warm = (Net::AfgNet, afg_learn::Algo::Ddqn, Variant::WarmStart);
+    for kind in ModelSpec::TABLE1_KINDS.into_iter().chain([warm]) {
         for n in dataset::TABLE1_SIZES {
             let spec = ModelSpec::new(kind.0, kind.1, kind.2, n);
             let label = spec.label();

@@ -20,6 +20,10 @@ pub enum Variant {
     Paper,
     /// Ours: AFGNet with the action's immediate reward added to its Q values.
     GainResidual,
+    /// The paper's network and algorithm, trained starting from the weights of the same
+    /// kind of model trained at [`ModelSpec::PRETRAINED_AT`] (a warm start; not in the
+    /// paper, named in the row).
+    WarmStart,
 }
 
 /// One trained model: network, algorithm, variant and the N it was trained at.
@@ -48,6 +52,10 @@ pub struct ModelSpec {
 }
 
 impl ModelSpec {
+    /// The training scale of the model the paper transfers to other N ("Pretrain_60"),
+    /// and that warm starts begin from.
+    pub const PRETRAINED_AT: usize = 60;
+
     /// The learned rows of Table I at one scale, in table order: the paper's three
     /// models, then ours.
     pub const TABLE1_KINDS: [(Net, Algo, Variant); 4] = [
@@ -89,6 +97,7 @@ impl ModelSpec {
         let variant = match self.variant {
             Variant::Paper => "",
             Variant::GainResidual => "_gain",
+            Variant::WarmStart => "_warm",
         };
         format!("{net}_{}{variant}_n{}", self.algo.name(), self.trained_at)
     }
@@ -111,17 +120,23 @@ impl ModelSpec {
         match self.variant {
             Variant::Paper => format!("{net}_{algo}"),
             Variant::GainResidual => format!("{net}_{algo} + gain residual (ours)"),
+            Variant::WarmStart => format!(
+                "{net}_{algo}, warm start from the N = {} model",
+                Self::PRETRAINED_AT
+            ),
         }
     }
 
-    /// Whether the model is ours (not in the paper); the tables treat ours as optional.
+    /// Whether the model is ours (not the paper's network and algorithm); the tables
+    /// treat ours as optional. A warm start keeps the paper's network and algorithm.
     pub fn is_ours(&self) -> bool {
-        self.variant != Variant::Paper
+        self.variant == Variant::GainResidual
     }
 }
 
 /// The price-structured model (ours, [`afg_learn::PricePolicy`]) trained at one N, in
-/// one of its two modes.
+/// one of its two modes, with prices recomputed every `block` robots in the sequential
+/// mode.
 ///
 /// # Examples
 /// ```
@@ -130,6 +145,8 @@ impl ModelSpec {
 /// let s = PriceSpec::new(60, PriceMode::OneShot);
 /// assert_eq!(s.dir_name(), "price_n60");
 /// assert_eq!(s.label(), "Price model, one-shot, trained at N = 60 (ours)");
+/// let b = PriceSpec::new(60, PriceMode::Sequential).with_block(10);
+/// assert_eq!(b.label(), "Price model, sequential, prices every 10 robots, trained at N = 60 (ours)");
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PriceSpec {
@@ -137,15 +154,26 @@ pub struct PriceSpec {
     pub trained_at: usize,
     /// Sequential or one-shot.
     pub mode: afg_learn::PriceMode,
+    /// Robots per price evaluation in the sequential mode (1: every step).
+    pub block: usize,
 }
 
 impl PriceSpec {
     /// The N the committed price model is trained at.
     pub const TRAINED_AT: usize = 60;
 
-    /// A model.
+    /// A model, prices at every step.
     pub const fn new(trained_at: usize, mode: afg_learn::PriceMode) -> Self {
-        PriceSpec { trained_at, mode }
+        PriceSpec {
+            trained_at,
+            mode,
+            block: 1,
+        }
+    }
+
+    /// The same in the sequential mode with prices once per `block` robots.
+    pub const fn with_block(self, block: usize) -> Self {
+        PriceSpec { block, ..self }
     }
 
     /// Both modes of the committed model, sequential first.
@@ -156,7 +184,7 @@ impl PriceSpec {
         ]
     }
 
-    /// The run directory's name under `models/` (both modes share one model).
+    /// The run directory's name under `models/` (every mode shares one model).
     pub fn dir_name(&self) -> String {
         format!("price_n{}", self.trained_at)
     }
@@ -170,8 +198,13 @@ impl PriceSpec {
 
     /// The row label; ends in "(ours)".
     pub fn label(&self) -> String {
+        let block = if self.block > 1 {
+            format!(", prices every {} robots", self.block)
+        } else {
+            String::new()
+        };
         format!(
-            "Price model, {}, trained at N = {} (ours)",
+            "Price model, {}{block}, trained at N = {} (ours)",
             self.mode.name(),
             self.trained_at
         )
@@ -180,8 +213,8 @@ impl PriceSpec {
     /// The policy of the committed weights under `root`.
     ///
     /// # Errors
-    /// See [`afg_learn::PriceModel::load`].
+    /// See [`afg_learn::PriceModel::load`]; a block of 0.
     pub fn load(&self, root: &Path) -> Result<afg_learn::PricePolicy, afg_learn::LearnError> {
-        afg_learn::PricePolicy::load(&self.model_path(root), self.mode)
+        afg_learn::PricePolicy::load(&self.model_path(root), self.mode)?.with_block(self.block)
     }
 }

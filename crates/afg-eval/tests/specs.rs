@@ -62,9 +62,8 @@ fn the_committed_price_model_beats_da_and_greedy_at_every_scale() {
             .take(10)
             .collect();
         let opt = optima(&insts).unwrap();
-        let score = |a: &dyn afg_baseline::Allocator| {
-            evaluate("", a, &insts, &opt).unwrap().percent_of_opt
-        };
+        let score =
+            |a: &dyn afg_baseline::Allocator| evaluate("", a, &insts, &opt).unwrap().percent_of_opt;
         let ours = score(&sequential);
         for method in [Method::Da, Method::Greedy] {
             let theirs = score(method.allocator(0).as_ref());

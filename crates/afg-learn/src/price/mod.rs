@@ -144,12 +144,38 @@ impl PriceModel {
 pub struct PricePolicy {
     mlp: PriceMlp,
     mode: PriceMode,
+    block: usize,
 }
 
 impl PricePolicy {
     /// A policy with these weights.
     pub fn new(mlp: PriceMlp, mode: PriceMode) -> Self {
-        PricePolicy { mlp, mode }
+        PricePolicy {
+            mlp,
+            mode,
+            block: 1,
+        }
+    }
+
+    /// Sequential mode: recompute the prices once per `block` robots instead of at every
+    /// step (1, the default, is the exact sequential rollout). ⌈N / block⌉ network
+    /// evaluations replace N; the features are still kept up to date at every step.
+    ///
+    /// # Errors
+    /// [`LearnError::InvalidConfig`] for a block of 0.
+    pub fn with_block(mut self, block: usize) -> Result<Self, LearnError> {
+        if block == 0 {
+            return Err(LearnError::InvalidConfig(
+                "the block must be at least 1".into(),
+            ));
+        }
+        self.block = block;
+        Ok(self)
+    }
+
+    /// Robots per price evaluation in the sequential mode.
+    pub fn block(&self) -> usize {
+        self.block
     }
 
     /// The policy of a saved model.
@@ -191,7 +217,8 @@ impl PricePolicy {
         state.features(&mut features);
         self.mlp.prices(&features, &mut prices);
         for robot in instance.robot_ids() {
-            if self.mode == PriceMode::Sequential && robot.index() > 0 {
+            let refresh = robot.index() > 0 && robot.index() % self.block == 0;
+            if self.mode == PriceMode::Sequential && refresh {
                 state.features(&mut features);
                 self.mlp.prices(&features, &mut prices);
             }
@@ -227,6 +254,37 @@ impl Allocator for PricePolicy {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Prices once per N robots are the one-shot prices; a block of 0 is refused; the
+    /// blocked rollout stays complete.
+    #[test]
+    fn a_block_of_n_is_the_one_shot_mode() {
+        // The committed model: its prices move with the state.
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/price_n60/price.json");
+        let mlp = PriceModel::load(&path).unwrap().mlp;
+        let sequential = PricePolicy::new(mlp.clone(), PriceMode::Sequential);
+        let one_shot = PricePolicy::new(mlp, PriceMode::OneShot);
+        let mut moved = 0;
+        for seed in 0..5 {
+            let inst = afg_game::GeneratorConfig::paper(60, 5, seed)
+                .generate()
+                .unwrap();
+            let once = one_shot.allocate(&inst).unwrap().assignment;
+            let whole = sequential.clone().with_block(60).unwrap();
+            assert_eq!(whole.allocate(&inst).unwrap().assignment, once);
+            let blocked = sequential.clone().with_block(7).unwrap();
+            assert!(blocked.allocate(&inst).unwrap().assignment.is_complete());
+            moved += usize::from(sequential.allocate(&inst).unwrap().assignment != once);
+        }
+        assert!(
+            moved > 0,
+            "the prices must move for the test to mean anything"
+        );
+        assert!(matches!(
+            sequential.with_block(0),
+            Err(LearnError::InvalidConfig(_))
+        ));
+    }
 
     #[test]
     fn a_saved_model_loads_back_and_bad_files_are_refused() {
