@@ -3,6 +3,8 @@
 mod bench;
 mod curves;
 mod datasets;
+mod manifest;
+mod map;
 mod plain;
 mod price;
 mod realloc;
@@ -66,7 +68,7 @@ enum Command {
     /// Where a trained model loses welfare along its rollouts, against the exact Q*.
     Regret(regret::RegretArgs),
     /// (Re)write manifest.json of finished training runs from their config and log.
-    Manifest(train::ManifestArgs),
+    Manifest(manifest::ManifestArgs),
 }
 
 fn main() -> Result<()> {
@@ -83,7 +85,7 @@ fn main() -> Result<()> {
         Command::TrainingReport(args) => curves::run_report(args),
         Command::TrainPrice(args) => price::run(args),
         Command::TrainAll(args) => train::run_all(args),
-        Command::Manifest(args) => train::run_manifest(args),
+        Command::Manifest(args) => manifest::run_manifest(args),
         Command::Regret(args) => regret::run(args),
         Command::ReallocStudy(args) => realloc::run_study(args),
     }

@@ -138,7 +138,7 @@ pub fn run(args: &SolveArgs, from: &Path, instances: &[Instance]) -> Result<()> 
     }
     if let Some(svg) = &args.svg {
         let opt = Optimum.allocate(instance)?.assignment;
-        crate::tables::draw_assignments(
+        crate::map::draw_assignments(
             instance,
             &[("OPT from scratch", &opt), ("warm start", &r.assignment)],
             svg,

@@ -282,7 +282,7 @@ fn write_outputs(
     }
     if let Some(svg) = &args.svg {
         let opt = Optimum.allocate(&instances[0])?.assignment;
-        crate::tables::draw_assignments(
+        crate::map::draw_assignments(
             &instances[0],
             &[("OPT", &opt), (name, &assignments[0])],
             svg,

@@ -73,7 +73,7 @@ pub fn run(args: TablesArgs) -> Result<()> {
         check_readme(&root)?;
         let committed = results_block(&root.join("docs/RESULTS.md"))?;
         let fresh = markdown_tables(&compute(&root, false)?);
-        let differences = table_differences(&committed, &fresh);
+        let differences = afg_eval::markdown::table_differences(&committed, &fresh);
         if !differences.is_empty() {
             for d in &differences {
                 eprintln!("{d}");
@@ -368,64 +368,7 @@ fn assignment_map(root: &Path, out: &Path) -> Result<()> {
             Method::Da.allocator(0).allocate(&inst)?.assignment,
         )
     };
-    draw_assignments(&inst, &[(Method::Opt.label(), &opt), (&label, &other)], out)
-}
-
-/// Draws assignments of one instance side by side as an SVG: robots coloured by task
-/// (black if unassigned), tasks as squares sized by coalition, welfare in each title.
-pub fn draw_assignments(
-    inst: &Instance,
-    panels: &[(&str, &afg_game::Assignment)],
-    out: &Path,
-) -> Result<()> {
-    use plotters::prelude::*;
-    let mut svg = String::new();
-    {
-        let width = 500 * panels.len().max(1) as u32;
-        let root_area = SVGBackend::with_string(&mut svg, (width, 520)).into_drawing_area();
-        root_area.fill(&WHITE)?;
-        let areas = root_area.split_evenly((1, panels.len().max(1)));
-        // The unit square, widened to hold every robot and task of other instances.
-        let points = inst
-            .robots()
-            .iter()
-            .chain(inst.tasks().iter().map(|t| &t.position));
-        let (mut x, mut y) = ((0.0f64, 1.0f64), (0.0f64, 1.0f64));
-        for p in points {
-            x = (x.0.min(p.x), x.1.max(p.x));
-            y = (y.0.min(p.y), y.1.max(p.y));
-        }
-        for (area, (name, a)) in areas.iter().zip(panels) {
-            let title = format!("{name}: welfare {:.2}", inst.welfare(a));
-            let mut chart = ChartBuilder::on(area)
-                .caption(title, ("sans-serif", 18))
-                .margin(10)
-                .x_label_area_size(25)
-                .y_label_area_size(35)
-                .build_cartesian_2d(x.0..x.1, y.0..y.1)?;
-            chart.configure_mesh().disable_mesh().draw()?;
-            for (i, p) in inst.robots().iter().enumerate() {
-                let color =
-                    a.tasks()[i].map_or(BLACK.to_rgba(), |j| Palette99::pick(j.index()).to_rgba());
-                chart.draw_series(std::iter::once(Circle::new((p.x, p.y), 3, color.filled())))?;
-            }
-            for j in inst.task_ids() {
-                let t = inst.task(j).position;
-                let size = 4 + 2 * (a.size(j) as f64).sqrt() as i32;
-                let color = Palette99::pick(j.index()).to_rgba();
-                chart.draw_series(std::iter::once(Rectangle::new(
-                    [
-                        (t.x - 0.004 * size as f64, t.y - 0.004 * size as f64),
-                        (t.x + 0.004 * size as f64, t.y + 0.004 * size as f64),
-                    ],
-                    color.stroke_width(3),
-                )))?;
-            }
-        }
-        root_area.present()?;
-    }
-    afg_game::io::write_atomic(out, svg.as_bytes())?;
-    Ok(())
+    crate::map::draw_assignments(&inst, &[(Method::Opt.label(), &opt), (&label, &other)], out)
 }
 
 /// The training budget of every committed model the tables use, from its manifest.
@@ -517,77 +460,6 @@ fn results_block(path: &Path) -> Result<String> {
     }
 }
 
-/// Relative difference below which two numbers of a table count as equal: the learned
-/// rollouts' floating point can differ between CPUs (other SIMD kernels), and a tie
-/// broken the other way moves a mean by far less than this; a retrained model or a
-/// changed method moves it by far more.
-const RELATIVE_NOISE: f64 = 5e-4;
-
-/// The cells where two renderings of the tables differ, each named by its table
-/// heading, row and column. Timings are skipped; numbers may differ by one unit of
-/// their last printed digit or by [`RELATIVE_NOISE`] (floating-point noise between
-/// machines).
-fn table_differences(committed: &str, fresh: &str) -> Vec<String> {
-    fn number(cell: &str) -> Option<(f64, f64)> {
-        let t = cell.trim().trim_end_matches('%').trim();
-        let value: f64 = t.parse().ok()?;
-        let decimals = t.split_once('.').map_or(0, |(_, d)| d.len());
-        Some((value, 10f64.powi(-(decimals as i32))))
-    }
-    let cells = |line: &str| -> Vec<String> {
-        line.trim()
-            .trim_matches('|')
-            .split('|')
-            .map(|c| c.trim().to_owned())
-            .collect()
-    };
-    let (a, b): (Vec<&str>, Vec<&str>) = (committed.lines().collect(), fresh.lines().collect());
-    let mut out = Vec::new();
-    if a.len() != b.len() {
-        out.push(format!(
-            "the tables have {} lines in docs/RESULTS.md and {} in a fresh run",
-            a.len(),
-            b.len()
-        ));
-    }
-    let (mut heading, mut header) = (String::new(), Vec::new());
-    for (x, y) in a.iter().zip(&b) {
-        if !x.starts_with('|') {
-            if !x.trim().is_empty() {
-                heading = x.trim().to_owned();
-            }
-            if x != y {
-                out.push(format!("{heading}: \"{x}\" is now \"{y}\""));
-            }
-            continue;
-        }
-        let (cx, cy) = (cells(x), cells(y));
-        if cx.first().is_some_and(|c| c == "method") {
-            header = cx.clone();
-        }
-        if cx.len() != cy.len() {
-            out.push(format!("{heading}: row \"{}\" changed shape", cx[0]));
-            continue;
-        }
-        for (k, (u, v)) in cx.iter().zip(&cy).enumerate() {
-            let column = header.get(k).map_or("?", String::as_str);
-            if column.contains("time") || u == v {
-                continue;
-            }
-            let close = match (number(u), number(v)) {
-                (Some((p, du)), Some((q, dv))) => {
-                    (p - q).abs() <= (du.max(dv) * 1.000_001).max(RELATIVE_NOISE * p.abs())
-                }
-                _ => false,
-            };
-            if !close {
-                out.push(format!("{heading}, {}, {column}: {u} → {v}", cx[0]));
-            }
-        }
-    }
-    out
-}
-
 fn check_readme(root: &Path) -> Result<()> {
     if results_block(&root.join("README.md"))? != results_block(&root.join("docs/RESULTS.md"))? {
         bail!("README.md's tables differ from docs/RESULTS.md; run `cargo xtask reproduce-tables`");
@@ -611,26 +483,6 @@ mod tests {
             }
         }
         v
-    }
-
-    #[test]
-    fn table_differences_name_the_cell_and_skip_timings_and_noise() {
-        let committed = "**N = 20**\n\n| method | welfare | % of OPT | time / instance |\n|---|---|---|---|\n| OPT | 22.61 | 100.00 % | 1 ms |\n| Greedy | 21.80 | 96.43 % | 2 µs |\n";
-        assert!(table_differences(committed, committed).is_empty());
-        // Timings and last-digit noise pass.
-        let noisy = committed
-            .replace("1 ms", "3 ms")
-            .replace("96.43 %", "96.44 %");
-        assert!(table_differences(committed, &noisy).is_empty());
-        // A real change is named by heading, row and column.
-        let stale = committed.replace("21.80", "21.70");
-        let d = table_differences(committed, &stale);
-        assert_eq!(d, ["**N = 20**, Greedy, welfare: 21.80 → 21.70"]);
-        // A new row is reported.
-        let longer = format!("{committed}| Random | 15.00 | 70.00 % | 1 µs |\n");
-        assert_eq!(table_differences(committed, &longer).len(), 1);
-        let renamed = committed.replace("Greedy", "Greedy (v2)");
-        assert_eq!(table_differences(committed, &renamed).len(), 1);
     }
 
     #[test]

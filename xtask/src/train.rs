@@ -1,15 +1,15 @@
 //! `cargo xtask train` and `cargo xtask plot-curves`.
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use afg_baseline::Method;
 use afg_eval::{ModelSpec, Net};
 use afg_graph::Units;
 use afg_learn::{
-    Algo, LogEvent, NetworkConfig, Preset, RunDir, RunManifest, TrainConfig, Trainer,
-    ValidationLine, save_network, validation_instances,
+    Algo, LogEvent, NetworkConfig, Preset, RunDir, TrainConfig, Trainer, ValidationLine,
+    save_network, validation_instances,
 };
 use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
@@ -341,6 +341,7 @@ mod tests {
     use clap::Parser;
 
     use super::*;
+    use std::path::Path;
 
     fn xtask(args: &[&str]) -> Result<()> {
         let mut argv = vec!["cargo xtask"];
@@ -377,7 +378,7 @@ mod tests {
                 unreachable!("a train command")
             };
             let config = args.config().unwrap();
-            let line = command_line(&config, dir);
+            let line = crate::manifest::command_line(&config, dir);
             let crate::Command::Train(again) = crate::Cli::try_parse_from(line.split(' ').skip(1))
                 .unwrap()
                 .command
@@ -487,95 +488,6 @@ fn git_revision() -> Option<String> {
         .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_owned())
 }
 
-/// The `cargo xtask train` command line that reproduces a configuration.
-pub fn command_line(c: &TrainConfig, dir: &Path) -> String {
-    let default = TrainConfig::from_preset(
-        c.preset,
-        c.robots,
-        c.algo,
-        c.network.clone(),
-        c.steps,
-        c.seed,
-    );
-    let mut cmd = format!(
-        "cargo xtask train --scale {} --algo {} --net {} --steps {} --seed {}",
-        c.robots,
-        c.algo.name(),
-        c.network.name(),
-        c.steps,
-        c.seed
-    );
-    if c.batch != default.batch {
-        cmd += &format!(" --batch {}", c.batch);
-    }
-    if c.lr != default.lr {
-        cmd += &format!(" --lr {}", c.lr);
-    }
-    if !c.lr_decay && default.lr_decay {
-        cmd += " --constant-lr";
-    }
-    if c.n_step != default.n_step {
-        cmd += &format!(" --n-step {}", c.n_step);
-    }
-    if c.target_sync != default.target_sync {
-        cmd += &format!(" --target-sync {}", c.target_sync);
-    }
-    if c.parallel_envs != default.parallel_envs {
-        cmd += &format!(" --parallel-envs {}", c.parallel_envs);
-    }
-    let gain_residual =
-        matches!(&c.network, NetworkConfig::AfgNet(a) if a.gain_residual == Some(true));
-    if !c.greedy_shaping && default.greedy_shaping && !gain_residual {
-        // (--gain-residual implies it)
-        cmd += " --no-shaping";
-    }
-    if c.network.units() != Units::Bounded {
-        cmd += &format!(" --units {}", c.network.units().name());
-    }
-    if let NetworkConfig::AfgNet(a) = &c.network
-        && a.gain_residual == Some(true)
-    {
-        cmd += " --gain-residual";
-    }
-    if c.preset == Preset::Paper {
-        cmd += " --paper";
-    }
-    if c.eps_start != default.eps_start {
-        cmd += &format!(" --eps-start {}", c.eps_start);
-    }
-    if let Some(from) = &c.init_from {
-        cmd += &format!(" --init-from {}", from.display());
-    }
-    cmd + &format!(" --out {}", dir.display())
-}
-
-/// Writes `dir/manifest.json` from the run's config and log: the command, seed, steps,
-/// wall time, git revision and final validation welfare.
-pub fn write_manifest(dir: &Path) -> Result<()> {
-    let run = RunDir::new(dir);
-    let config = run.config()?;
-    let events = run.log()?;
-    let relative = dir.strip_prefix(crate::repo_root()).unwrap_or(dir);
-    let manifest = RunManifest {
-        command: command_line(&config, relative),
-        seed: config.seed,
-        steps: config.steps,
-        wall_time_s: events.iter().rev().find_map(LogEvent::elapsed_s),
-        // The revision the run started from, as its log recorded it.
-        git_revision: events.iter().find_map(|e| match e {
-            LogEvent::Start { git_revision, .. } => git_revision.clone(),
-            _ => None,
-        }),
-        final_validation: events.iter().rev().find_map(|e| match e {
-            LogEvent::Validation(v) => Some(v.clone()),
-            _ => None,
-        }),
-        weights: RunDir::WEIGHT_FILES.map(str::to_owned).to_vec(),
-    };
-    run.write_manifest(&manifest)?;
-    Ok(())
-}
-
 #[derive(Args)]
 pub struct TrainAllArgs {
     /// Scales to train.
@@ -635,22 +547,6 @@ pub fn run_all(args: TrainAllArgs) -> Result<()> {
                 checkpoint_secs: 300,
             })?;
         }
-    }
-    Ok(())
-}
-
-#[derive(Args)]
-pub struct ManifestArgs {
-    /// Finished run directories.
-    #[arg(required = true)]
-    dirs: Vec<PathBuf>,
-}
-
-/// Rewrites the manifests of finished runs.
-pub fn run_manifest(args: ManifestArgs) -> Result<()> {
-    for d in &args.dirs {
-        write_manifest(d)?;
-        println!("wrote {}", d.join("manifest.json").display());
     }
     Ok(())
 }

@@ -6,6 +6,7 @@
 
 pub mod dataset;
 mod error;
+pub mod markdown;
 mod model;
 pub mod paper;
 mod score;
