@@ -353,30 +353,14 @@ impl PriceTrainer {
 
     /// One Adam step on a random batch; returns its loss.
     fn step(&mut self) -> Result<f64, LearnError> {
-        let (m, k, b) = (self.config.tasks, TASK_FEATURES, self.config.batch);
-        let mut inputs = vec![0.0f32; b * m * PRICE_INPUTS];
-        let (mut costs, mut targets, mut room) =
-            (vec![0.0; b * m], vec![0.0; b * m], vec![0.0; b * m]);
-        for s in 0..b {
-            let i = self.rng.random_range(0..self.buffer.len);
-            task_inputs(
-                &self.buffer.features[i * m * k..(i + 1) * m * k],
-                &mut inputs[s * m * PRICE_INPUTS..(s + 1) * m * PRICE_INPUTS],
-            );
-            costs[s * m..(s + 1) * m].copy_from_slice(&self.buffer.costs[i * m..(i + 1) * m]);
-            targets[s * m..(s + 1) * m].copy_from_slice(&self.buffer.targets[i * m..(i + 1) * m]);
-            room[s * m..(s + 1) * m].copy_from_slice(&self.buffer.room[i * m..(i + 1) * m]);
-        }
-        let device = Default::default();
-        let tensor = |v: Vec<f32>, shape: [usize; 2]| {
-            Tensor::<TrainBackend, 2>::from_data(TensorData::new(v, shape), &device)
-        };
-        let x = tensor(inputs, [b * m, PRICE_INPUTS]);
-        let (c, y, w) = (
-            tensor(costs, [b, m]),
-            tensor(targets, [b, m]),
-            tensor(room, [b, m]),
-        );
+        let (m, b) = (self.config.tasks, self.config.batch);
+        let picks: Vec<usize> = (0..b)
+            .map(|_| self.rng.random_range(0..self.buffer.len))
+            .collect();
+        let x = inputs_of(&self.buffer.features, &picks, m);
+        let c = rows_of(&self.buffer.costs, &picks, m);
+        let y = rows_of(&self.buffer.targets, &picks, m);
+        let w = rows_of(&self.buffer.room, &picks, m);
         let q = self.net.forward(x).reshape([b, m]) - c;
         let open = w.clone().sum_dim(1);
         let centre = |v: Tensor<TrainBackend, 2>| {
@@ -402,34 +386,46 @@ impl PriceTrainer {
         self.net = self.optim.step(lr, self.net.clone(), grads);
         Ok(value)
     }
-}
 
-impl PriceTrainer {
     /// Squared error of the centred prices of random empty states against their exact
     /// prices (a quarter batch of instances).
     fn one_shot_loss(&mut self) -> Tensor<TrainBackend, 1> {
-        let (m, k) = (self.config.tasks, TASK_FEATURES);
-        let b = (self.config.batch / 4).max(1);
-        let mut inputs = vec![0.0f32; b * m * PRICE_INPUTS];
-        let mut prices = vec![0.0f32; b * m];
-        for s in 0..b {
-            let i = self.rng.random_range(0..self.initial.len);
-            task_inputs(
-                &self.initial.features[i * m * k..(i + 1) * m * k],
-                &mut inputs[s * m * PRICE_INPUTS..(s + 1) * m * PRICE_INPUTS],
-            );
-            prices[s * m..(s + 1) * m].copy_from_slice(&self.initial.prices[i * m..(i + 1) * m]);
-        }
-        let device = &Default::default();
-        let x = Tensor::<TrainBackend, 2>::from_data(
-            TensorData::new(inputs, [b * m, PRICE_INPUTS]),
-            device,
-        );
-        let y = Tensor::<TrainBackend, 2>::from_data(TensorData::new(prices, [b, m]), device);
+        let (m, b) = (self.config.tasks, (self.config.batch / 4).max(1));
+        let picks: Vec<usize> = (0..b)
+            .map(|_| self.rng.random_range(0..self.initial.len))
+            .collect();
+        let x = inputs_of(&self.initial.features, &picks, m);
+        let y = rows_of(&self.initial.prices, &picks, m);
         let p = self.net.forward(x).reshape([b, m]);
         let centre = |v: Tensor<TrainBackend, 2>| v.clone() - v.mean_dim(1);
         (centre(p) - centre(y)).powf_scalar(2.0).mean()
     }
+}
+
+/// The network inputs of states `picks` of a `[states, M, TASK_FEATURES]` array.
+///
+/// # Shapes
+/// output: `[picks · M, PRICE_INPUTS]`
+fn inputs_of(features: &[f32], picks: &[usize], m: usize) -> Tensor<TrainBackend, 2> {
+    let k = m * TASK_FEATURES;
+    let mut inputs = vec![0.0f32; picks.len() * m * PRICE_INPUTS];
+    for (&i, out) in picks.iter().zip(inputs.chunks_exact_mut(m * PRICE_INPUTS)) {
+        task_inputs(&features[i * k..(i + 1) * k], out);
+    }
+    let shape = [picks.len() * m, PRICE_INPUTS];
+    Tensor::from_data(TensorData::new(inputs, shape), &Default::default())
+}
+
+/// Rows `picks` of a `[states, M]` array.
+///
+/// # Shapes
+/// output: `[picks, M]`
+fn rows_of(values: &[f32], picks: &[usize], m: usize) -> Tensor<TrainBackend, 2> {
+    let rows: Vec<f32> = picks
+        .iter()
+        .flat_map(|&i| values[i * m..(i + 1) * m].iter().copied())
+        .collect();
+    Tensor::from_data(TensorData::new(rows, [picks.len(), m]), &Default::default())
 }
 
 #[cfg(test)]
