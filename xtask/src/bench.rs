@@ -5,7 +5,7 @@ use std::time::Duration;
 use afg_baseline::{Allocator, Method, Optimum};
 use afg_game::GeneratorConfig;
 use afg_learn::{QNetwork, TrainBackend};
-use anyhow::{Result, bail};
+use anyhow::Result;
 use burn::tensor::Tensor;
 use clap::Args;
 
@@ -108,7 +108,7 @@ pub struct ModelBenchArgs {
 }
 
 /// A batch of `size` states from random partial episodes on fresh instances.
-fn random_batch(n: usize, size: usize) -> Result<afg_graph::GraphBatch> {
+pub(crate) fn random_batch(n: usize, size: usize) -> Result<afg_graph::GraphBatch> {
     use rand::{Rng, SeedableRng};
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(n as u64);
     let mut batch = afg_graph::GraphBatch::new(5);
@@ -209,7 +209,7 @@ pub fn run_models(args: ModelBenchArgs) -> Result<()> {
     println!(
         "\nAFGNet's training step against the plain model of the first Burn notes of this project \
          (neighbours padded to the largest degree, gather + reshape + sum; same parameters, \
-         same Q values), in the same run:\n"
+         same Q values: tested in xtask/src/plain.rs), in the same run:\n"
     );
     println!("| N | train step, plain (padded gather) | train step, ours (dense) | speed-up |");
     println!("|---|---|---|---|");
@@ -222,21 +222,6 @@ pub fn run_models(args: ModelBenchArgs) -> Result<()> {
     };
     for &n in &args.sizes {
         let batch = random_batch(n, args.batch)?;
-        let net = config.init::<TrainBackend>(&device);
-        let ours: Vec<f32> = net
-            .forward(&GraphTensors::new(&batch, &device))
-            .into_data()
-            .to_vec()
-            .expect("f32");
-        let plain: Vec<f32> = plain_q(&net, &batch).into_data().to_vec().expect("f32");
-        let gap = ours
-            .iter()
-            .zip(&plain)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f32::max);
-        if gap > 1e-4 {
-            bail!("the plain model's Q values differ from ours by {gap} at N = {n}");
-        }
         let plain = step_time(args.repeats, &config, args.batch, |net| {
             plain_q(net, &batch)
         })?;

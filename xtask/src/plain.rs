@@ -2,7 +2,7 @@
 //! `bench-models` measures our training step against: every node's neighbours padded
 //! to the batch's largest degree, gathered with `select`, reshaped to `[V, D, ·]` and
 //! summed over the slots — no dense per-graph path. It reads the parameters of an
-//! [`AfgNet`] and computes the same Q values (bench-models checks this before timing).
+//! [`AfgNet`] and computes the same Q values (tested below).
 
 use afg_graph::GraphBatch;
 use afg_learn::{Activation, AfgNet, GraphTensors};
@@ -87,4 +87,43 @@ pub fn forward<B: Backend>(
     }
     net.head
         .forward(b.graph_mean(delta.clone()), b.actor_rows(delta))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use afg_learn::{InferBackend, NetworkConfig, QNetwork};
+
+    #[test]
+    fn the_plain_model_computes_our_q_values() {
+        let device = Default::default();
+        for n in [20, 60] {
+            let batch = crate::bench::random_batch(n, 8).unwrap();
+            let net = NetworkConfig::afgnet(5, 0).init::<InferBackend>(&device);
+            let QNetwork::AfgNet(afgnet) = &net else {
+                unreachable!("an AFGNet configuration")
+            };
+            let ours: Vec<f32> = net
+                .forward(&GraphTensors::new(&batch, &device))
+                .into_data()
+                .to_vec()
+                .unwrap();
+            let plain: Vec<f32> =
+                forward(afgnet, Activation::Relu, &PaddedGraph::new(&batch, &device))
+                    .into_data()
+                    .to_vec()
+                    .unwrap();
+            assert_eq!(ours.len(), plain.len());
+            let gap = ours
+                .iter()
+                .zip(&plain)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f32::max);
+            assert!(gap < 1e-4, "N = {n}: {gap}");
+            assert!(
+                ours.iter().any(|q| q.abs() > 1e-3),
+                "Q values must not all vanish"
+            );
+        }
+    }
 }
