@@ -5,12 +5,23 @@
 /// rollouts' floating point can differ between CPUs (other SIMD kernels), and a tie
 /// broken the other way moves a mean by far less than this; a retrained model or a
 /// changed method moves it by far more.
-const RELATIVE_NOISE: f64 = 5e-4;
+pub const RELATIVE_NOISE: f64 = 5e-4;
 
 /// The cells where two renderings of the tables differ, each named by its table
 /// heading, row and column. Timings are skipped; numbers may differ by one unit of
 /// their last printed digit or by [`RELATIVE_NOISE`] (floating-point noise between
 /// machines).
+///
+/// # Examples
+/// ```
+/// use afg_eval::markdown::table_differences;
+/// let old = "**N = 20**\n\n| method | welfare | time |\n|---|---|---|\n| Greedy | 21.80 | 2 µs |\n";
+/// assert!(table_differences(old, &old.replace("2 µs", "3 µs")).is_empty()); // a timing
+/// assert_eq!(
+///     table_differences(old, &old.replace("21.80", "21.70")),
+///     ["**N = 20**, Greedy, welfare: 21.80 → 21.70"]
+/// );
+/// ```
 pub fn table_differences(committed: &str, fresh: &str) -> Vec<String> {
     fn number(cell: &str) -> Option<(f64, f64)> {
         let t = cell.trim().trim_end_matches('%').trim();
