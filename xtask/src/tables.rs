@@ -32,8 +32,6 @@ pub struct TablesArgs {
     root: Option<PathBuf>,
 }
 
-const PRETRAINED_AT: usize = ModelSpec::PRETRAINED_AT;
-
 const BEGIN: &str = "<!-- reproduce-tables:begin -->";
 const END: &str = "<!-- reproduce-tables:end -->";
 
@@ -127,11 +125,15 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
             rows.push(evaluate(&spec.label(), &policy, &insts, &opt)?);
         }
         // The N = 60 model at the other scales (the paper's "Pretrain_60" at N = 20, 100).
-        let pretrained = ModelSpec::afgnet_ddqn(PRETRAINED_AT);
+        let pretrained = ModelSpec::afgnet_ddqn(ModelSpec::PRETRAINED_AT);
         let pretrained_run = pretrained.run_dir(root);
-        if n != PRETRAINED_AT && pretrained_run.has_weights() {
+        if n != ModelSpec::PRETRAINED_AT && pretrained_run.has_weights() {
             let policy = LearnedPolicy::load(&pretrained_run.weights())?;
-            let label = format!("{} trained at N = {PRETRAINED_AT}", pretrained.label());
+            let label = format!(
+                "{} trained at N = {}",
+                pretrained.label(),
+                ModelSpec::PRETRAINED_AT
+            );
             rows.push(evaluate(&label, &policy, &insts, &opt)?);
         }
         // The same model trained further at this N (a warm start), where one exists.

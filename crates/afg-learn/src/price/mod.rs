@@ -30,6 +30,7 @@ use afg_game::{Instance, RobotId, TaskId};
 use serde::{Deserialize, Serialize};
 
 pub use features::{PriceState, TASK_FEATURES, task_inputs};
+use net::PriceScratch;
 pub use net::{PRICE_INPUTS, PriceMlp, PriceNet, PriceNetConfig};
 pub use train::{PriceRound, PriceTrainConfig, PriceTrainer};
 
@@ -193,7 +194,7 @@ impl PricePolicy {
 
     /// The task robot `t` takes in `state` with prices `prices`: the best
     /// `π_a − β d(t, a)` among tasks with room.
-    fn choose(
+    pub(super) fn choose(
         state: &PriceState<'_>,
         robot: RobotId,
         prices: &[f32],
@@ -214,13 +215,14 @@ impl PricePolicy {
         let mut state = PriceState::new(instance);
         let mut features = vec![0.0; m * TASK_FEATURES];
         let (mut prices, mut q, mut mask) = (vec![0.0; m], vec![0.0; m], vec![false; m]);
+        let mut scratch = PriceScratch::default();
         state.features(&mut features);
-        self.mlp.prices(&features, &mut prices);
+        self.mlp.prices_with(&features, &mut prices, &mut scratch);
         for robot in instance.robot_ids() {
             let refresh = robot.index() > 0 && robot.index() % self.block == 0;
             if self.mode == PriceMode::Sequential && refresh {
                 state.features(&mut features);
-                self.mlp.prices(&features, &mut prices);
+                self.mlp.prices_with(&features, &mut prices, &mut scratch);
             }
             let task =
                 Self::choose(&state, robot, &prices, &mut q, &mut mask).ok_or_else(|| {

@@ -137,22 +137,43 @@ impl PriceMlp {
     }
 
     /// The price of every task from [`super::PriceState::features`] (`[M, TASK_FEATURES]`)
-    /// into `prices` (`[M]`). Allocates two rows of scratch.
+    /// into `prices` (`[M]`). Allocates its scratch; a rollout that asks at every step
+    /// keeps one [`PriceScratch`] instead ([`PriceMlp::prices_with`]).
     pub fn prices(&self, features: &[f32], prices: &mut [f32]) {
-        let mut inputs = vec![0.0; 2 * features.len()];
-        task_inputs(features, &mut inputs);
+        self.prices_with(features, prices, &mut PriceScratch::default());
+    }
+
+    /// [`PriceMlp::prices`] with reused scratch rows: allocates only the first time.
+    pub(crate) fn prices_with(
+        &self,
+        features: &[f32],
+        prices: &mut [f32],
+        scratch: &mut PriceScratch,
+    ) {
         let h = self.hidden();
-        let (mut a, mut b) = (vec![0.0; h], vec![0.0; h]);
+        let PriceScratch { inputs, a, b } = scratch;
+        inputs.resize(2 * features.len(), 0.0);
+        a.resize(h, 0.0);
+        b.resize(h, 0.0);
+        task_inputs(features, inputs);
         let mut out = [0.0f32];
         for (input, price) in inputs.chunks_exact(PRICE_INPUTS).zip(prices.iter_mut()) {
-            self.layers[0].apply_row(input, &mut a);
+            self.layers[0].apply_row(input, a);
             a.iter_mut().for_each(|x| *x = x.max(0.0));
-            self.layers[1].apply_row(&a, &mut b);
+            self.layers[1].apply_row(a, b);
             b.iter_mut().for_each(|x| *x = x.max(0.0));
-            self.layers[2].apply_row(&b, &mut out);
+            self.layers[2].apply_row(b, &mut out);
             *price = out[0];
         }
     }
+}
+
+/// Scratch rows of [`PriceMlp::prices_with`]: the network inputs and two hidden rows.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct PriceScratch {
+    inputs: Vec<f32>,
+    a: Vec<f32>,
+    b: Vec<f32>,
 }
 
 #[cfg(test)]

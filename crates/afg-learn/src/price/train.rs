@@ -10,7 +10,7 @@
 //! the loss is the squared error of the *centred* values (each minus its mean over the
 //! tasks with room), since the policy only compares actions of one state.
 
-use afg_baseline::{Allocator, Optimum};
+use afg_baseline::Optimum;
 use afg_game::{GeneratorConfig, Instance};
 use burn::optim::adaptor::OptimizerAdaptor;
 use burn::optim::{Adam, AdamConfig, GradientsParams, Optimizer};
@@ -20,11 +20,10 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use super::features::{PriceState, TASK_FEATURES, task_inputs};
-use super::net::{PRICE_INPUTS, PriceMlp, PriceNet, PriceNetConfig};
+use super::net::{PRICE_INPUTS, PriceMlp, PriceNet, PriceNetConfig, PriceScratch};
 use super::{PriceMode, PriceModel, PricePolicy};
-use crate::{
-    LearnError, TrainBackend, masked_argmax, q_star, training_instance_seed, validation_instances,
-};
+use crate::train::validation_set;
+use crate::{LearnError, TrainBackend, masked_argmax, q_star, training_instance_seed};
 
 /// Every setting of a price-model training run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -215,13 +214,9 @@ impl PriceTrainer {
     /// [`LearnError::InvalidConfig`] for a setting out of range.
     pub fn new(config: PriceTrainConfig) -> Result<Self, LearnError> {
         config.validate()?;
-        let validation =
-            validation_instances(config.robots, config.tasks, config.validation_instances)?;
-        let optimum = validation
-            .iter()
-            .map(|inst| Optimum.allocate(inst).map(|a| inst.welfare(&a.assignment)))
-            .sum::<Result<f64, _>>()
-            .map_err(|e| LearnError::InvalidConfig(e.to_string()))?;
+        let (validation, optima) =
+            validation_set(config.robots, config.tasks, config.validation_instances)?;
+        let optimum = optima.iter().sum();
         Ok(PriceTrainer {
             net: config.network.init(&Default::default()),
             optim: AdamConfig::new().init(),
@@ -310,6 +305,7 @@ impl PriceTrainer {
         let (mut prices, mut costs) = (vec![0.0f32; m], vec![0.0f32; m]);
         let (mut targets, mut room, mut q) = (vec![0.0f32; m], vec![0.0f32; m], vec![0.0f32; m]);
         let mut mask = vec![false; m];
+        let mut scratch = PriceScratch::default();
         if self.config.one_shot_weight > 0.0 && self.initial.len < self.config.buffer_states {
             state.features(&mut features);
             let (_, prices) = Optimum.with_prices(inst);
@@ -337,11 +333,8 @@ impl PriceTrainer {
                 let open: Vec<usize> = (0..m).filter(|&j| mask[j]).collect();
                 (!open.is_empty()).then(|| open[self.rng.random_range(0..open.len())])
             } else {
-                mlp.prices(&features, &mut prices);
-                for j in 0..m {
-                    q[j] = prices[j] - costs[j];
-                }
-                masked_argmax(&q, &mask)
+                mlp.prices_with(&features, &mut prices, &mut scratch);
+                PricePolicy::choose(&state, robot, &prices, &mut q, &mut mask).map(|j| j.index())
             };
             let action = action.ok_or_else(|| {
                 LearnError::InvalidAction(format!("no task has room for robot {robot}"))

@@ -1,5 +1,6 @@
 //! Every setting of a training run, and the seeded instances it trains and validates on.
 
+use afg_baseline::Allocator;
 use afg_game::{GeneratorConfig, Instance};
 use serde::{Deserialize, Serialize};
 
@@ -313,4 +314,24 @@ pub fn validation_instances(
     (0..count as u64)
         .map(|i| Ok(GeneratorConfig::paper(robots, tasks, (1 << 63) + i).generate()?))
         .collect()
+}
+
+/// The fixed validation set ([`validation_instances`]) with the optimum's welfare of
+/// each instance, what every validation compares with.
+pub(crate) fn validation_set(
+    robots: usize,
+    tasks: usize,
+    count: usize,
+) -> Result<(Vec<Instance>, Vec<f64>), LearnError> {
+    let instances = validation_instances(robots, tasks, count)?;
+    let optima = instances
+        .iter()
+        .map(|inst| {
+            let opt = afg_baseline::Optimum
+                .allocate(inst)
+                .map_err(|e| LearnError::InvalidConfig(e.to_string()))?;
+            Ok(inst.welfare(&opt.assignment))
+        })
+        .collect::<Result<_, LearnError>>()?;
+    Ok((instances, optima))
 }

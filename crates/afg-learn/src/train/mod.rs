@@ -19,7 +19,6 @@ mod replay;
 
 use std::collections::VecDeque;
 
-use afg_baseline::{Allocator, Optimum};
 use afg_game::{Instance, RobotId, TaskId};
 use afg_graph::{AllocationState, GraphBatch, GraphKind};
 use burn::module::AutodiffModule;
@@ -31,6 +30,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 pub use checkpoint::checkpoint_dir;
+pub(crate) use config::validation_set;
 pub use config::{Algo, Preset, TrainConfig, training_instance_seed, validation_instances};
 use replay::{Episode, EpisodeRecord};
 
@@ -153,22 +153,11 @@ impl Trainer {
         next_episode: u64,
         step: u64,
     ) -> Result<Self, LearnError> {
-        let validation = validation_instances(
+        let (validation, validation_opt) = validation_set(
             config.robots,
             config.network.tasks(),
             config.validation_instances,
         )?;
-        let validation_opt = validation
-            .iter()
-            .map(|inst| {
-                Ok(inst.welfare(
-                    &Optimum
-                        .allocate(inst)
-                        .map_err(|e| LearnError::InvalidConfig(e.to_string()))?
-                        .assignment,
-                ))
-            })
-            .collect::<Result<_, LearnError>>()?;
         let replay = replay
             .into_iter()
             .map(|r| Episode::new(&config, r))
