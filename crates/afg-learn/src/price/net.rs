@@ -137,8 +137,8 @@ impl PriceMlp {
     }
 
     /// The price of every task from [`super::PriceState::features`] (`[M, TASK_FEATURES]`)
-    /// into `prices` (`[M]`). Allocates its scratch; a rollout that asks at every step
-    /// keeps one [`PriceScratch`] instead ([`PriceMlp::prices_with`]).
+    /// into `prices` (`[M]`). Allocates its scratch rows; the crate's own rollouts, which
+    /// ask at every step, reuse theirs.
     pub fn prices(&self, features: &[f32], prices: &mut [f32]) {
         self.prices_with(features, prices, &mut PriceScratch::default());
     }
