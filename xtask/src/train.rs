@@ -16,8 +16,13 @@ use clap::{Args, ValueEnum};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum AlgoArg {
+    /// DQN (the paper's bootstrap rule).
     Dqn,
+    /// Double DQN (the paper's).
     Ddqn,
+    /// Regression on the exact Q* of every action (ours; not reinforcement learning).
+    #[value(name = "qstar")]
+    QStar,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -38,7 +43,7 @@ pub struct TrainArgs {
     /// Robots per training instance N (defaults exist for 20, 60 and 100).
     #[arg(long)]
     scale: Option<usize>,
-    /// Bootstrap rule.
+    /// What the Q values are fitted to (default ddqn).
     #[arg(long, value_enum)]
     algo: Option<AlgoArg>,
     /// Network.
@@ -142,6 +147,7 @@ impl TrainArgs {
         let algo = match self.algo.unwrap_or(AlgoArg::Ddqn) {
             AlgoArg::Dqn => Algo::Dqn,
             AlgoArg::Ddqn => Algo::Ddqn,
+            AlgoArg::QStar => Algo::QStar,
         };
         let preset = if self.paper {
             Preset::Paper
@@ -515,6 +521,7 @@ pub fn run_all(args: TrainAllArgs) -> Result<()> {
             let algo = match spec.algo {
                 Algo::Dqn => AlgoArg::Dqn,
                 Algo::Ddqn => AlgoArg::Ddqn,
+                Algo::QStar => AlgoArg::QStar,
             };
             if run_dir.has_weights() && !args.force {
                 eprintln!("{name}: exists, skipped (--force retrains)");

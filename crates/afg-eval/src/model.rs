@@ -16,7 +16,8 @@ pub enum Net {
 /// What a model adds to the paper's method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Variant {
-    /// The paper's network and algorithm (training departures are in its command).
+    /// Nothing: the paper's network, trained by `algo` (the paper's algorithm unless it
+    /// is [`Algo::QStar`]; training departures are in its command).
     Paper,
     /// Ours: AFGNet with the action's immediate reward added to its Q values.
     GainResidual,
@@ -37,13 +38,17 @@ pub enum Variant {
 /// assert_eq!(m.label(), "AFGNet_DDQN");
 /// let ours = ModelSpec { variant: Variant::GainResidual, ..m };
 /// assert!(ours.is_ours() && ours.label().ends_with("(ours)"));
-/// assert_eq!(ModelSpec::table1(20).len(), 4);
+/// assert_eq!(ModelSpec::table1(20).len(), 5);
+/// let exact = ModelSpec::TRANSFERRED[1];
+/// assert_eq!(exact.dir_name(), "afgnet_qstar_n60");
+/// assert_eq!(exact.label(), "AFGNet, exact Q* regression (ours)");
+/// assert!(exact.is_ours());
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ModelSpec {
     /// The network.
     pub net: Net,
-    /// The bootstrap rule.
+    /// The bootstrap rule (or exact Q* regression).
     pub algo: Algo,
     /// The variant.
     pub variant: Variant,
@@ -58,11 +63,12 @@ impl ModelSpec {
 
     /// The learned rows of Table I at one scale, in table order: the paper's three
     /// models, then ours.
-    pub const TABLE1_KINDS: [(Net, Algo, Variant); 4] = [
+    pub const TABLE1_KINDS: [(Net, Algo, Variant); 5] = [
         (Net::S2v, Algo::Ddqn, Variant::Paper),
         (Net::AfgNet, Algo::Dqn, Variant::Paper),
         (Net::AfgNet, Algo::Ddqn, Variant::Paper),
         (Net::AfgNet, Algo::Ddqn, Variant::GainResidual),
+        (Net::AfgNet, Algo::QStar, Variant::Paper),
     ];
 
     /// A model.
@@ -87,6 +93,19 @@ impl ModelSpec {
     pub const fn afgnet_ddqn(robots: usize) -> Self {
         Self::new(Net::AfgNet, Algo::Ddqn, Variant::Paper, robots)
     }
+
+    /// The models trained at [`ModelSpec::PRETRAINED_AT`] that the tables also run at
+    /// every other N: the paper's AFGNet DDQN, and AFGNet trained on the exact Q*
+    /// (ours).
+    pub const TRANSFERRED: [ModelSpec; 2] = [
+        Self::afgnet_ddqn(Self::PRETRAINED_AT),
+        Self::new(
+            Net::AfgNet,
+            Algo::QStar,
+            Variant::Paper,
+            Self::PRETRAINED_AT,
+        ),
+    ];
 
     /// The run directory's name under `models/`, e.g. `afgnet_ddqn_n60`.
     pub fn dir_name(&self) -> String {
@@ -116,6 +135,7 @@ impl ModelSpec {
         let algo = match self.algo {
             Algo::Dqn => "DQN",
             Algo::Ddqn => "DDQN",
+            Algo::QStar => return format!("{net}, exact Q* regression (ours)"),
         };
         match self.variant {
             Variant::Paper => format!("{net}_{algo}"),
@@ -130,7 +150,7 @@ impl ModelSpec {
     /// Whether the model is ours (not the paper's network and algorithm); the tables
     /// treat ours as optional. A warm start keeps the paper's network and algorithm.
     pub fn is_ours(&self) -> bool {
-        self.variant == Variant::GainResidual
+        self.variant == Variant::GainResidual || self.algo == Algo::QStar
     }
 }
 

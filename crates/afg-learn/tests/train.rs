@@ -58,6 +58,7 @@ fn smoke_run_has_finite_losses_and_validations() {
     for (algo, net) in [
         (Algo::Ddqn, NetworkConfig::afgnet(5, 1)),
         (Algo::Dqn, NetworkConfig::s2v(5, 1)),
+        (Algo::QStar, NetworkConfig::afgnet(5, 1)),
     ] {
         let mut t = Trainer::new(tiny(algo, net, 200)).unwrap();
         let (mut losses, mut validations) = (Vec::new(), Vec::new());

@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::{LearnError, NetworkConfig};
 
-/// The bootstrap rule.
+/// What the network's Q values are fitted to: a bootstrap rule, or the exact `Q*`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Algo {
@@ -14,14 +14,22 @@ pub enum Algo {
     Dqn,
     /// `r + Q_target(s', argmax_a Q_online(s', a))`.
     Ddqn,
+    /// Every allowed action's value regressed on the exact `Q*(s, a)` of the sequential
+    /// MDP ([`crate::q_star`]), on the states the ε-greedy policy of the network visits
+    /// (as in DAgger), in the run's reward convention: divided by the welfare unit with
+    /// `reward_scaling`, minus the shaping potential with `greedy_shaping` (the exact
+    /// value that the TD targets estimate). Supervised, not reinforcement learning, and
+    /// not in the paper (ours).
+    QStar,
 }
 
 impl Algo {
-    /// `dqn` or `ddqn`.
+    /// `dqn`, `ddqn` or `qstar`.
     pub fn name(self) -> &'static str {
         match self {
             Algo::Dqn => "dqn",
             Algo::Ddqn => "ddqn",
+            Algo::QStar => "qstar",
         }
     }
 }

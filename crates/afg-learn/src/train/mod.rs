@@ -7,7 +7,9 @@
 //!   states and reward are rebuilt when it is sampled.
 //! - **Learning.** One gradient step per acting step: Adam on the Huber (or squared)
 //!   error between `Q(s_t, a_t)` and the DQN or Double DQN target, the target network
-//!   synced every `target_sync` steps.
+//!   synced every `target_sync` steps; or, with [`Algo::QStar`], between `Q(s_t, ·)`
+//!   and the exact `Q*(s_t, ·)` of every task with room (one optimal completion per
+//!   task, [`crate::q_star`]).
 //! - **Determinism.** Everything random comes from one ChaCha8 generator seeded by
 //!   `seed`; a checkpoint stores its state, the replay records, the running episodes,
 //!   both networks and Adam's moments, so a resumed run ends with the same weights as
@@ -36,7 +38,7 @@ use replay::{Episode, EpisodeRecord};
 
 use crate::{
     GraphTensors, InferBackend, LearnError, QNetwork, TrainBackend, double_dqn_target, dqn_target,
-    greedy_rollouts, masked_argmax, n_step_reward,
+    greedy_completion_welfare, greedy_rollouts, masked_argmax, n_step_reward, q_star,
 };
 
 /// What one call of [`Trainer::step`] did.
@@ -267,6 +269,115 @@ impl Trainer {
     /// One gradient step on a sampled batch; returns the loss. A non-finite loss is an
     /// error and leaves the weights untouched.
     fn learn(&mut self) -> Result<f32, LearnError> {
+        let device = Default::default();
+        let loss = match self.config.algo {
+            Algo::Dqn | Algo::Ddqn => {
+                let (now, actions, targets) = self.td_batch();
+                let b = actions.len();
+                let g = GraphTensors::<TrainBackend>::new(&now, &device);
+                let action_index = Tensor::<TrainBackend, 2, Int>::from_data(
+                    TensorData::new(actions, [b, 1]),
+                    &device,
+                );
+                let q_sa = self.online.forward(&g).gather(1, action_index);
+                let y =
+                    Tensor::<TrainBackend, 2>::from_data(TensorData::new(targets, [b, 1]), &device);
+                self.elementwise_loss(q_sa - y).mean()
+            }
+            Algo::QStar => {
+                let (now, labels, allowed) = self.q_star_batch()?;
+                let shape = [now.num_graphs(), self.config.network.tasks()];
+                let count = allowed.iter().sum::<f32>();
+                let g = GraphTensors::<TrainBackend>::new(&now, &device);
+                let y =
+                    Tensor::<TrainBackend, 2>::from_data(TensorData::new(labels, shape), &device);
+                let w =
+                    Tensor::<TrainBackend, 2>::from_data(TensorData::new(allowed, shape), &device);
+                // Full tasks have label 0 and weight 0: they add nothing.
+                let diff = (self.online.forward(&g) - y) * w;
+                self.elementwise_loss(diff).sum() / count
+            }
+        };
+        let loss_value: f32 = loss.clone().into_scalar();
+        if !loss_value.is_finite() {
+            return Err(LearnError::NonFiniteLoss {
+                step: self.step + 1,
+                loss: loss_value,
+            });
+        }
+        let grads = GradientsParams::from_grads(loss.backward(), &self.online);
+        let lr = self.config.learning_rate(self.step);
+        self.online = self.optim.step(lr, self.online.clone(), grads);
+        Ok(loss_value)
+    }
+
+    /// The Huber (δ = 1) or squared error of every entry of `diff`.
+    fn elementwise_loss<const D: usize>(
+        &self,
+        diff: Tensor<TrainBackend, D>,
+    ) -> Tensor<TrainBackend, D> {
+        if self.config.huber {
+            // huber(x) = q²/2 + (|x| - q) with q = min(|x|, 1).
+            let abs = diff.abs();
+            let quad = abs.clone().clamp_max(1.0);
+            quad.clone().powi_scalar(2) * 0.5 + (abs - quad)
+        } else {
+            diff.powi_scalar(2)
+        }
+    }
+
+    /// A sampled batch of states with the exact `Q*` of every task (the run's reward
+    /// convention) and 1 where the task has room, 0 where it is full, row-major `[b, M]`.
+    fn q_star_batch(&mut self) -> Result<(GraphBatch, Vec<f32>, Vec<f32>), LearnError> {
+        let (n, m, b) = (
+            self.config.robots,
+            self.config.network.tasks(),
+            self.config.batch,
+        );
+        let total = self.replay_len();
+        let units = self.config.network.units();
+        let mut now = GraphBatch::new(m);
+        let mut labels = Vec::with_capacity(b * m);
+        let mut allowed = Vec::with_capacity(b * m);
+        for _ in 0..b {
+            let k = self.rng.random_range(0..total);
+            let (ep, t) = (&self.replay[k / n], k % n);
+            let robot = RobotId(t as u32);
+            for value in self.q_star_labels(ep, t)? {
+                labels.push(value.unwrap_or(0.0));
+                allowed.push(if value.is_some() { 1.0 } else { 0.0 });
+            }
+            let a = ep.assignment_after(t);
+            now.push(
+                &ep.graph,
+                &AllocationState::with_units(&ep.instance, a, units),
+                robot,
+            );
+        }
+        Ok((now, labels, allowed))
+    }
+
+    /// The exact `Q*(s_t, ·)` of episode `ep`'s step `t` in the run's reward convention:
+    /// minus the shaping potential `Φ(s) = W(greedy completion of s) − W(s)` with
+    /// `greedy_shaping`, divided by the welfare unit with `reward_scaling`; `None` where
+    /// the task is full.
+    fn q_star_labels(&self, ep: &Episode, t: usize) -> Result<Vec<Option<f32>>, LearnError> {
+        let a = ep.assignment_after(t);
+        let offset = if self.config.greedy_shaping {
+            ep.instance.welfare(&a) - greedy_completion_welfare(&ep.instance, &a)
+        } else {
+            0.0
+        };
+        let unit = self.reward_unit(&ep.instance);
+        Ok(q_star(&ep.instance, &a, RobotId(t as u32))?
+            .into_iter()
+            .map(|q| q.map(|v| ((v + offset) / unit) as f32))
+            .collect())
+    }
+
+    /// A sampled batch of transitions: the states, the actions taken and their DQN or
+    /// Double DQN targets.
+    fn td_batch(&mut self) -> (GraphBatch, Vec<i64>, Vec<f32>) {
         let (n, m, b) = (
             self.config.robots,
             self.config.network.tasks(),
@@ -321,7 +432,7 @@ impl Trainer {
                     .into_data()
                     .to_vec()
                     .expect("f32"),
-                Algo::Dqn => Vec::new(),
+                Algo::Dqn | Algo::QStar => Vec::new(),
             };
             (target, online)
         } else {
@@ -334,7 +445,6 @@ impl Trainer {
                     let range = row * m..(row + 1) * m;
                     let mask = &next.mask[range.clone()];
                     match self.config.algo {
-                        Algo::Dqn => dqn_target(rewards[i], &next_target[range], mask, false),
                         Algo::Ddqn => double_dqn_target(
                             rewards[i],
                             &next_online[range.clone()],
@@ -342,35 +452,14 @@ impl Trainer {
                             mask,
                             false,
                         ),
+                        Algo::Dqn | Algo::QStar => {
+                            dqn_target(rewards[i], &next_target[range], mask, false)
+                        }
                     }
                 }
             })
             .collect();
-        let g = GraphTensors::<TrainBackend>::new(&now, &device);
-        let action_index =
-            Tensor::<TrainBackend, 2, Int>::from_data(TensorData::new(actions, [b, 1]), &device);
-        let q_sa = self.online.forward(&g).gather(1, action_index);
-        let y = Tensor::<TrainBackend, 2>::from_data(TensorData::new(targets, [b, 1]), &device);
-        let diff = q_sa - y;
-        let loss = if self.config.huber {
-            // huber(x) = q²/2 + (|x| - q) with q = min(|x|, 1).
-            let abs = diff.abs();
-            let quad = abs.clone().clamp_max(1.0);
-            (quad.clone().powi_scalar(2) * 0.5 + (abs - quad)).mean()
-        } else {
-            diff.powi_scalar(2).mean()
-        };
-        let loss_value: f32 = loss.clone().into_scalar();
-        if !loss_value.is_finite() {
-            return Err(LearnError::NonFiniteLoss {
-                step: self.step + 1,
-                loss: loss_value,
-            });
-        }
-        let grads = GradientsParams::from_grads(loss.backward(), &self.online);
-        let lr = self.config.learning_rate(self.step);
-        self.online = self.optim.step(lr, self.online.clone(), grads);
-        Ok(loss_value)
+        (now, actions, targets)
     }
 
     /// The greedy policy of the current network on the validation set.
@@ -457,5 +546,63 @@ impl Trainer {
             epsilon,
             validation,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use afg_baseline::{Allocator, Optimum};
+
+    use super::*;
+    use crate::NetworkConfig;
+
+    /// Checks every step of every episode in the replay buffer of a small `QStar` run.
+    fn replay_labels(shaping: bool, check: impl Fn(&Episode, usize, f32)) {
+        let mut c = TrainConfig::new(7, Algo::QStar, NetworkConfig::afgnet(3, 0), 10, 1);
+        (c.greedy_shaping, c.reward_scaling, c.validation_instances) = (shaping, false, 2);
+        let mut t = Trainer::new(c).unwrap();
+        while t.replay.len() < 20 {
+            t.act(1.0).unwrap();
+        }
+        for ep in &t.replay {
+            for step in 0..7 {
+                let labels = t.q_star_labels(ep, step).unwrap();
+                assert!(
+                    labels.iter().all(Option::is_some),
+                    "no capacities: never full"
+                );
+                let best = labels
+                    .iter()
+                    .flatten()
+                    .fold(f32::NEG_INFINITY, |a, &b| a.max(b));
+                check(ep, step, best);
+            }
+        }
+    }
+
+    #[test]
+    fn unshaped_q_star_labels_start_at_the_optimum() {
+        replay_labels(false, |ep, step, best| {
+            if step == 0 {
+                let opt = Optimum.allocate(&ep.instance).unwrap().assignment;
+                let opt = ep.instance.welfare(&opt) as f32;
+                assert!(
+                    (best - opt).abs() < 1e-4 * opt.abs().max(1.0),
+                    "{best} vs {opt}"
+                );
+            }
+        });
+    }
+
+    #[test]
+    fn shaped_q_star_labels_are_what_an_optimal_finish_adds_over_greedy() {
+        // Greedy's own first choice completes greedily, so the best label is ≥ 0; the
+        // last robot's greedy choice is optimal, so there it is 0.
+        replay_labels(true, |_, step, best| {
+            assert!(best > -1e-4, "step {step}: {best}");
+            if step == 6 {
+                assert!(best.abs() < 1e-4, "last step: {best}");
+            }
+        });
     }
 }
