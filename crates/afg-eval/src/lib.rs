@@ -1,6 +1,7 @@
 //! Evaluation of allocators: the fixed test datasets ([`dataset`]), one way to score an
 //! allocation against the exact optimum ([`Score`], [`evaluate`]), the learned models
-//! of the paper's tables ([`ModelSpec`]) and the numbers the paper reports ([`paper`]).
+//! of the paper's tables ([`ModelSpec`]), the numbers the paper reports ([`paper`]) and
+//! the tables themselves ([`tables`]).
 //!
 //! Every command that prints "% of OPT" computes it here.
 
@@ -10,6 +11,7 @@ pub mod markdown;
 mod model;
 pub mod paper;
 mod score;
+pub mod tables;
 
 pub use error::EvalError;
 pub use model::{ModelSpec, Net, PriceSpec, Variant};
