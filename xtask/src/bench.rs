@@ -3,6 +3,7 @@
 use std::time::Duration;
 
 use afg_baseline::{Allocator, Method, Optimum};
+use afg_eval::tables::duration;
 use afg_game::GeneratorConfig;
 use afg_learn::{QNetwork, TrainBackend};
 use anyhow::Result;
@@ -44,17 +45,6 @@ fn median_time(
     Ok((times[times.len() / 2], welfare))
 }
 
-pub fn fmt_time(d: Duration) -> String {
-    let s = d.as_secs_f64();
-    if s < 1e-3 {
-        format!("{:.1} µs", s * 1e6)
-    } else if s < 1.0 {
-        format!("{:.2} ms", s * 1e3)
-    } else {
-        format!("{s:.2} s")
-    }
-}
-
 pub fn run(args: BenchArgs) -> Result<()> {
     let methods = [
         Method::Opt,
@@ -84,7 +74,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
                 continue;
             }
             let (t, w) = median_time(m.allocator(0).as_ref(), &inst, args.seconds)?;
-            print!(" {} ({:.2} %) |", fmt_time(t), 100.0 * w / opt);
+            print!(" {} ({:.2} %) |", duration(t), 100.0 * w / opt);
         }
         println!();
     }
@@ -198,10 +188,10 @@ pub fn run_models(args: ModelBenchArgs) -> Result<()> {
             println!(
                 "| {} | {n} | {} | {} | {} | {} | {:.1}× |",
                 config.name(),
-                fmt_time(forward[0]),
-                fmt_time(forward[1]),
-                fmt_time(step[0]),
-                fmt_time(step[1]),
+                duration(forward[0]),
+                duration(forward[1]),
+                duration(step[0]),
+                duration(step[1]),
                 step[0].as_secs_f64() / step[1].as_secs_f64()
             );
         }
@@ -230,8 +220,8 @@ pub fn run_models(args: ModelBenchArgs) -> Result<()> {
         })?;
         println!(
             "| {n} | {} | {} | {:.1}× |",
-            fmt_time(plain),
-            fmt_time(ours),
+            duration(plain),
+            duration(ours),
             plain.as_secs_f64() / ours.as_secs_f64()
         );
     }
@@ -249,8 +239,8 @@ pub fn run_models(args: ModelBenchArgs) -> Result<()> {
         println!(
             "| {} | {} | {} | {:.1}× |",
             config.name(),
-            fmt_time(burn),
-            fmt_time(fast),
+            duration(burn),
+            duration(fast),
             burn.as_secs_f64() / fast.as_secs_f64()
         );
     }

@@ -16,7 +16,7 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use serde::{Deserialize, Serialize};
 
-use crate::bench::fmt_time;
+use afg_eval::tables::duration;
 
 #[derive(Args)]
 pub struct ScaleArgs {
@@ -297,14 +297,14 @@ pub fn run(args: ScaleArgs) -> Result<()> {
             label(&o.case),
             trained,
             o.passes.map_or("–".into(), |p| p.to_string()),
-            fmt_time(Duration::from_secs_f64(o.seconds)),
+            duration(Duration::from_secs_f64(o.seconds)),
             percent(o.welfare),
             o.rollout_welfare
                 .filter(|_| o.repair_moves.is_some())
                 .map_or("–".into(), percent),
             o.repair_moves.map_or("–".into(), |m| m.to_string()),
             o.repair_seconds
-                .map_or("–".into(), |s| fmt_time(Duration::from_secs_f64(s))),
+                .map_or("–".into(), |s| duration(Duration::from_secs_f64(s))),
             o.peak_rss_mib.map_or("–".into(), |m| format!("{m:.0} MiB")),
         );
     }

@@ -5,7 +5,8 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use afg_baseline::{Allocator, Method, Optimum};
-use afg_eval::{ModelSpec, Net, Summary, Variant, dataset, evaluate, optima, paper};
+use afg_eval::tables::{Row, Scale, headline, table1_markdown, table2_markdown};
+use afg_eval::{ModelSpec, Net, Variant, dataset, evaluate, optima};
 use afg_game::Instance;
 use afg_learn::LearnedPolicy;
 use anyhow::{Context, Result, bail};
@@ -32,32 +33,35 @@ pub struct TablesArgs {
     root: Option<PathBuf>,
 }
 
+/// What Table I's rows are, under it.
+const TABLE1_NOTE: &str = "The learned rows keep the paper's networks and algorithms; where their training departs from the paper (units of the inputs and rewards, reward shaping, loss, learning rate, target sync) is in each model's command under \"The committed models\" in docs/RESULTS.md, and explained in docs/training.md. The rows marked (ours) are not the paper's method: \"AFGNet, exact Q* regression\" is the paper's network trained by regression on the exact Q* of the sequential MDP instead of TD targets (docs/training.md); the price model (docs/price.md) is a per-task price network trained on the same Q*, run without any repair.\n\n";
+
 const BEGIN: &str = "<!-- reproduce-tables:begin -->";
 const END: &str = "<!-- reproduce-tables:end -->";
 
 #[derive(Serialize)]
 struct Results {
     quick: bool,
-    table1: Vec<(usize, Vec<Summary>)>,
-    table2: Vec<(usize, Vec<Summary>)>,
+    table1: Vec<Scale>,
+    table2: Vec<Scale>,
     price_ablation: Vec<crate::price::AblationRow>,
     price_ablation_instances: usize,
     missing_models: Vec<String>,
 }
 
 /// Every classical method on `insts` (the decentralised DA only up to N = 1000).
-fn classical_rows(n: usize, insts: &[Instance], opt: &[f64]) -> Result<Vec<Summary>> {
+fn classical_rows(n: usize, insts: &[Instance], opt: &[f64]) -> Result<Vec<Row>> {
     let mut rows = Vec::new();
     for method in Method::ALL {
         if n > 1000 && method == Method::DaDecentralised {
             continue;
         }
-        rows.push(evaluate(
+        rows.push(Row::new(evaluate(
             method.label(),
             method.allocator(0).as_ref(),
             insts,
             opt,
-        )?);
+        )?));
     }
     Ok(rows)
 }
@@ -122,7 +126,10 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
             }
             let policy = LearnedPolicy::load(&run.weights())
                 .with_context(|| format!("loading {}", run.path().display()))?;
-            rows.push(evaluate(&spec.label(), &policy, &insts, &opt)?);
+            rows.push(Row::of_model(
+                spec,
+                evaluate(&spec.label(), &policy, &insts, &opt)?,
+            ));
         }
         // The N = 60 models at the other scales (the paper's "Pretrain_60" at N = 20, 100).
         for pretrained in ModelSpec::TRANSFERRED {
@@ -134,7 +141,7 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
                     pretrained.label(),
                     ModelSpec::PRETRAINED_AT
                 );
-                rows.push(evaluate(&label, &policy, &insts, &opt)?);
+                rows.push(Row::new(evaluate(&label, &policy, &insts, &opt)?));
             }
         }
         // The same model trained further at this N (a warm start), where one exists.
@@ -144,12 +151,16 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
         };
         if warm.run_dir(root).has_weights() {
             let policy = LearnedPolicy::load(&warm.run_dir(root).weights())?;
-            rows.push(evaluate(&warm.label(), &policy, &insts, &opt)?);
+            rows.push(Row::new(evaluate(&warm.label(), &policy, &insts, &opt)?));
         }
-        rows.extend(crate::price::rows(root, n, &insts, &opt)?);
+        rows.extend(
+            crate::price::rows(root, n, &insts, &opt)?
+                .into_iter()
+                .map(Row::new),
+        );
         rows.extend(classical_rows(n, &insts, &opt)?);
         bar.inc(1);
-        table1.push((n, rows));
+        table1.push(Scale { robots: n, rows });
     }
     let mut table2 = Vec::new();
     for n in dataset::TABLE2_SIZES {
@@ -160,7 +171,11 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
         let opt = optima(&insts)?;
         let mut rows = Vec::new();
         rows.extend(classical_rows(n, &insts, &opt)?);
-        rows.extend(crate::price::rows(root, n, &insts, &opt)?);
+        rows.extend(
+            crate::price::rows(root, n, &insts, &opt)?
+                .into_iter()
+                .map(Row::new),
+        );
         let few = t2_learned.min(insts.len());
         for variant in [Variant::Paper, Variant::GainResidual] {
             for trained in dataset::TABLE1_SIZES {
@@ -174,12 +189,17 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
                 }
                 let policy = LearnedPolicy::load(&run.weights())?;
                 let label = format!("{} trained at N = {trained}", spec.label());
-                rows.push(evaluate(&label, &policy, &insts[..few], &opt[..few])?);
+                rows.push(Row::new(evaluate(
+                    &label,
+                    &policy,
+                    &insts[..few],
+                    &opt[..few],
+                )?));
                 if variant == Variant::Paper {
                     // The fast variant: one pass per N/100 robots, then balanced repair.
                     let policy = policy.with_block(n / 100)?.with_repair(true);
                     let label = format!("{label}, block {}, + repair", policy.block());
-                    rows.push(evaluate(&label, &policy, &insts, &opt)?);
+                    rows.push(Row::new(evaluate(&label, &policy, &insts, &opt)?));
                 }
             }
         }
@@ -189,11 +209,16 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
             if run.has_weights() {
                 let policy = LearnedPolicy::load(&run.weights())?;
                 let label = format!("{} trained at N = {}", spec.label(), spec.trained_at);
-                rows.push(evaluate(&label, &policy, &insts[..few], &opt[..few])?);
+                rows.push(Row::new(evaluate(
+                    &label,
+                    &policy,
+                    &insts[..few],
+                    &opt[..few],
+                )?));
             }
         }
         bar.inc(1);
-        table2.push((n, rows));
+        table2.push(Scale { robots: n, rows });
     }
     bar.finish_and_clear();
     missing.sort();
@@ -208,94 +233,10 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
     })
 }
 
-fn row_line(r: &Summary, paper: &str) -> String {
-    format!(
-        "| {} | {:.2} | {:.2} % | {:.1} % | {:.1} % | {} | {} |",
-        r.method,
-        r.welfare,
-        r.percent_of_opt,
-        r.ns_rate_balanced,
-        r.ns_rate_selfish,
-        crate::bench::fmt_time(std::time::Duration::from_secs_f64(r.seconds_per_instance)),
-        paper
-    )
-}
-
 fn markdown_tables(res: &Results) -> String {
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "### Table I — mean over the first {} instances of each test set\n",
-        res.table1[0].1[0].instances
-    );
-    for (n, rows) in &res.table1 {
-        let paper = paper::table1(*n).expect("the paper reports every N of Table I");
-        let _ = writeln!(
-            s,
-            "**N = {n}** (paper: S2V_DDQN {}, AFGNet_DQN {}, AFGNet_DDQN {}, NS_rate {} %)\n",
-            paper.s2v_ddqn, paper.afgnet_dqn, paper.afgnet_ddqn, paper.afgnet_ddqn_ns_rate
-        );
-        let _ = writeln!(
-            s,
-            "| method | welfare | % of OPT | NS_rate balanced | NS_rate selfish | time / instance | paper welfare |"
-        );
-        let _ = writeln!(s, "|---|---|---|---|---|---|---|");
-        for r in rows {
-            let model = ModelSpec::table1(*n)
-                .into_iter()
-                .find(|m| m.label() == r.method);
-            let p = match model.and_then(|m| paper.welfare_of(&m).map(|w| (m, w))) {
-                Some((m, w)) if m == ModelSpec::afgnet_ddqn(*n) => {
-                    format!("{w} (NS {} %)", paper.afgnet_ddqn_ns_rate)
-                }
-                Some((_, w)) => format!("{w}"),
-                None => "–".into(),
-            };
-            let _ = writeln!(s, "{}", row_line(r, &p));
-        }
-        let _ = writeln!(s);
-    }
-    let _ = writeln!(
-        s,
-        "The learned rows keep the paper's networks and algorithms; where their training departs from the paper (units of the inputs and rewards, reward shaping, loss, learning rate, target sync) is in each model's command under \"The committed models\" in docs/RESULTS.md, and explained in docs/training.md. The rows marked (ours) are not the paper's method: \"AFGNet, exact Q* regression\" is the paper's network trained by regression on the exact Q* of the sequential MDP instead of TD targets (docs/training.md); the price model (docs/price.md) is a per-task price network trained on the same Q*, run without any repair.\n"
-    );
-    let _ = writeln!(
-        s,
-        "### Table II — large swarms (classical methods on the first {} instances)\n",
-        res.table2[0].1[0].instances
-    );
-    for (n, rows) in &res.table2 {
-        let paper = paper::table2(*n).expect("the paper reports every N of Table II");
-        let _ = writeln!(
-            s,
-            "**N = {n}** (paper: DA {} in {} s, NS {} %; Pretrain_60 {} in {} s, NS {} %)\n",
-            paper.da_welfare,
-            paper.da_seconds,
-            paper.da_ns_rate,
-            paper.pretrain60_welfare,
-            paper.pretrain60_seconds,
-            paper.pretrain60_ns_rate
-        );
-        let _ = writeln!(
-            s,
-            "| method | instances | welfare | % of OPT | NS_rate balanced | NS_rate selfish | time / instance |"
-        );
-        let _ = writeln!(s, "|---|---|---|---|---|---|---|");
-        for r in rows {
-            let _ = writeln!(
-                s,
-                "| {} | {} | {:.2} | {:.2} % | {:.1} % | {:.1} % | {} |",
-                r.method,
-                r.instances,
-                r.welfare,
-                r.percent_of_opt,
-                r.ns_rate_balanced,
-                r.ns_rate_selfish,
-                crate::bench::fmt_time(std::time::Duration::from_secs_f64(r.seconds_per_instance))
-            );
-        }
-        let _ = writeln!(s);
-    }
+    let mut s = table1_markdown(&res.table1);
+    s.push_str(TABLE1_NOTE);
+    s.push_str(&table2_markdown(&res.table2));
     if !res.price_ablation.is_empty() {
         s += &crate::price::ablation_markdown(&res.price_ablation, res.price_ablation_instances);
     }
@@ -343,7 +284,7 @@ fn write_outputs(root: &Path, res: &Results, tables: &str, quick: bool) -> Resul
     md.push_str(tables);
     md.push_str(END);
     md.push('\n');
-    let _ = writeln!(md, "\n{}", headline(res));
+    let _ = writeln!(md, "\n{}", headline(&res.table1));
     md.push_str(&models_table(root)?);
     afg_game::io::write_atomic(&docs.join("RESULTS.md"), md.as_bytes())?;
     let readme = root.join("README.md");
@@ -427,41 +368,6 @@ fn models_table(root: &Path) -> Result<String> {
     Ok(md)
 }
 
-/// The honest headline: AFGNet_DDQN against DA, greedy and OPT at each N, in numbers.
-fn headline(res: &Results) -> String {
-    let mut s = String::from("**Headline.** ");
-    for (n, rows) in &res.table1 {
-        let get = |m: &str| rows.iter().find(|r| r.method == m);
-        let (Some(da), Some(greedy), Some(nearest)) = (
-            get(Method::Da.label()),
-            get(Method::Greedy.label()),
-            get(Method::Nearest.label()),
-        ) else {
-            continue;
-        };
-        match get(&ModelSpec::afgnet_ddqn(*n).label()) {
-            Some(drl) => {
-                let _ = write!(
-                    s,
-                    "At N = {n}, AFGNet_DDQN reaches {:.1} % of OPT, against {:.1} % for GRAPE DA, {:.1} % for one-pass greedy and {:.1} % for nearest-task. ",
-                    drl.percent_of_opt,
-                    da.percent_of_opt,
-                    greedy.percent_of_opt,
-                    nearest.percent_of_opt
-                );
-            }
-            None => {
-                let _ = write!(
-                    s,
-                    "At N = {n} no AFGNet_DDQN model is committed yet; GRAPE DA reaches {:.1} % of OPT, greedy {:.1} % and nearest {:.1} %. ",
-                    da.percent_of_opt, greedy.percent_of_opt, nearest.percent_of_opt
-                );
-            }
-        }
-    }
-    s
-}
-
 /// The tables between the BEGIN and END markers of a file.
 fn results_block(path: &Path) -> Result<String> {
     let text =
@@ -489,7 +395,7 @@ mod tests {
         let mut v = serde_json::to_value(r).unwrap();
         for table in ["table1", "table2"] {
             for entry in v[table].as_array_mut().unwrap() {
-                for row in entry[1].as_array_mut().unwrap() {
+                for row in entry["rows"].as_array_mut().unwrap() {
                     row["seconds_per_instance"] = serde_json::Value::Null;
                 }
             }
@@ -503,13 +409,14 @@ mod tests {
         let a = compute(&root, true).unwrap();
         let b = compute(&root, true).unwrap();
         assert_eq!(without_timings(&a), without_timings(&b));
-        for (_, rows) in a.table1.iter().chain(&a.table2) {
+        for scale in a.table1.iter().chain(&a.table2) {
+            let rows: Vec<_> = scale.rows.iter().map(|r| &r.summary).collect();
             let opt = rows
                 .iter()
                 .find(|r| r.method == Method::Opt.label())
                 .unwrap();
             assert!((opt.percent_of_opt - 100.0).abs() < 1e-9);
-            for r in rows {
+            for r in &rows {
                 assert!(
                     r.welfare <= opt.welfare + 1e-9 * opt.welfare.abs()
                         || r.instances < opt.instances,
