@@ -261,7 +261,10 @@ mod tests {
         let mut impostor = scale_60();
         impostor.rows[0].model = None;
         let md = table1_markdown(&[impostor]);
-        let line = md.lines().find(|l| l.starts_with("| AFGNet_DDQN |")).unwrap();
+        let line = md
+            .lines()
+            .find(|l| l.starts_with("| AFGNet_DDQN |"))
+            .unwrap();
         assert!(line.ends_with("| – |"), "{line}");
     }
 
