@@ -177,44 +177,35 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
                 .map(Row::new),
         );
         let few = t2_learned.min(insts.len());
-        for variant in [Variant::Paper, Variant::GainResidual] {
-            for trained in dataset::TABLE1_SIZES {
-                let spec = ModelSpec {
+        // The paper's model and ours with the gain residual at every training N, then
+        // ours trained at N = 60 only.
+        let specs = [Variant::Paper, Variant::GainResidual]
+            .into_iter()
+            .flat_map(|variant| {
+                dataset::TABLE1_SIZES.map(|trained| ModelSpec {
                     variant,
                     ..ModelSpec::afgnet_ddqn(trained)
-                };
-                let run = spec.run_dir(root);
-                if !run.has_weights() {
-                    continue;
-                }
-                let policy = LearnedPolicy::load(&run.weights())?;
-                let label = format!("{} trained at N = {trained}", spec.label());
-                rows.push(Row::new(evaluate(
-                    &label,
-                    &policy,
-                    &insts[..few],
-                    &opt[..few],
-                )?));
-                if variant == Variant::Paper {
-                    // The fast variant: one pass per N/100 robots, then balanced repair.
-                    let policy = policy.with_block(n / 100)?.with_repair(true);
-                    let label = format!("{label}, block {}, + repair", policy.block());
-                    rows.push(Row::new(evaluate(&label, &policy, &insts, &opt)?));
-                }
-            }
-        }
-        // Ours trained at N = 60 only (the paper's models are above, at every N).
-        for spec in ModelSpec::TRANSFERRED.iter().filter(|s| s.is_ours()) {
+                })
+            })
+            .chain(ModelSpec::TRANSFERRED.into_iter().filter(|s| s.is_ours()));
+        for spec in specs {
             let run = spec.run_dir(root);
-            if run.has_weights() {
-                let policy = LearnedPolicy::load(&run.weights())?;
-                let label = format!("{} trained at N = {}", spec.label(), spec.trained_at);
-                rows.push(Row::new(evaluate(
-                    &label,
-                    &policy,
-                    &insts[..few],
-                    &opt[..few],
-                )?));
+            if !run.has_weights() {
+                continue;
+            }
+            let policy = LearnedPolicy::load(&run.weights())?;
+            let label = format!("{} trained at N = {}", spec.label(), spec.trained_at);
+            rows.push(Row::new(evaluate(
+                &label,
+                &policy,
+                &insts[..few],
+                &opt[..few],
+            )?));
+            if spec == ModelSpec::afgnet_ddqn(spec.trained_at) {
+                // The fast variant: one pass per N/100 robots, then balanced repair.
+                let policy = policy.with_block(n / 100)?.with_repair(true);
+                let label = format!("{label}, block {}, + repair", policy.block());
+                rows.push(Row::new(evaluate(&label, &policy, &insts, &opt)?));
             }
         }
         bar.inc(1);
