@@ -70,8 +70,20 @@ pub fn duration(d: Duration) -> String {
     }
 }
 
-fn seconds(s: f64) -> String {
-    duration(Duration::from_secs_f64(s))
+/// The measured cells both tables share: welfare, % of OPT, the two NS_rates and the
+/// time per instance.
+const MEASURED_HEADER: &str =
+    "welfare | % of OPT | NS_rate balanced | NS_rate selfish | time / instance";
+
+fn measured_cells(r: &Summary) -> String {
+    format!(
+        "{:.2} | {:.2} % | {:.1} % | {:.1} % | {}",
+        r.welfare,
+        r.percent_of_opt,
+        r.ns_rate_balanced,
+        r.ns_rate_selfish,
+        duration(Duration::from_secs_f64(r.seconds_per_instance))
+    )
 }
 
 /// Table I in Markdown: per N, every row with the paper's welfare beside the paper's
@@ -94,10 +106,7 @@ pub fn table1_markdown(scales: &[Scale]) -> String {
             "**N = {n}** (paper: S2V_DDQN {}, AFGNet_DQN {}, AFGNet_DDQN {}, NS_rate {} %)\n",
             paper.s2v_ddqn, paper.afgnet_dqn, paper.afgnet_ddqn, paper.afgnet_ddqn_ns_rate
         );
-        let _ = writeln!(
-            s,
-            "| method | welfare | % of OPT | NS_rate balanced | NS_rate selfish | time / instance | paper welfare |"
-        );
+        let _ = writeln!(s, "| method | {MEASURED_HEADER} | paper welfare |");
         let _ = writeln!(s, "|---|---|---|---|---|---|---|");
         for row in &scale.rows {
             let reported = match row.model.and_then(|m| paper.welfare_of(&m).map(|w| (m, w))) {
@@ -108,16 +117,7 @@ pub fn table1_markdown(scales: &[Scale]) -> String {
                 None => "–".into(),
             };
             let r = &row.summary;
-            let _ = writeln!(
-                s,
-                "| {} | {:.2} | {:.2} % | {:.1} % | {:.1} % | {} | {reported} |",
-                r.method,
-                r.welfare,
-                r.percent_of_opt,
-                r.ns_rate_balanced,
-                r.ns_rate_selfish,
-                seconds(r.seconds_per_instance),
-            );
+            let _ = writeln!(s, "| {} | {} | {reported} |", r.method, measured_cells(r));
         }
         let _ = writeln!(s);
     }
@@ -149,23 +149,16 @@ pub fn table2_markdown(scales: &[Scale]) -> String {
             paper.pretrain60_seconds,
             paper.pretrain60_ns_rate
         );
-        let _ = writeln!(
-            s,
-            "| method | instances | welfare | % of OPT | NS_rate balanced | NS_rate selfish | time / instance |"
-        );
+        let _ = writeln!(s, "| method | instances | {MEASURED_HEADER} |");
         let _ = writeln!(s, "|---|---|---|---|---|---|---|");
         for row in &scale.rows {
             let r = &row.summary;
             let _ = writeln!(
                 s,
-                "| {} | {} | {:.2} | {:.2} % | {:.1} % | {:.1} % | {} |",
+                "| {} | {} | {} |",
                 r.method,
                 r.instances,
-                r.welfare,
-                r.percent_of_opt,
-                r.ns_rate_balanced,
-                r.ns_rate_selfish,
-                seconds(r.seconds_per_instance)
+                measured_cells(r)
             );
         }
         let _ = writeln!(s);

@@ -21,7 +21,7 @@ mod replay;
 
 use std::collections::VecDeque;
 
-use afg_game::{Instance, RobotId, TaskId};
+use afg_game::{Assignment, Instance, RobotId, TaskId};
 use afg_graph::{AllocationState, GraphBatch, GraphKind};
 use burn::module::AutodiffModule;
 use burn::optim::adaptor::OptimizerAdaptor;
@@ -272,7 +272,7 @@ impl Trainer {
         let device = Default::default();
         let loss = match self.config.algo {
             Algo::Dqn | Algo::Ddqn => {
-                let (now, actions, targets) = self.td_batch();
+                let (now, actions, targets) = self.td_batch(self.config.algo == Algo::Ddqn);
                 let b = actions.len();
                 let g = GraphTensors::<TrainBackend>::new(&now, &device);
                 let action_index = Tensor::<TrainBackend, 2, Int>::from_data(
@@ -329,61 +329,66 @@ impl Trainer {
     /// A sampled batch of states with the exact `Q*` of every task (the run's reward
     /// convention) and 1 where the task has room, 0 where it is full, row-major `[b, M]`.
     fn q_star_batch(&mut self) -> Result<(GraphBatch, Vec<f32>, Vec<f32>), LearnError> {
-        let (n, m, b) = (
-            self.config.robots,
-            self.config.network.tasks(),
-            self.config.batch,
-        );
-        let total = self.replay_len();
+        let (m, b) = (self.config.network.tasks(), self.config.batch);
         let units = self.config.network.units();
         let mut now = GraphBatch::new(m);
         let mut labels = Vec::with_capacity(b * m);
         let mut allowed = Vec::with_capacity(b * m);
         for _ in 0..b {
-            let k = self.rng.random_range(0..total);
-            let (ep, t) = (&self.replay[k / n], k % n);
-            let robot = RobotId(t as u32);
-            for value in self.q_star_labels(ep, t)? {
+            let (e, t) = self.sample_step();
+            let ep = &self.replay[e];
+            let a = ep.assignment_after(t);
+            for value in self.q_star_labels(ep, &a, t)? {
                 labels.push(value.unwrap_or(0.0));
                 allowed.push(if value.is_some() { 1.0 } else { 0.0 });
             }
-            let a = ep.assignment_after(t);
             now.push(
                 &ep.graph,
                 &AllocationState::with_units(&ep.instance, a, units),
-                robot,
+                RobotId(t as u32),
             );
         }
         Ok((now, labels, allowed))
     }
 
-    /// The exact `Q*(s_t, ·)` of episode `ep`'s step `t` in the run's reward convention:
-    /// minus the shaping potential `Φ(s) = W(greedy completion of s) − W(s)` with
-    /// `greedy_shaping`, divided by the welfare unit with `reward_scaling`; `None` where
-    /// the task is full.
-    fn q_star_labels(&self, ep: &Episode, t: usize) -> Result<Vec<Option<f32>>, LearnError> {
-        let a = ep.assignment_after(t);
+    /// The exact `Q*(s_t, ·)` of episode `ep`'s step `t`, whose state is `a`, in the
+    /// run's reward convention: minus the shaping potential
+    /// `Φ(s) = W(greedy completion of s) − W(s)` with `greedy_shaping`, divided by the
+    /// welfare unit with `reward_scaling`; `None` where the task is full.
+    fn q_star_labels(
+        &self,
+        ep: &Episode,
+        a: &Assignment,
+        t: usize,
+    ) -> Result<Vec<Option<f32>>, LearnError> {
         let offset = if self.config.greedy_shaping {
-            ep.instance.welfare(&a) - greedy_completion_welfare(&ep.instance, &a)
+            ep.instance.welfare(a) - greedy_completion_welfare(&ep.instance, a)
         } else {
             0.0
         };
         let unit = self.reward_unit(&ep.instance);
-        Ok(q_star(&ep.instance, &a, RobotId(t as u32))?
+        Ok(q_star(&ep.instance, a, RobotId(t as u32))?
             .into_iter()
             .map(|q| q.map(|v| ((v + offset) / unit) as f32))
             .collect())
     }
 
-    /// A sampled batch of transitions: the states, the actions taken and their DQN or
-    /// Double DQN targets.
-    fn td_batch(&mut self) -> (GraphBatch, Vec<i64>, Vec<f32>) {
+    /// A uniformly drawn stored step: (episode, robot index). One draw of the run's
+    /// generator, whatever the algorithm.
+    fn sample_step(&mut self) -> (usize, usize) {
+        let n = self.config.robots;
+        let k = self.rng.random_range(0..self.replay_len());
+        (k / n, k % n)
+    }
+
+    /// A sampled batch of transitions: the states, the actions taken and their DQN
+    /// targets, or Double DQN targets with `double`.
+    fn td_batch(&mut self, double: bool) -> (GraphBatch, Vec<i64>, Vec<f32>) {
         let (n, m, b) = (
             self.config.robots,
             self.config.network.tasks(),
             self.config.batch,
         );
-        let total = self.replay_len();
         let units = self.config.network.units();
         let mut now = GraphBatch::new(m);
         let mut next = GraphBatch::new(m);
@@ -393,8 +398,8 @@ impl Trainer {
             Vec::with_capacity(b),
         );
         for _ in 0..b {
-            let k = self.rng.random_range(0..total);
-            let (ep, t) = (&self.replay[k / n], k % n);
+            let (e, t) = self.sample_step();
+            let ep = &self.replay[e];
             let (robot, task) = (RobotId(t as u32), TaskId(u32::from(ep.record.actions[t])));
             let mut a = ep.assignment_after(t);
             now.push(
@@ -424,15 +429,11 @@ impl Trainer {
         let (next_target, next_online) = if next.num_graphs() > 0 {
             let g = GraphTensors::<InferBackend>::new(&next, &device);
             let target: Vec<f32> = self.target.forward(&g).into_data().to_vec().expect("f32");
-            let online: Vec<f32> = match self.config.algo {
-                Algo::Ddqn => self
-                    .online
-                    .valid()
-                    .forward(&g)
-                    .into_data()
-                    .to_vec()
-                    .expect("f32"),
-                Algo::Dqn | Algo::QStar => Vec::new(),
+            let online: Vec<f32> = if double {
+                let q = self.online.valid().forward(&g);
+                q.into_data().to_vec().expect("f32")
+            } else {
+                Vec::new()
             };
             (target, online)
         } else {
@@ -444,17 +445,16 @@ impl Trainer {
                 Some(row) => {
                     let range = row * m..(row + 1) * m;
                     let mask = &next.mask[range.clone()];
-                    match self.config.algo {
-                        Algo::Ddqn => double_dqn_target(
+                    if double {
+                        double_dqn_target(
                             rewards[i],
                             &next_online[range.clone()],
                             &next_target[range],
                             mask,
                             false,
-                        ),
-                        Algo::Dqn | Algo::QStar => {
-                            dqn_target(rewards[i], &next_target[range], mask, false)
-                        }
+                        )
+                    } else {
+                        dqn_target(rewards[i], &next_target[range], mask, false)
                     }
                 }
             })
@@ -566,7 +566,9 @@ mod tests {
         }
         for ep in &t.replay {
             for step in 0..7 {
-                let labels = t.q_star_labels(ep, step).unwrap();
+                let labels = t
+                    .q_star_labels(ep, &ep.assignment_after(step), step)
+                    .unwrap();
                 assert!(
                     labels.iter().all(Option::is_some),
                     "no capacities: never full"
