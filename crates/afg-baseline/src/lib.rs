@@ -1,8 +1,8 @@
 //! Classical allocators for the alliance formation game, all behind one
 //! [`Allocator`] trait: GRAPE's decentralised algorithm and its centralised twin
 //! ([`DecentralisedDa`], [`CentralisedDa`], selfish or balanced preference), the exact
-//! optimum ([`Optimum`]), and the trivial [`Greedy`], [`Nearest`] and
-//! [`RandomAllocator`].
+//! optimum ([`Optimum`]), and the trivial [`Greedy`], [`Nearest`],
+//! [`RandomAllocator`] and [`Blind`].
 //!
 //! # Examples
 //! ```
@@ -35,7 +35,7 @@ use thiserror::Error;
 
 pub use dynamics::{CentralisedDa, DecentralisedDa, DecentralisedRun};
 pub use optimum::Optimum;
-pub use simple::{Greedy, Nearest, RandomAllocator};
+pub use simple::{Blind, Greedy, Nearest, RandomAllocator};
 
 /// An allocation method: instance in, complete assignment and statistics out.
 pub trait Allocator {
@@ -136,11 +136,13 @@ pub enum Method {
     Nearest,
     /// [`RandomAllocator`].
     Random,
+    /// [`Blind`].
+    Blind,
 }
 
 impl Method {
     /// Every method, OPT first.
-    pub const ALL: [Method; 7] = [
+    pub const ALL: [Method; 8] = [
         Method::Opt,
         Method::Da,
         Method::DaDecentralised,
@@ -148,6 +150,7 @@ impl Method {
         Method::Greedy,
         Method::Nearest,
         Method::Random,
+        Method::Blind,
     ];
 
     /// The centralised methods, OPT first: those a training log compares against.
@@ -170,6 +173,7 @@ impl Method {
             Method::Greedy => Box::new(Greedy),
             Method::Nearest => Box::new(Nearest),
             Method::Random => Box::new(RandomAllocator { seed }),
+            Method::Blind => Box::new(Blind),
         }
     }
 
@@ -190,6 +194,7 @@ impl Method {
             Method::Greedy => "Greedy",
             Method::Nearest => "Nearest",
             Method::Random => "Random",
+            Method::Blind => "Blind round robin",
         }
     }
 
@@ -203,6 +208,7 @@ impl Method {
             Method::Greedy => "greedy",
             Method::Nearest => "nearest",
             Method::Random => "random",
+            Method::Blind => "blind",
         }
     }
 }

@@ -1,4 +1,4 @@
-//! Honest trivial baselines: greedy, nearest, random.
+//! Honest trivial baselines: greedy, nearest, random, blind.
 
 use afg_game::{Assignment, Instance, Preference, TaskId};
 use rand::{Rng, SeedableRng};
@@ -114,6 +114,46 @@ impl Allocator for RandomAllocator {
             room.clear();
             room.extend(instance.task_ids().filter(|&j| a.has_room(instance, i, j)));
             Some(room[rng.random_range(0..room.len())])
+        }))
+    }
+}
+
+/// Each robot, in index order, joins the task with room that has the fewest robots so
+/// far (the lowest index among ties): a round robin that never looks at a task's
+/// position or reward.
+///
+/// It is the yardstick for policies that cannot see the tasks, such as the paper's S2V
+/// network (it reads only which task each robot joined and robot-to-robot distances).
+/// When the task positions are independent of the robots' and the task rewards are
+/// exchangeable, a choice that ignores them leaves every robot's expected distance
+/// unchanged, so in expectation over instances only the coalition sizes matter, and
+/// the concave `F_j` is best served by equal sizes: no blind policy beats this one on
+/// average. O(N M).
+///
+/// # Examples
+/// ```
+/// use afg_baseline::{Allocator, Blind};
+/// use afg_game::TaskId;
+/// let inst = afg_game::GeneratorConfig::paper(7, 3, 1).generate()?;
+/// let a = Blind.allocate(&inst)?.assignment;
+/// let tasks: Vec<u32> = a.tasks().iter().map(|t| t.unwrap().0).collect();
+/// assert_eq!(tasks, [0, 1, 2, 0, 1, 2, 0]);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Blind;
+
+impl Allocator for Blind {
+    fn name(&self) -> String {
+        "blind".into()
+    }
+
+    fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
+        Ok(one_pass(instance, None, |a, i| {
+            instance
+                .task_ids()
+                .filter(|&j| a.has_room(instance, i, j))
+                .min_by_key(|&j| a.size(j))
         }))
     }
 }

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use afg_baseline::{Allocator, CentralisedDa, DecentralisedDa, Method, Optimum};
+use afg_baseline::{Allocator, Blind, CentralisedDa, DecentralisedDa, Method, Optimum};
 use afg_game::io::read_dataset;
 use afg_game::{Assignment, GeneratorConfig, Instance, Preference, RobotId, TaskId};
 use rand::{Rng, SeedableRng};
@@ -385,4 +385,37 @@ fn schedule_naming_a_missing_robot_is_an_error() {
         da.allocate(&inst),
         Err(afg_baseline::AllocError::InvalidParameter(_))
     ));
+}
+
+#[test]
+fn blind_balances_sizes_whatever_the_positions() {
+    for n in [1, 7, 20, 37] {
+        let first = Blind
+            .allocate(&GeneratorConfig::paper(n, 5, 0).generate().unwrap())
+            .unwrap()
+            .assignment;
+        for seed in 1..20 {
+            let inst = GeneratorConfig::paper(n, 5, seed).generate().unwrap();
+            let a = Blind.allocate(&inst).unwrap().assignment;
+            assert_eq!(a, first, "N = {n}: the positions changed the choice");
+            let (lo, hi) = (a.sizes().iter().min(), a.sizes().iter().max());
+            assert!(hi.unwrap() - lo.unwrap() <= 1, "N = {n}: {:?}", a.sizes());
+        }
+    }
+}
+
+#[test]
+fn blind_beats_random_where_tasks_can_be_left_empty() {
+    // At N = 20 (four robots per task) a random pass often leaves a task empty and
+    // loses its whole reward; equal sizes never do.
+    let insts = dataset(20);
+    let mean = |m: Method| {
+        insts
+            .iter()
+            .map(|i| i.welfare(&m.allocator(0).allocate(i).unwrap().assignment))
+            .sum::<f64>()
+            / insts.len() as f64
+    };
+    let (blind, random) = (mean(Method::Blind), mean(Method::Random));
+    assert!(blind > random + 1.0, "blind {blind}, random {random}");
 }
