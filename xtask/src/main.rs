@@ -13,6 +13,7 @@ mod scale;
 mod solve;
 mod tables;
 mod train;
+mod train_all;
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
@@ -62,7 +63,7 @@ enum Command {
     /// Train the price-structured model (ours) by regression on the exact Q* (DAgger).
     TrainPrice(price::PriceArgs),
     /// Train every model the tables use (AFGNet DDQN/DQN and S2V DDQN at N = 20, 60, 100).
-    TrainAll(train::TrainAllArgs),
+    TrainAll(train_all::TrainAllArgs),
     /// Robots leave an optimally allocated instance: warm-start reallocation against OPT from scratch.
     ReallocStudy(realloc::StudyArgs),
     /// Where a trained model loses welfare along its rollouts, against the exact Q*.
@@ -84,7 +85,7 @@ fn main() -> Result<()> {
         Command::PlotCurves(args) => curves::run_plot(args),
         Command::TrainingReport(args) => curves::run_report(args),
         Command::TrainPrice(args) => price::run(args),
-        Command::TrainAll(args) => train::run_all(args),
+        Command::TrainAll(args) => train_all::run_all(args),
         Command::Manifest(args) => manifest::run_manifest(args),
         Command::Regret(args) => regret::run(args),
         Command::ReallocStudy(args) => realloc::run_study(args),

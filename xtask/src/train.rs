@@ -1,11 +1,10 @@
-//! `cargo xtask train` and `cargo xtask plot-curves`.
+//! `cargo xtask train`.
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use afg_baseline::Method;
-use afg_eval::{ModelSpec, Net};
 use afg_graph::Units;
 use afg_learn::{
     Algo, LogEvent, NetworkConfig, Preset, RunDir, TrainConfig, Trainer, ValidationLine,
@@ -38,82 +37,82 @@ pub enum UnitsArg {
     MeanReward,
 }
 
-#[derive(Args)]
+#[derive(Args, Default)]
 pub struct TrainArgs {
     /// Robots per training instance N (defaults exist for 20, 60 and 100).
     #[arg(long)]
-    scale: Option<usize>,
+    pub(crate) scale: Option<usize>,
     /// What the Q values are fitted to (default ddqn).
     #[arg(long, value_enum)]
-    algo: Option<AlgoArg>,
+    pub(crate) algo: Option<AlgoArg>,
     /// Network.
     #[arg(long, value_enum)]
-    net: Option<NetArg>,
+    pub(crate) net: Option<NetArg>,
     /// Gradient steps (default: the per-scale budget of about an hour on 2 cores).
     #[arg(long)]
-    steps: Option<u64>,
+    pub(crate) steps: Option<u64>,
     /// Seed of everything random in the run (initial weights, instances, exploration).
     #[arg(long)]
-    seed: Option<u64>,
+    pub(crate) seed: Option<u64>,
     /// Transitions per gradient step.
     #[arg(long)]
-    batch: Option<usize>,
+    pub(crate) batch: Option<usize>,
     /// Adam learning rate (default 1e-3; the paper's is 1e-4).
     #[arg(long)]
-    lr: Option<f64>,
+    pub(crate) lr: Option<f64>,
     /// Keep the learning rate constant (by default it anneals linearly to a tenth of
     /// --lr over the run).
     #[arg(long)]
-    constant_lr: bool,
+    pub(crate) constant_lr: bool,
     /// n-step returns (1 = the paper's one-step target).
     #[arg(long)]
-    n_step: Option<usize>,
+    pub(crate) n_step: Option<usize>,
     /// Units of the network's inputs and rewards: bounded (the default: scale-free, and
     /// the value part of the task features capped at 4 r_j/eps_j, so that nearly empty
     /// tasks look alike at every N), scale-free (welfare / β, edge weights / their
     /// mean, the same at every N) or mean-reward (welfare / the instance's mean task
     /// reward, raw edge weights: the first models' units).
     #[arg(long, value_enum)]
-    units: Option<UnitsArg>,
+    pub(crate) units: Option<UnitsArg>,
     /// Gradient steps between target-network syncs (default: the run's budget / 20,
     /// clamped to 10..=1000).
     #[arg(long)]
-    target_sync: Option<u64>,
+    pub(crate) target_sync: Option<u64>,
     /// Episodes run side by side (each acting step adds this many transitions).
     #[arg(long)]
-    parallel_envs: Option<usize>,
+    pub(crate) parallel_envs: Option<usize>,
     /// Turn off the reward shaping. By default rewards are shaped with the potential
     /// "welfare a greedy completion would still add", so the network learns how much
     /// better than finishing greedily each action is (not in the paper; the optimal
     /// policy is unchanged; docs/training.md).
     #[arg(long)]
-    no_shaping: bool,
+    pub(crate) no_shaping: bool,
     /// AFGNet only: add each action's immediate reward (the actor's join gain) to the
     /// Q values, so the network learns only the value of what follows (not in the paper).
     #[arg(long)]
-    gain_residual: bool,
+    pub(crate) gain_residual: bool,
     /// The paper's settings where ours differ: squared loss, raw rewards, no clipping,
     /// target sync every 1000 steps, constant learning rate 1e-4 (an explicit --lr still
     /// wins).
     #[arg(long)]
-    paper: bool,
+    pub(crate) paper: bool,
     /// Warm start: begin from the final weights of this run directory (same network and
     /// units) instead of fresh ones, e.g. a model trained at N = 60 for a run at N = 100.
     /// Not in the paper. Usually with a small --eps-start.
     #[arg(long)]
-    init_from: Option<PathBuf>,
+    pub(crate) init_from: Option<PathBuf>,
     /// ε at the start (default 1.0, decaying to 0.05 over the first tenth of the run).
     #[arg(long)]
-    eps_start: Option<f64>,
+    pub(crate) eps_start: Option<f64>,
     /// Run directory: config.json, log.jsonl, checkpoint/, and model.{json,mpk} at the end.
     #[arg(long, conflicts_with = "resume")]
-    out: Option<PathBuf>,
+    pub(crate) out: Option<PathBuf>,
     /// Continue the run in this directory from its last checkpoint.
     #[arg(long)]
-    resume: Option<PathBuf>,
+    pub(crate) resume: Option<PathBuf>,
     /// Seconds between checkpoints.
     #[arg(long, default_value_t = 300)]
-    checkpoint_secs: u64,
+    pub(crate) checkpoint_secs: u64,
 }
 
 impl TrainArgs {
@@ -342,6 +341,17 @@ fn baselines(config: &TrainConfig) -> Result<BTreeMap<String, f64>> {
     Ok(out)
 }
 
+/// The checked-out git revision, if there is one.
+fn git_revision() -> Option<String> {
+    std::process::Command::new("git")
+        .args(["rev-parse", "HEAD"])
+        .current_dir(crate::repo_root())
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_owned())
+}
+
 #[cfg(test)]
 mod tests {
     use clap::Parser;
@@ -481,79 +491,4 @@ mod tests {
         assert!(err.to_string().contains("no default budget"), "{err}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
-}
-
-/// The checked-out git revision, if there is one.
-fn git_revision() -> Option<String> {
-    std::process::Command::new("git")
-        .args(["rev-parse", "HEAD"])
-        .current_dir(crate::repo_root())
-        .output()
-        .ok()
-        .filter(|o| o.status.success())
-        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_owned())
-}
-
-#[derive(Args)]
-pub struct TrainAllArgs {
-    /// Scales to train.
-    #[arg(long, value_delimiter = ',', default_values_t = afg_eval::dataset::TABLE1_SIZES)]
-    scales: Vec<usize>,
-    /// Retrain models that already exist (their directories are replaced).
-    #[arg(long)]
-    force: bool,
-}
-
-/// Trains every model the tables use, one after the other, with the default budgets.
-pub fn run_all(args: TrainAllArgs) -> Result<()> {
-    for scale in &args.scales {
-        // The paper's three models (ours are trained by hand, see docs/training.md).
-        for spec in ModelSpec::table1(*scale)
-            .into_iter()
-            .filter(|m| !m.is_ours())
-        {
-            let name = spec.dir_name();
-            let run_dir = spec.run_dir(&crate::repo_root());
-            let net = match spec.net {
-                Net::AfgNet => NetArg::Afgnet,
-                Net::S2v => NetArg::S2v,
-            };
-            let algo = match spec.algo {
-                Algo::Dqn => AlgoArg::Dqn,
-                Algo::Ddqn => AlgoArg::Ddqn,
-                Algo::QStar => AlgoArg::QStar,
-            };
-            if run_dir.has_weights() && !args.force {
-                eprintln!("{name}: exists, skipped (--force retrains)");
-                continue;
-            }
-            let dir = run_dir.path().to_path_buf();
-            if dir.exists() {
-                std::fs::remove_dir_all(&dir)?;
-            }
-            run(TrainArgs {
-                scale: Some(*scale),
-                algo: Some(algo),
-                net: Some(net),
-                steps: None,
-                seed: Some(0),
-                batch: None,
-                lr: None,
-                constant_lr: false,
-                n_step: None,
-                units: None,
-                target_sync: None,
-                parallel_envs: None,
-                no_shaping: false,
-                gain_residual: false,
-                paper: false,
-                init_from: None,
-                eps_start: None,
-                out: Some(dir),
-                resume: None,
-                checkpoint_secs: 300,
-            })?;
-        }
-    }
-    Ok(())
 }

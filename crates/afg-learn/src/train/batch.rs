@@ -1,0 +1,213 @@
+//! The sampled batches a gradient step learns from: TD transitions with their DQN or
+//! Double DQN targets, or states with the exact `Q*` of every task.
+
+use afg_game::{Assignment, RobotId, TaskId};
+use afg_graph::{AllocationState, GraphBatch};
+use burn::module::AutodiffModule;
+use rand::Rng;
+
+use super::Trainer;
+use super::replay::Episode;
+use crate::{
+    GraphTensors, InferBackend, LearnError, double_dqn_target, dqn_target,
+    greedy_completion_welfare, n_step_reward, q_star,
+};
+
+impl Trainer {
+    /// A sampled batch of states with the exact `Q*` of every task (the run's reward
+    /// convention) and 1 where the task has room, 0 where it is full, row-major `[b, M]`.
+    pub(super) fn q_star_batch(&mut self) -> Result<(GraphBatch, Vec<f32>, Vec<f32>), LearnError> {
+        let (m, b) = (self.config.network.tasks(), self.config.batch);
+        let units = self.config.network.units();
+        let mut now = GraphBatch::new(m);
+        let mut labels = Vec::with_capacity(b * m);
+        let mut allowed = Vec::with_capacity(b * m);
+        for _ in 0..b {
+            let (e, t) = self.sample_step();
+            let ep = &self.replay[e];
+            let a = ep.assignment_after(t);
+            for value in self.q_star_labels(ep, &a, t)? {
+                labels.push(value.unwrap_or(0.0));
+                allowed.push(if value.is_some() { 1.0 } else { 0.0 });
+            }
+            now.push(
+                &ep.graph,
+                &AllocationState::with_units(&ep.instance, a, units),
+                RobotId(t as u32),
+            );
+        }
+        Ok((now, labels, allowed))
+    }
+
+    /// The exact `Q*(s_t, ·)` of episode `ep`'s step `t`, whose state is `a`, in the
+    /// run's reward convention: minus the shaping potential
+    /// `Φ(s) = W(greedy completion of s) − W(s)` with `greedy_shaping`, divided by the
+    /// welfare unit with `reward_scaling`; `None` where the task is full.
+    fn q_star_labels(
+        &self,
+        ep: &Episode,
+        a: &Assignment,
+        t: usize,
+    ) -> Result<Vec<Option<f32>>, LearnError> {
+        let offset = if self.config.greedy_shaping {
+            ep.instance.welfare(a) - greedy_completion_welfare(&ep.instance, a)
+        } else {
+            0.0
+        };
+        let unit = self.reward_unit(&ep.instance);
+        Ok(q_star(&ep.instance, a, RobotId(t as u32))?
+            .into_iter()
+            .map(|q| q.map(|v| ((v + offset) / unit) as f32))
+            .collect())
+    }
+
+    /// A uniformly drawn stored step: (episode, robot index). One draw of the run's
+    /// generator, whatever the algorithm.
+    fn sample_step(&mut self) -> (usize, usize) {
+        let n = self.config.robots;
+        let k = self.rng.random_range(0..self.replay_len());
+        (k / n, k % n)
+    }
+
+    /// A sampled batch of transitions: the states, the actions taken and their DQN
+    /// targets, or Double DQN targets with `double`.
+    pub(super) fn td_batch(&mut self, double: bool) -> (GraphBatch, Vec<i64>, Vec<f32>) {
+        let (n, m, b) = (
+            self.config.robots,
+            self.config.network.tasks(),
+            self.config.batch,
+        );
+        let units = self.config.network.units();
+        let mut now = GraphBatch::new(m);
+        let mut next = GraphBatch::new(m);
+        let (mut actions, mut rewards, mut next_row) = (
+            Vec::with_capacity(b),
+            Vec::with_capacity(b),
+            Vec::with_capacity(b),
+        );
+        for _ in 0..b {
+            let (e, t) = self.sample_step();
+            let ep = &self.replay[e];
+            let (robot, task) = (RobotId(t as u32), TaskId(u32::from(ep.record.actions[t])));
+            let mut a = ep.assignment_after(t);
+            now.push(
+                &ep.graph,
+                &AllocationState::with_units(&ep.instance, a.clone(), units),
+                robot,
+            );
+            actions.push(i64::from(task.0));
+            // n-step return: the rewards of steps t..end, then bootstrap from s_end.
+            let end = (t + self.config.n_step).min(n);
+            let taken: Vec<TaskId> = ep.record.actions[t..end]
+                .iter()
+                .map(|&j| TaskId(u32::from(j)))
+                .collect();
+            let reward = n_step_reward(&ep.instance, &mut a, t, &taken, self.config.greedy_shaping);
+            rewards.push((reward / self.reward_unit(&ep.instance)) as f32);
+            next_row.push((end < n).then(|| {
+                next.push(
+                    &ep.graph,
+                    &AllocationState::with_units(&ep.instance, a, units),
+                    RobotId(end as u32),
+                );
+                next.num_graphs() - 1
+            }));
+        }
+        let device = Default::default();
+        let (next_target, next_online) = if next.num_graphs() > 0 {
+            let g = GraphTensors::<InferBackend>::new(&next, &device);
+            let target: Vec<f32> = self.target.forward(&g).into_data().to_vec().expect("f32");
+            let online: Vec<f32> = if double {
+                let q = self.online.valid().forward(&g);
+                q.into_data().to_vec().expect("f32")
+            } else {
+                Vec::new()
+            };
+            (target, online)
+        } else {
+            (Vec::new(), Vec::new())
+        };
+        let targets: Vec<f32> = (0..b)
+            .map(|i| match next_row[i] {
+                None => rewards[i],
+                Some(row) => {
+                    let range = row * m..(row + 1) * m;
+                    let mask = &next.mask[range.clone()];
+                    if double {
+                        double_dqn_target(
+                            rewards[i],
+                            &next_online[range.clone()],
+                            &next_target[range],
+                            mask,
+                            false,
+                        )
+                    } else {
+                        dqn_target(rewards[i], &next_target[range], mask, false)
+                    }
+                }
+            })
+            .collect();
+        (now, actions, targets)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use afg_baseline::{Allocator, Optimum};
+
+    use super::*;
+    use crate::NetworkConfig;
+    use crate::train::{Algo, TrainConfig};
+
+    /// Checks every step of every episode in the replay buffer of a small `QStar` run.
+    fn replay_labels(shaping: bool, check: impl Fn(&Episode, usize, f32)) {
+        let mut c = TrainConfig::new(7, Algo::QStar, NetworkConfig::afgnet(3, 0), 10, 1);
+        (c.greedy_shaping, c.reward_scaling, c.validation_instances) = (shaping, false, 2);
+        let mut t = Trainer::new(c).unwrap();
+        while t.replay.len() < 20 {
+            t.act(1.0).unwrap();
+        }
+        for ep in &t.replay {
+            for step in 0..7 {
+                let labels = t
+                    .q_star_labels(ep, &ep.assignment_after(step), step)
+                    .unwrap();
+                assert!(
+                    labels.iter().all(Option::is_some),
+                    "no capacities: never full"
+                );
+                let best = labels
+                    .iter()
+                    .flatten()
+                    .fold(f32::NEG_INFINITY, |a, &b| a.max(b));
+                check(ep, step, best);
+            }
+        }
+    }
+
+    #[test]
+    fn unshaped_q_star_labels_start_at_the_optimum() {
+        replay_labels(false, |ep, step, best| {
+            if step == 0 {
+                let opt = Optimum.allocate(&ep.instance).unwrap().assignment;
+                let opt = ep.instance.welfare(&opt) as f32;
+                assert!(
+                    (best - opt).abs() < 1e-4 * opt.abs().max(1.0),
+                    "{best} vs {opt}"
+                );
+            }
+        });
+    }
+
+    #[test]
+    fn shaped_q_star_labels_are_what_an_optimal_finish_adds_over_greedy() {
+        // Greedy's own first choice completes greedily, so the best label is ≥ 0; the
+        // last robot's greedy choice is optimal, so there it is 0.
+        replay_labels(true, |_, step, best| {
+            assert!(best > -1e-4, "step {step}: {best}");
+            if step == 6 {
+                assert!(best.abs() < 1e-4, "last step: {best}");
+            }
+        });
+    }
+}
