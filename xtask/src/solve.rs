@@ -77,19 +77,19 @@ pub struct Row {
 
 impl Row {
     /// Runs `method` and OPT on `inst`; the row and the method's assignment.
-    pub fn compute(inst: &Instance, method: &dyn Allocator) -> Result<(Row, Assignment)> {
+    fn compute(inst: &Instance, method: &dyn Allocator) -> Result<(Row, Assignment)> {
         let out = method.allocate(inst)?;
-        Ok((Self::of(inst, &out.assignment, out.stats)?, out.assignment))
-    }
-
-    /// The row of an assignment made elsewhere (OPT is computed here).
-    fn of(
-        inst: &Instance,
-        assignment: &Assignment,
-        stats: afg_baseline::AllocStats,
-    ) -> Result<Row> {
-        let score = Score::of("the allocation", inst, assignment, optimum_welfare(inst)?)?;
-        Ok(Row { score, stats })
+        let score = Score::of(
+            "the allocation",
+            inst,
+            &out.assignment,
+            optimum_welfare(inst)?,
+        )?;
+        let row = Row {
+            score,
+            stats: out.stats,
+        };
+        Ok((row, out.assignment))
     }
 
     /// The line `--out` writes for this row's assignment.
