@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use afg_baseline::{Allocator, Method, Optimum};
 use afg_eval::tables::{Row, Scale, headline, table1_markdown, table2_markdown};
-use afg_eval::{ModelSpec, Net, Variant, dataset, evaluate, optima};
+use afg_eval::{ModelSpec, Variant, dataset, evaluate, optima};
 use afg_game::Instance;
 use afg_learn::LearnedPolicy;
 use anyhow::{Context, Result, bail};
@@ -144,14 +144,16 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
                 rows.push(Row::new(evaluate(&label, &policy, &insts, &opt)?));
             }
         }
-        // The same model trained further at this N (a warm start), where one exists.
-        let warm = ModelSpec {
-            variant: Variant::WarmStart,
-            ..ModelSpec::afgnet_ddqn(n)
-        };
-        if warm.run_dir(root).has_weights() {
-            let policy = LearnedPolicy::load(&warm.run_dir(root).weights())?;
-            rows.push(Row::new(evaluate(&warm.label(), &policy, &insts, &opt)?));
+        // Models trained further at this N from a smaller one (warm starts).
+        for warm in ModelSpec::WARM_STARTS
+            .into_iter()
+            .filter(|w| w.trained_at == n)
+        {
+            let run = warm.run_dir(root);
+            if run.has_weights() {
+                let policy = LearnedPolicy::load(&run.weights())?;
+                rows.push(Row::new(evaluate(&warm.label(), &policy, &insts, &opt)?));
+            }
         }
         rows.extend(
             crate::price::rows(root, n, &insts, &opt)?
@@ -324,37 +326,40 @@ fn models_table(root: &Path) -> Result<String> {
          | model | N | steps | learning rate | wall time | final validation, % of OPT | command |\n\
          |---|---|---|---|---|---|---|\n",
     );
-    let warm = (Net::AfgNet, afg_learn::Algo::Ddqn, Variant::WarmStart);
-    for kind in ModelSpec::TABLE1_KINDS.into_iter().chain([warm]) {
-        for n in dataset::TABLE1_SIZES {
-            let spec = ModelSpec::new(kind.0, kind.1, kind.2, n);
-            let label = spec.label();
-            let run = spec.run_dir(root);
-            if !run.has_manifest() {
-                continue;
-            }
-            let manifest = run.manifest()?;
-            let config = run.config()?;
-            let lr = if config.lr_decay {
-                format!(
-                    "{:.1e} → {:.1e} (annealed)",
-                    config.lr,
-                    config.learning_rate(config.steps)
-                )
-            } else {
-                format!("{:.1e} (constant)", config.lr)
-            };
-            let minutes = manifest.wall_time_s.unwrap_or(f64::NAN) / 60.0;
-            let pct = manifest
-                .final_validation
-                .as_ref()
-                .map_or(f64::NAN, |v| v.percent_of_opt);
-            let _ = writeln!(
-                md,
-                "| {label} | {n} | {} | {lr} | {minutes:.0} min | {pct:.1} % | `{}` |",
-                config.steps, manifest.command
-            );
+    let specs = ModelSpec::TABLE1_KINDS
+        .into_iter()
+        .flat_map(|(net, algo, variant)| {
+            dataset::TABLE1_SIZES.map(|n| ModelSpec::new(net, algo, variant, n))
+        })
+        .chain(ModelSpec::WARM_STARTS);
+    for spec in specs {
+        let n = spec.trained_at;
+        let label = spec.label();
+        let run = spec.run_dir(root);
+        if !run.has_manifest() {
+            continue;
         }
+        let manifest = run.manifest()?;
+        let config = run.config()?;
+        let lr = if config.lr_decay {
+            format!(
+                "{:.1e} → {:.1e} (annealed)",
+                config.lr,
+                config.learning_rate(config.steps)
+            )
+        } else {
+            format!("{:.1e} (constant)", config.lr)
+        };
+        let minutes = manifest.wall_time_s.unwrap_or(f64::NAN) / 60.0;
+        let pct = manifest
+            .final_validation
+            .as_ref()
+            .map_or(f64::NAN, |v| v.percent_of_opt);
+        let _ = writeln!(
+            md,
+            "| {label} | {n} | {} | {lr} | {minutes:.0} min | {pct:.1} % | `{}` |",
+            config.steps, manifest.command
+        );
     }
     Ok(md)
 }

@@ -22,9 +22,12 @@ pub enum Variant {
     /// Ours: AFGNet with the action's immediate reward added to its Q values.
     GainResidual,
     /// The paper's network and algorithm, trained starting from the weights of the same
-    /// kind of model trained at [`ModelSpec::PRETRAINED_AT`] (a warm start; not in the
-    /// paper, named in the row).
-    WarmStart,
+    /// kind of model trained at N = `from` (a warm start; not in the paper, named in the
+    /// row).
+    WarmStart {
+        /// The N of the model whose weights the run starts from.
+        from: usize,
+    },
 }
 
 /// One trained model: network, algorithm, variant and the N it was trained at.
@@ -43,6 +46,10 @@ pub enum Variant {
 /// assert_eq!(exact.dir_name(), "afgnet_qstar_n60");
 /// assert_eq!(exact.label(), "AFGNet, exact Q* regression (ours)");
 /// assert!(exact.is_ours());
+/// let warm = ModelSpec::WARM_STARTS[1];
+/// assert_eq!(warm.dir_name(), "s2v_ddqn_warm_n60");
+/// assert_eq!(warm.label(), "S2V_DDQN, warm start from the N = 20 model");
+/// assert!(!warm.is_ours());
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ModelSpec {
@@ -57,8 +64,7 @@ pub struct ModelSpec {
 }
 
 impl ModelSpec {
-    /// The training scale of the model the paper transfers to other N ("Pretrain_60"),
-    /// and that warm starts begin from.
+    /// The training scale of the model the paper transfers to other N ("Pretrain_60").
     pub const PRETRAINED_AT: usize = 60;
 
     /// The learned rows of Table I at one scale, in table order: the paper's three
@@ -107,6 +113,19 @@ impl ModelSpec {
         ),
     ];
 
+    /// The warm starts the tables show beside the paper's rows: AFGNet DDQN at N = 100
+    /// from the N = 60 model, S2V DDQN at N = 60 and 100 from the N = 20 model.
+    pub const WARM_STARTS: [ModelSpec; 3] = [
+        Self::new(
+            Net::AfgNet,
+            Algo::Ddqn,
+            Variant::WarmStart { from: 60 },
+            100,
+        ),
+        Self::new(Net::S2v, Algo::Ddqn, Variant::WarmStart { from: 20 }, 60),
+        Self::new(Net::S2v, Algo::Ddqn, Variant::WarmStart { from: 20 }, 100),
+    ];
+
     /// The run directory's name under `models/`, e.g. `afgnet_ddqn_n60`.
     pub fn dir_name(&self) -> String {
         let net = match self.net {
@@ -116,7 +135,7 @@ impl ModelSpec {
         let variant = match self.variant {
             Variant::Paper => "",
             Variant::GainResidual => "_gain",
-            Variant::WarmStart => "_warm",
+            Variant::WarmStart { .. } => "_warm",
         };
         format!("{net}_{}{variant}_n{}", self.algo.name(), self.trained_at)
     }
@@ -140,10 +159,9 @@ impl ModelSpec {
         match self.variant {
             Variant::Paper => format!("{net}_{algo}"),
             Variant::GainResidual => format!("{net}_{algo} + gain residual (ours)"),
-            Variant::WarmStart => format!(
-                "{net}_{algo}, warm start from the N = {} model",
-                Self::PRETRAINED_AT
-            ),
+            Variant::WarmStart { from } => {
+                format!("{net}_{algo}, warm start from the N = {from} model")
+            }
         }
     }
 
