@@ -91,6 +91,12 @@ pub struct TrainArgs {
     /// Q values, so the network learns only the value of what follows (not in the paper).
     #[arg(long)]
     pub(crate) gain_residual: bool,
+    /// AFGNet only: the price structure Q(s, a) = π_a(s) − β d(t, a) + c_a(s), with a
+    /// price head shared by all tasks that reads each task's summaries and the pooled
+    /// embedding; the untrained network is Nearest (ours, not in the paper;
+    /// docs/price.md).
+    #[arg(long)]
+    pub(crate) price_head: bool,
     /// The paper's settings where ours differ: squared loss, raw rewards, no clipping,
     /// target sync every 1000 steps, constant learning rate 1e-4 (an explicit --lr still
     /// wins).
@@ -131,10 +137,11 @@ impl TrainArgs {
             NetArg::Afgnet => NetworkConfig::AfgNet(
                 afg_learn::AfgNetConfig::new(5)
                     .with_seed(seed)
-                    .with_gain_residual(self.gain_residual.then_some(true)),
+                    .with_gain_residual(self.gain_residual.then_some(true))
+                    .with_price_head(self.price_head.then_some(true)),
             ),
-            NetArg::S2v if self.gain_residual => {
-                anyhow::bail!("--gain-residual exists for AFGNet only")
+            NetArg::S2v if self.gain_residual || self.price_head => {
+                anyhow::bail!("--gain-residual and --price-head exist for AFGNet only")
             }
             NetArg::S2v => NetworkConfig::s2v(5, seed),
         };
@@ -199,6 +206,7 @@ impl TrainArgs {
             || self.parallel_envs.is_some()
             || self.no_shaping
             || self.gain_residual
+            || self.price_head
             || self.paper
             || self.init_from.is_some()
             || self.eps_start.is_some()

@@ -4,7 +4,7 @@
 
 use afg_game::RobotId;
 
-use crate::{AllocationState, RobotGraph};
+use crate::{AllocationState, PriceState, RobotGraph, TASK_FEATURES, task_inputs};
 
 /// A batch of graph states (one acting robot each), in flat row-major arrays.
 ///
@@ -49,6 +49,14 @@ pub struct GraphBatch {
     pub mask: Vec<bool>,
     /// Per graph, the actor's [`join_gain`](crate::join_gain) for each task, `[G × M]`.
     pub gain: Vec<f32>,
+    /// Per graph, the actor's distance cost `β d(actor, j)` for each task, in the
+    /// state's welfare unit ([`Units::welfare_unit`](crate::Units::welfare_unit)),
+    /// `[G × M]`.
+    pub cost: Vec<f32>,
+    /// Per graph and task, the task's [`PriceState::features`] and the mean of all
+    /// tasks' ([`task_inputs`]), `[G × M, 2 · TASK_FEATURES]`: what AFGNet's price
+    /// head reads.
+    pub task_inputs: Vec<f32>,
 }
 
 impl GraphBatch {
@@ -110,5 +118,13 @@ impl GraphBatch {
         self.actors.push(offset + actor.0);
         self.mask.extend(state.action_mask(actor));
         self.gain.extend(state.gains(actor));
+        let unit = state.units().welfare_unit(inst);
+        self.cost
+            .extend(inst.task_ids().map(|j| (inst.cost(actor, j) / unit) as f32));
+        let mut features = vec![0.0; inst.num_tasks() * TASK_FEATURES];
+        PriceState::from_assignment(inst, state.assignment()).features(&mut features);
+        let at = self.task_inputs.len();
+        self.task_inputs.resize(at + 2 * features.len(), 0.0);
+        task_inputs(&features, &mut self.task_inputs[at..]);
     }
 }

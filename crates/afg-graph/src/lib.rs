@@ -6,11 +6,13 @@
 
 mod batch;
 mod neighbours;
+mod price_features;
 mod state;
 mod units;
 
 pub use batch::GraphBatch;
 pub use neighbours::{GraphKind, RobotGraph};
+pub use price_features::{PriceState, TASK_FEATURES, task_inputs};
 pub use state::{AllocationState, join_gain, write_task_column};
 pub use units::{Units, VALUE_CAP, feature_scale};
 

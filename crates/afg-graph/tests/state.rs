@@ -94,3 +94,47 @@ fn bounded_units_cap_the_value_part_only() {
     let want = 30.0 * 7f64.ln() / 5f64.ln() / 3.0 - 1.0;
     assert!((f64::from(s.mu(RobotId(2))[0]) - want).abs() < 1e-5);
 }
+
+#[test]
+fn a_batch_carries_the_actors_costs_and_the_tasks_summaries() {
+    use afg_graph::{GraphBatch, GraphKind, PriceState, RobotGraph, TASK_FEATURES};
+    let inst = GeneratorConfig::paper(30, 5, 4).generate().unwrap();
+    let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
+    let mut a = Assignment::unassigned(30, 5);
+    for i in 0..12u32 {
+        a.set(RobotId(i), Some(TaskId((i * 7) % 5)));
+    }
+    let mut batch = GraphBatch::new(5);
+    for units in [Units::MeanReward, Units::Bounded] {
+        let state = AllocationState::with_units(&inst, a.clone(), units);
+        batch.push(&graph, &state, RobotId(12));
+    }
+    // Costs: β d(12, j) in each state's welfare unit (the mean reward, then β = 1).
+    for (g, unit) in [feature_scale(&inst), 1.0].into_iter().enumerate() {
+        for j in 0..5 {
+            let by_hand = inst.distance(RobotId(12), TaskId(j as u32)) / unit;
+            assert!((f64::from(batch.cost[g * 5 + j]) - by_hand).abs() < 1e-6);
+        }
+    }
+    // Task summaries: the same for both units, and those of the robots placed in
+    // order; after each task's own features comes the mean over the tasks.
+    let mut sequential = PriceState::new(&inst);
+    for i in 0..12u32 {
+        sequential.assign(RobotId(i), TaskId((i * 7) % 5));
+    }
+    let mut f = vec![0.0; 5 * TASK_FEATURES];
+    sequential.features(&mut f);
+    let width = 2 * TASK_FEATURES;
+    assert_eq!(batch.task_inputs.len(), 2 * 5 * width);
+    for g in 0..2 {
+        for j in 0..5 {
+            let row = &batch.task_inputs[(g * 5 + j) * width..(g * 5 + j + 1) * width];
+            assert_eq!(
+                &row[..TASK_FEATURES],
+                &f[j * TASK_FEATURES..(j + 1) * TASK_FEATURES]
+            );
+            let mean_occupancy = (0..5).map(|k| f[k * TASK_FEATURES + 1]).sum::<f32>() / 5.0;
+            assert!((row[TASK_FEATURES + 1] - mean_occupancy).abs() < 1e-6);
+        }
+    }
+}

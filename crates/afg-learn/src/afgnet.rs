@@ -10,7 +10,8 @@ use burn::tensor::backend::Backend;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use crate::layers::{Activation, QHead, linear_of_concat, seeded_linear};
+use crate::layers::{Activation, QHead, linear_of_concat, seeded_linear, zero_linear};
+use crate::price::PRICE_INPUTS;
 use crate::tensors::GraphTensors;
 
 /// Shape and seed of an [`AfgNet`].
@@ -41,6 +42,15 @@ pub struct AfgNetConfig {
     /// before it existed still load (`None` = [`Units::MeanReward`]).
     #[config(default = "None")]
     pub units: Option<Units>,
+    /// Price structure (ours; off in the paper's model):
+    /// `Q(s, a) = π_a(s) − β d(t, a) + c_a(s)`, where the price `π_a` comes from one
+    /// MLP shared by all tasks ([`PriceHead`]) reading the task's summaries
+    /// ([`GraphBatch::task_inputs`](afg_graph::GraphBatch::task_inputs)) and the pooled
+    /// embedding, and the correction `c` is the paper's head. Both output layers start
+    /// at zero, so the untrained network is Nearest. Optional so that files written
+    /// before it existed still load (`None` = off).
+    #[config(default = "None")]
+    pub price_head: Option<bool>,
 }
 
 impl AfgNetConfig {
@@ -58,12 +68,22 @@ impl AfgNetConfig {
                 theta5: seeded_linear(&mut rng, 2 * d, d, device),
             })
             .collect();
-        let head = QHead::new(&mut rng, d, m, self.activation, device);
+        let mut head = QHead::new(&mut rng, d, m, self.activation, device);
+        // Drawn after everything else, so the paper's network keeps its weights.
+        let price = self.price_head.unwrap_or(false).then(|| {
+            head.output = zero_linear(d, m, device);
+            PriceHead {
+                input: seeded_linear(&mut rng, PRICE_INPUTS + d, d, device),
+                hidden: seeded_linear(&mut rng, d, d, device),
+                output: zero_linear(d, 1, device),
+            }
+        });
         AfgNet {
             theta1,
             theta2,
             layers,
             head,
+            price,
             activation: self.activation,
             gain_residual: self.gain_residual.unwrap_or(false),
             units: self.units.unwrap_or_default(),
@@ -94,8 +114,10 @@ pub struct AfgNet<B: Backend> {
     pub theta2: Linear<B>,
     /// The L layers.
     pub layers: Vec<AfgLayer<B>>,
-    /// θ7 and the Q MLP.
+    /// θ7 and the Q MLP (with a price head, the correction `c`).
     pub head: QHead<B>,
+    /// The price head, when configured ([`AfgNetConfig::price_head`]).
+    pub price: Option<PriceHead<B>>,
     #[module(skip)]
     activation: Activation,
     #[module(skip)]
@@ -157,19 +179,73 @@ impl<B: Backend> AfgNet<B> {
         delta
     }
 
+    /// The task prices π of each graph (no actor involved), `None` without a price
+    /// head: the one-shot mode gives every robot `argmin_j [β d(i, j) − π_j]` with the
+    /// prices of the empty state.
+    ///
+    /// # Shapes
+    /// output: `[G, M]`
+    pub fn prices(&self, g: &GraphTensors<B>) -> Option<Tensor<B, 2>> {
+        let price = self.price.as_ref()?;
+        let pooled = g.graph_mean(self.embed(g));
+        Some(price.forward(g, pooled, self.activation))
+    }
+
     /// Q values of each graph's acting robot (eq. 9 and the head).
     ///
     /// # Shapes
     /// output: `[G, M]`
     pub fn forward(&self, g: &GraphTensors<B>) -> Tensor<B, 2> {
         let delta = self.embed(g);
-        let q = self
-            .head
-            .forward(g.graph_mean(delta.clone()), g.actor_rows(delta));
+        let pooled = g.graph_mean(delta.clone());
+        let mut q = self.head.forward(pooled.clone(), g.actor_rows(delta));
+        if let Some(price) = &self.price {
+            q = q + price.forward(g, pooled, self.activation) - g.cost.clone();
+        }
         if self.gain_residual {
             q + g.gain.clone()
         } else {
             q
         }
+    }
+}
+
+/// The price head: one MLP shared by every task, from the task's summaries and the
+/// pooled graph embedding to its price π_j (ours, not in the paper).
+#[derive(Module, Debug)]
+pub struct PriceHead<B: Backend> {
+    /// `[task inputs || pooled embedding]`, `2 · TASK_FEATURES + d → d`.
+    pub input: Linear<B>,
+    /// `d → d`.
+    pub hidden: Linear<B>,
+    /// `d → 1`, zero at initialisation.
+    pub output: Linear<B>,
+}
+
+impl<B: Backend> PriceHead<B> {
+    /// Every task's price.
+    ///
+    /// # Shapes
+    /// - `pooled`: `[G, d]`
+    /// - output: `[G, M]`
+    pub fn forward(
+        &self,
+        g: &GraphTensors<B>,
+        pooled: Tensor<B, 2>,
+        activation: Activation,
+    ) -> Tensor<B, 2> {
+        let [graphs, d] = pooled.dims();
+        let m = g.cost.dims()[1];
+        // Each graph's pooled embedding beside each of its tasks.       [G M, d]
+        let pooled = pooled
+            .unsqueeze_dim::<3>(1)
+            .repeat_dim(1, m)
+            .reshape([graphs * m, d]);
+        let x = activation.apply(linear_of_concat(
+            &self.input,
+            vec![g.task_inputs.clone(), pooled],
+        ));
+        let x = activation.apply(self.hidden.forward(x));
+        self.output.forward(x).reshape([graphs, m])
     }
 }

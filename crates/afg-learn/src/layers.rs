@@ -78,6 +78,22 @@ pub fn seeded_linear<B: Backend>(
     }
 }
 
+/// A linear layer `[.., d_in] → [.., d_out]` whose weights and bias are all zero: an
+/// output layer that makes its network start at exactly 0.
+pub fn zero_linear<B: Backend>(d_in: usize, d_out: usize, device: &B::Device) -> Linear<B> {
+    let zeros = |shape: Vec<usize>| {
+        let len = shape.iter().product();
+        TensorData::new(vec![0.0f32; len], shape)
+    };
+    Linear {
+        weight: Param::from_tensor(Tensor::from_data(zeros(vec![d_in, d_out]), device)),
+        bias: Some(Param::from_tensor(Tensor::from_data(
+            zeros(vec![d_out]),
+            device,
+        ))),
+    }
+}
+
 /// `linear` applied to the concatenation of `parts` along the feature axis, without
 /// building the concatenation: each part meets its own rows of the weight. (Same
 /// values as `linear.forward(Tensor::cat(parts, 1))`; the copy, and its gradient's

@@ -24,7 +24,7 @@ mod tensors;
 mod train;
 mod weights;
 
-pub use afgnet::{AfgLayer, AfgNet, AfgNetConfig};
+pub use afgnet::{AfgLayer, AfgNet, AfgNetConfig, PriceHead};
 pub use env::{Env, greedy_completion_welfare, n_step_reward};
 pub use error::LearnError;
 pub use fast::{FastPolicy, FastRollout, FastRolloutOutcome};
@@ -33,7 +33,7 @@ pub use network::{NetworkConfig, QNetwork};
 pub use policy::{LearnedPolicy, LearnedRun};
 pub use price::{
     PRICE_INPUTS, PriceMlp, PriceMode, PriceModel, PriceNet, PriceNetConfig, PricePolicy,
-    PriceRound, PriceState, PriceTrainConfig, PriceTrainer, TASK_FEATURES, task_inputs,
+    PriceRound, PriceTrainConfig, PriceTrainer,
 };
 pub use regret::{RegretStep, q_star, regret_trace};
 pub use rollout::greedy_rollouts;

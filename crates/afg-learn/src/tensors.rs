@@ -36,6 +36,10 @@ pub struct GraphTensors<B: Backend> {
     pub actors: Tensor<B, 1, Int>,
     /// The actor's join gain per task (`GraphBatch::gain`), `[G, M]`.
     pub gain: Tensor<B, 2>,
+    /// The actor's distance cost per task (`GraphBatch::cost`), `[G, M]`.
+    pub cost: Tensor<B, 2>,
+    /// Each task's summaries (`GraphBatch::task_inputs`), `[G M, 2 · TASK_FEATURES]`.
+    pub task_inputs: Tensor<B, 2>,
     /// Dense per-graph aggregation matrices, when every graph has the same N ≤
     /// [`DENSE_MAX_NODES`]: a batched matrix product then replaces gather + scatter.
     pub dense: Option<DenseAdjacency<B>>,
@@ -99,6 +103,8 @@ impl<B: Backend> GraphTensors<B> {
             inv_graph_size: float2(&inv_size, 1, device),
             actors: int1(&batch.actors, device),
             gain: float2(&batch.gain, m, device),
+            cost: float2(&batch.cost, m, device),
+            task_inputs: float2(&batch.task_inputs, 2 * afg_graph::TASK_FEATURES, device),
             dense: None,
         }
     }

@@ -8,11 +8,12 @@
 use std::path::{Path, PathBuf};
 
 use burn::module::{Module, ModuleVisitor, Param};
-use burn::record::{FullPrecisionSettings, NamedMpkFileRecorder};
+use burn::record::{FullPrecisionSettings, NamedMpkFileRecorder, Recorder};
 use burn::tensor::Tensor;
 use burn::tensor::backend::Backend;
 use serde::{Deserialize, Serialize};
 
+use crate::network::QNetworkRecord;
 use crate::{LearnError, NetworkConfig, QNetwork};
 
 fn weights_error(path: &Path, reason: impl Into<String>) -> LearnError {
@@ -113,16 +114,37 @@ pub fn load_network<B: Backend>(
     let record_path = with_extension(stem, "mpk");
     // Burn panics when a record holds another network variant; report that as an error too.
     let loaded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        fresh.load_file(record_path.clone(), &recorder, device)
+        recorder.load::<<QNetwork<B> as Module<B>>::Record>(record_path.clone(), device)
     }));
-    let network = match loaded {
-        Ok(Ok(network)) => network,
+    let record = match loaded {
+        Ok(Ok(record)) => record,
         Ok(Err(e)) => {
             return Err(weights_error(
                 &record_path,
                 format!("unreadable weights ({e}); corrupt or truncated?"),
             ));
         }
+        Err(_) => {
+            return Err(weights_error(
+                &record_path,
+                "the record holds another kind of network than its header says",
+            ));
+        }
+    };
+    // An optional part (AFGNet's price head) that the record has and the header does
+    // not would be dropped without a word by `load_record`.
+    if let (QNetworkRecord::AfgNet(r), NetworkConfig::AfgNet(c)) = (&record, &header.network)
+        && r.price.is_some() != c.price_head.unwrap_or(false)
+    {
+        return Err(weights_error(
+            &record_path,
+            "the record and its header disagree on the price head",
+        ));
+    }
+    let network = match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        fresh.load_record(record)
+    })) {
+        Ok(network) => network,
         Err(_) => {
             return Err(weights_error(
                 &record_path,

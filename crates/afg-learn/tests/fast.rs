@@ -117,6 +117,58 @@ fn fast_path_matches_burn_with_random_weights_on_the_datasets() {
     }
 }
 
+/// A price-headed AFGNet whose two zero-initialised output layers are replaced by
+/// seeded random ones, so that every part of the head counts.
+fn price_headed(seed: u64, units: afg_graph::Units) -> (NetworkConfig, QNetwork<B>) {
+    use burn::module::Param;
+    use burn::nn::Linear;
+    use burn::tensor::{Tensor, TensorData};
+    use rand::{Rng, SeedableRng};
+    let device = Default::default();
+    let config = NetworkConfig::AfgNet(
+        afg_learn::AfgNetConfig::new(5)
+            .with_price_head(Some(true))
+            .with_seed(seed),
+    )
+    .with_units(units);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let mut random = |d_in: usize, d_out: usize| {
+        let mut draw =
+            |len: usize| -> Vec<f32> { (0..len).map(|_| rng.random_range(-0.3..0.3)).collect() };
+        Linear {
+            weight: Param::from_tensor(Tensor::from_data(
+                TensorData::new(draw(d_in * d_out), [d_in, d_out]),
+                &device,
+            )),
+            bias: Some(Param::from_tensor(Tensor::from_data(
+                TensorData::new(draw(d_out), [d_out]),
+                &device,
+            ))),
+        }
+    };
+    let QNetwork::AfgNet(mut net) = config.init::<B>(&device) else {
+        unreachable!("an AFGNet configuration")
+    };
+    net.head.output = random(64, 5);
+    net.price.as_mut().expect("a price head").output = random(64, 1);
+    (config, QNetwork::AfgNet(net))
+}
+
+#[test]
+fn fast_path_matches_burn_with_a_price_head() {
+    for (seed, units) in [
+        (21, afg_graph::Units::Bounded),
+        (22, afg_graph::Units::MeanReward),
+    ] {
+        let (config, network) = price_headed(seed, units);
+        for n in [20, 60, 100] {
+            for inst in dataset(n).iter().take(10) {
+                assert_parity(&config, &network, inst);
+            }
+        }
+    }
+}
+
 #[test]
 fn fast_path_matches_burn_with_the_committed_weights() {
     let device = Default::default();

@@ -18,8 +18,21 @@ use rand_chacha::ChaCha8Rng;
 
 type B = InferBackend;
 
-fn configs() -> [NetworkConfig; 2] {
-    [NetworkConfig::afgnet(5, 3), NetworkConfig::s2v(5, 3)]
+fn price_headed(seed: u64) -> NetworkConfig {
+    NetworkConfig::AfgNet(
+        afg_learn::AfgNetConfig::new(5)
+            .with_price_head(Some(true))
+            .with_seed(seed),
+    )
+    .with_units(afg_graph::Units::Bounded)
+}
+
+fn configs() -> [NetworkConfig; 3] {
+    [
+        NetworkConfig::afgnet(5, 3),
+        NetworkConfig::s2v(5, 3),
+        price_headed(3),
+    ]
 }
 
 /// One uniformly random allowed action: (reward, done).
@@ -291,6 +304,20 @@ fn bad_weight_files_are_clear_errors() {
     let err = load_network::<B>(&stem, &Default::default()).unwrap_err();
     assert!(err.to_string().contains("shapes differ"), "{err}");
 
+    // A price-headed record under a header without the head (and the reverse).
+    let headed = price_headed(1);
+    save_network(headed.init::<B>(&Default::default()), &headed, &stem).unwrap();
+    let text = std::fs::read_to_string(&json).unwrap();
+    let plain = text.replace("\"price_head\": true", "\"price_head\": null");
+    assert_ne!(plain, text);
+    std::fs::write(&json, plain).unwrap();
+    let err = load_network::<B>(&stem, &Default::default()).unwrap_err();
+    assert!(err.to_string().contains("price head"), "{err}");
+    save_network(config.init::<B>(&Default::default()), &config, &stem).unwrap();
+    std::fs::write(&json, text).unwrap();
+    let err = load_network::<B>(&stem, &Default::default()).unwrap_err();
+    assert!(matches!(err, LearnError::Weights { .. }), "{err}");
+
     // A truncated record.
     save_network(config.init::<B>(&Default::default()), &config, &stem).unwrap();
     let bytes = std::fs::read(&mpk).unwrap();
@@ -377,4 +404,86 @@ fn dense_and_edge_list_aggregation_agree() {
             );
         }
     }
+}
+
+#[test]
+fn an_untrained_price_head_is_nearest() {
+    // Both output layers start at zero: Q(s, a) = −β d(t, a) in the features' unit,
+    // so the greedy action is the nearest task with room, and every price is 0.
+    let device = Default::default();
+    let config = price_headed(5);
+    let net = config.init::<B>(&device);
+    for (n, seed) in [(20, 1), (60, 2), (100, 3)] {
+        let mut inst = GeneratorConfig::paper(n, 5, seed).generate().unwrap();
+        if n == 20 {
+            // Capacities, so that some nearest tasks are full.
+            let tasks = inst
+                .tasks()
+                .iter()
+                .map(|t| Task {
+                    capacity: Some(5),
+                    ..t.clone()
+                })
+                .collect();
+            inst = Instance::new(inst.robots().to_vec(), tasks, inst.beta()).unwrap();
+        }
+        let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
+        let mut batch = GraphBatch::new(5);
+        for k in 0..8 {
+            let (state, actor) = midway(&inst, k * n / 8, k as u64);
+            // In the network's units, as the trainer and the policies build states.
+            let state =
+                AllocationState::with_units(&inst, state.assignment().clone(), config.units());
+            batch.push(&graph, &state, actor);
+        }
+        let g = GraphTensors::new(&batch, &device);
+        let q: Vec<f32> = net.forward(&g).into_data().to_vec().unwrap();
+        let afg_learn::QNetwork::AfgNet(afgnet) = &net else {
+            unreachable!()
+        };
+        let prices: Vec<f32> = afgnet.prices(&g).unwrap().into_data().to_vec().unwrap();
+        assert!(prices.iter().all(|&p| p == 0.0));
+        for k in 0..8 {
+            let actor = RobotId(batch.actors[k] - (k * n) as u32);
+            let row = &q[k * 5..(k + 1) * 5];
+            let mask = &batch.mask[k * 5..(k + 1) * 5];
+            for j in 0..5 {
+                let cost = inst.cost(actor, TaskId(j as u32)) as f32; // β = 1
+                assert!((row[j] + cost).abs() < 1e-6, "{row:?}");
+            }
+            let nearest = (0..5)
+                .filter(|&j| mask[j])
+                .min_by(|&a, &b| {
+                    inst.distance(actor, TaskId(a as u32))
+                        .total_cmp(&inst.distance(actor, TaskId(b as u32)))
+                })
+                .unwrap();
+            assert_eq!(afg_learn::masked_argmax(row, mask), Some(nearest));
+        }
+    }
+}
+
+#[test]
+fn networks_without_a_price_head_load_from_files_that_predate_it() {
+    let json = r#"{"net":"afgnet","tasks":5,"hidden":64,"layers":3,"activation":"relu","seed":0,"gain_residual":null,"units":"bounded"}"#;
+    let config: NetworkConfig = serde_json::from_str(json).unwrap();
+    let NetworkConfig::AfgNet(c) = &config else {
+        unreachable!()
+    };
+    assert_eq!(c.price_head, None);
+    // The price head draws its weights after everything else: the paper's network
+    // keeps the weights of its seed.
+    let device = Default::default();
+    let (plain, headed) = (
+        config.init::<B>(&device),
+        price_headed(0).init::<B>(&device),
+    );
+    let (afg_learn::QNetwork::AfgNet(a), afg_learn::QNetwork::AfgNet(b)) = (&plain, &headed) else {
+        unreachable!()
+    };
+    let theta = |l: &burn::nn::Linear<B>| l.weight.val().into_data().to_vec::<f32>().unwrap();
+    assert_eq!(theta(&a.theta1), theta(&b.theta1));
+    assert_eq!(theta(&a.head.hidden), theta(&b.head.hidden));
+    assert!(theta(&b.head.output).iter().all(|&w| w == 0.0));
+    assert!(a.price.is_none() && b.price.is_some());
 }

@@ -33,13 +33,15 @@
 use std::time::{Duration, Instant};
 
 use afg_game::{Assignment, Instance, RobotId, TaskId};
-use afg_graph::{RobotGraph, Units, join_gain, write_task_column};
+use afg_graph::{
+    PriceState, RobotGraph, TASK_FEATURES, Units, join_gain, task_inputs, write_task_column,
+};
 use burn::tensor::backend::Backend;
 
 mod net;
 mod passes;
 
-use net::{FastAfgLayer, FastAfgNet, FastNet, FastS2v, Head, one_hot_table};
+use net::{FastAfgLayer, FastAfgNet, FastNet, FastPriceHead, FastS2v, Head, one_hot_table};
 
 use crate::dense::{Dense, side_by_side};
 use crate::{LearnError, NetworkConfig, QNetwork, masked_argmax};
@@ -120,6 +122,7 @@ impl FastPolicy {
                         robot_table: one_hot_table(&Dense::from_burn(&n.theta1), |x| s.scalar(x)),
                         theta2: Dense::from_burn(&n.theta2),
                         layers,
+                        price: n.price.as_ref().map(FastPriceHead::from_burn),
                     }),
                     head: Head::from_burn(&n.head, s),
                     tasks: c.tasks,
@@ -236,6 +239,23 @@ pub struct FastRollout<'a> {
     /// `[d]` scratch vectors.
     vec_a: Vec<f32>,
     vec_b: Vec<f32>,
+    /// With a price head: the tasks' summaries and the prices of the last pass.
+    price: Option<PricePass<'a>>,
+}
+
+/// What a rollout of a network with a price head keeps between passes.
+#[derive(Debug)]
+struct PricePass<'a> {
+    /// The tasks' summaries, kept up to date by [`FastRollout::assign`].
+    state: PriceState<'a>,
+    /// `[M, TASK_FEATURES]`.
+    features: Vec<f32>,
+    /// `[M, 2 · TASK_FEATURES]`.
+    inputs: Vec<f32>,
+    /// The pooled embedding's term of the head's first layer, `[d]`.
+    pooled_term: Vec<f32>,
+    /// The prices of the last pass, `[M]`.
+    prices: Vec<f32>,
 }
 
 impl<'a> FastRollout<'a> {
@@ -280,6 +300,15 @@ impl<'a> FastRollout<'a> {
             head_state: vec![0.0; d],
             vec_a: vec![0.0; d],
             vec_b: vec![0.0; d],
+            price: matches!(&policy.net, FastNet::AfgNet(net) if net.price.is_some()).then(|| {
+                PricePass {
+                    state: PriceState::new(instance),
+                    features: vec![0.0; m * TASK_FEATURES],
+                    inputs: vec![0.0; 2 * m * TASK_FEATURES],
+                    pooled_term: vec![0.0; d],
+                    prices: vec![0.0; m],
+                }
+            }),
         };
         run.cached = match &policy.net {
             FastNet::AfgNet(net) => {
@@ -311,6 +340,9 @@ impl<'a> FastRollout<'a> {
         );
         self.assignment.set(robot, Some(task));
         self.moved.push(robot);
+        if let Some(price) = &mut self.price {
+            price.state.assign(robot, task);
+        }
     }
 
     /// Which tasks have room for `robot`, into `mask` (length M).
@@ -364,6 +396,30 @@ impl<'a> FastRollout<'a> {
             }
         }
         self.head_pass(n, d);
+        self.price_pass();
+    }
+
+    /// The prices of the current state, with a price head (after
+    /// [`FastRollout::head_pass`], which leaves the pooled embedding in `vec_b`).
+    fn price_pass(&mut self) {
+        let (FastNet::AfgNet(net), Some(pass)) = (&self.policy.net, &mut self.price) else {
+            return;
+        };
+        let head = net
+            .price
+            .as_ref()
+            .expect("a price pass only with a price head");
+        pass.state.features(&mut pass.features);
+        task_inputs(&pass.features, &mut pass.inputs);
+        head.input_pooled
+            .apply_row(&self.vec_b, &mut pass.pooled_term);
+        head.prices(
+            &pass.inputs,
+            &pass.pooled_term,
+            self.policy.head.activation,
+            (&mut self.vec_a, &mut self.scratch[..self.policy.hidden]),
+            &mut pass.prices,
+        );
     }
 
     /// Q values of `robot` acting in the state of the last [`FastRollout::evaluate`],
@@ -378,6 +434,11 @@ impl<'a> FastRollout<'a> {
             *h = s.scalar(*h + g);
         }
         head.output.apply_row(&self.vec_a, q);
+        if let Some(pass) = &self.price {
+            for (j, (q, &price)) in q.iter_mut().zip(&pass.prices).enumerate() {
+                *q += price - (self.instance.cost(robot, TaskId(j as u32)) / self.scale) as f32;
+            }
+        }
         if self.policy.gain_residual {
             for (j, q) in q.iter_mut().enumerate() {
                 *q += join_gain(

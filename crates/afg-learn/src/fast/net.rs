@@ -3,6 +3,8 @@
 use burn::tensor::backend::Backend;
 
 use crate::Activation;
+use crate::PRICE_INPUTS;
+use crate::afgnet::PriceHead;
 use crate::dense::Dense;
 use crate::layers::QHead;
 
@@ -28,6 +30,55 @@ impl Head {
             hidden_actor: hidden.rows(d..2 * d),
             output: Dense::from_burn(&head.output),
             activation,
+        }
+    }
+}
+
+/// AFGNet's price head: `π_j = out(σ(hidden(σ(input [x_j || pooled]))))`.
+#[derive(Clone, Debug, PartialEq)]
+pub(super) struct FastPriceHead {
+    /// `input`'s rows for a task's inputs, with its bias.
+    pub(super) input_task: Dense,
+    /// `input`'s rows for the pooled embedding.
+    pub(super) input_pooled: Dense,
+    pub(super) hidden: Dense,
+    pub(super) output: Dense,
+}
+
+impl FastPriceHead {
+    pub(super) fn from_burn<B: Backend>(head: &PriceHead<B>) -> Self {
+        let input = Dense::from_burn(&head.input);
+        FastPriceHead {
+            input_task: input.rows_with_bias(0..PRICE_INPUTS),
+            input_pooled: input.rows(PRICE_INPUTS..input.inputs),
+            hidden: Dense::from_burn(&head.hidden),
+            output: Dense::from_burn(&head.output),
+        }
+    }
+
+    /// Every task's price into `prices` from the tasks' inputs (`[M, PRICE_INPUTS]`)
+    /// and the pooled embedding's contribution `pooled_term` (`input_pooled` applied
+    /// to it); `a` and `b` are `[d]` scratch.
+    pub(super) fn prices(
+        &self,
+        inputs: &[f32],
+        pooled_term: &[f32],
+        activation: Activation,
+        (a, b): (&mut [f32], &mut [f32]),
+        prices: &mut [f32],
+    ) {
+        for (x, price) in inputs.chunks_exact(PRICE_INPUTS).zip(prices) {
+            self.input_task.apply_row(x, a);
+            for (h, &p) in a.iter_mut().zip(pooled_term) {
+                *h = activation.scalar(*h + p);
+            }
+            self.hidden.apply_row(a, b);
+            for h in b.iter_mut() {
+                *h = activation.scalar(*h);
+            }
+            let mut out = [0.0f32];
+            self.output.apply_row(b, &mut out);
+            *price = out[0];
         }
     }
 }
@@ -60,6 +111,8 @@ pub(super) struct FastAfgNet {
     /// θ2 with its bias.
     pub(super) theta2: Dense,
     pub(super) layers: Vec<FastAfgLayer>,
+    /// The price head, when the network has one.
+    pub(super) price: Option<FastPriceHead>,
 }
 
 #[derive(Clone, Debug, PartialEq)]

@@ -19,7 +19,6 @@
 //!
 //! Every input is per task, so the same weights serve any M.
 
-mod features;
 mod net;
 mod train;
 
@@ -29,7 +28,7 @@ use afg_baseline::{AllocError, AllocStats, Allocation, Allocator};
 use afg_game::{Instance, RobotId, TaskId};
 use serde::{Deserialize, Serialize};
 
-pub use features::{PriceState, TASK_FEATURES, task_inputs};
+use afg_graph::{PriceState, TASK_FEATURES};
 use net::PriceScratch;
 pub use net::{PRICE_INPUTS, PriceMlp, PriceNet, PriceNetConfig};
 pub use train::{PriceRound, PriceTrainConfig, PriceTrainer};

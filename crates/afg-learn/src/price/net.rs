@@ -10,9 +10,9 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use super::features::{TASK_FEATURES, task_inputs};
 use crate::dense::Dense;
-use crate::layers::seeded_linear;
+use crate::layers::{seeded_linear, zero_linear};
+use afg_graph::{TASK_FEATURES, task_inputs};
 
 /// Width of a task's network input: its features and the mean of all tasks' features.
 pub const PRICE_INPUTS: usize = 2 * TASK_FEATURES;
@@ -33,16 +33,10 @@ impl PriceNetConfig {
     pub fn init<B: Backend>(&self, device: &B::Device) -> PriceNet<B> {
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
         let h = self.hidden;
-        let zeros = |shape: [usize; 2]| {
-            Tensor::<B, 2>::from_data(TensorData::zeros::<f32, _>(shape), device)
-        };
         PriceNet {
             input: seeded_linear(&mut rng, PRICE_INPUTS, h, device),
             hidden: seeded_linear(&mut rng, h, h, device),
-            output: Linear {
-                weight: Param::from_tensor(zeros([h, 1])),
-                bias: Some(Param::from_tensor(zeros([1, 1]).reshape([1]))),
-            },
+            output: zero_linear(h, 1, device),
         }
     }
 }
@@ -75,7 +69,8 @@ impl<B: Backend> PriceNet<B> {
 ///
 /// # Examples
 /// ```
-/// use afg_learn::{PriceMlp, PriceNetConfig, TASK_FEATURES};
+/// use afg_graph::TASK_FEATURES;
+/// use afg_learn::{PriceMlp, PriceNetConfig};
 /// let config = PriceNetConfig { hidden: 16, seed: 0 };
 /// let mlp = PriceMlp::from_burn(&config.init::<afg_learn::InferBackend>(&Default::default()));
 /// let mut prices = vec![1.0; 5];

@@ -19,11 +19,11 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use super::features::{PriceState, TASK_FEATURES, task_inputs};
 use super::net::{PRICE_INPUTS, PriceMlp, PriceNet, PriceNetConfig, PriceScratch};
 use super::{PriceMode, PriceModel, PricePolicy};
 use crate::train::validation_set;
 use crate::{LearnError, TrainBackend, masked_argmax, q_star, training_instance_seed};
+use afg_graph::{PriceState, TASK_FEATURES, task_inputs};
 
 /// Every setting of a price-model training run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

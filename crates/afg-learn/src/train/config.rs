@@ -259,6 +259,14 @@ impl TrainConfig {
                 "the gain residual is in the features' unit and adds the unshaped reward: it needs reward scaling and no shaping",
             );
         }
+        if let NetworkConfig::AfgNet(c) = &self.network
+            && c.price_head == Some(true)
+            && (!self.reward_scaling || c.gain_residual == Some(true))
+        {
+            return bad(
+                "the price head subtracts the actor's cost in the features' unit: it needs reward scaling, and no gain residual",
+            );
+        }
         Ok(())
     }
 

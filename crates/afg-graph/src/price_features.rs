@@ -1,11 +1,12 @@
-//! The per-task inputs of the price model, kept up to date as robots join tasks.
+//! Per-task summaries of an allocation in progress (the inputs of the price model and
+//! of AFGNet's price head), kept up to date as robots join tasks.
 //!
 //! Everything is measured so that it means the same at every N (β units for welfare,
 //! a task's `eps_j` for counts): the paper's distribution has `eps_j = N/M` and rewards
 //! in `[N/M, 2N/M]`, so `n_j / eps_j` and `r_j / eps_j` are O(1) at any scale.
 
+use crate::{Units, VALUE_CAP};
 use afg_game::{Assignment, Instance, RobotId, TaskId};
-use afg_graph::{Units, VALUE_CAP};
 
 /// Number of inputs per task ([`PriceState::features`]).
 pub const TASK_FEATURES: usize = 9;
@@ -23,7 +24,7 @@ const SOFT_TEMPERATURES: [f64; 2] = [0.05, 0.2];
 /// # Examples
 /// ```
 /// use afg_game::{GeneratorConfig, RobotId, TaskId};
-/// use afg_learn::{PriceState, TASK_FEATURES};
+/// use afg_graph::{PriceState, TASK_FEATURES};
 /// let inst = GeneratorConfig::paper(60, 5, 1).generate()?;
 /// let mut state = PriceState::new(&inst);
 /// let mut before = vec![0.0; 5 * TASK_FEATURES];
@@ -104,6 +105,25 @@ impl<'a> PriceState<'a> {
             unassigned: n,
             eps_total: instance.tasks().iter().map(|t| t.eps).sum(),
         }
+    }
+
+    /// The state with the robots of `assignment` placed.
+    ///
+    /// # Panics
+    /// If `assignment` is for another number of robots or tasks.
+    pub fn from_assignment(instance: &'a Instance, assignment: &Assignment) -> Self {
+        assert_eq!(
+            (assignment.num_robots(), assignment.sizes().len()),
+            (instance.num_robots(), instance.num_tasks()),
+            "assignment of another instance"
+        );
+        let mut state = Self::new(instance);
+        for i in instance.robot_ids() {
+            if let Some(j) = assignment.task_of(i) {
+                state.assign(i, j);
+            }
+        }
+        state
     }
 
     /// The instance.
