@@ -57,6 +57,17 @@ pub fn command_line(c: &TrainConfig, dir: &Path) -> String {
     {
         cmd += " --gain-residual";
     }
+    if let NetworkConfig::AfgNet(a) = &c.network
+        && a.price_head == Some(true)
+    {
+        cmd += " --price-head";
+    }
+    if let Some(d) = &c.demonstrations {
+        cmd += &format!(
+            " --demos {} --demo-share {} --demo-margin {} --demo-weight {}",
+            d.episodes, d.share, d.margin, d.weight
+        );
+    }
     if c.preset == Preset::Paper {
         cmd += " --paper";
     }

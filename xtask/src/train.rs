@@ -7,8 +7,8 @@ use std::time::{Duration, Instant};
 use afg_baseline::Method;
 use afg_graph::Units;
 use afg_learn::{
-    Algo, LogEvent, NetworkConfig, Preset, RunDir, TrainConfig, Trainer, ValidationLine,
-    save_network, validation_instances,
+    Algo, Demonstrations, LogEvent, NetworkConfig, Preset, RunDir, TrainConfig, Trainer,
+    ValidationLine, save_network, validation_instances,
 };
 use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
@@ -97,6 +97,22 @@ pub struct TrainArgs {
     /// docs/price.md).
     #[arg(long)]
     pub(crate) price_head: bool,
+    /// Learn from demonstrations as in Deep Q-learning from Demonstrations (ours, not
+    /// in the paper): this many expert episodes (each robot on its task in the exact
+    /// optimum), a share of every batch drawn from them, and a large-margin loss on the
+    /// expert's action. DQN and Double DQN only.
+    #[arg(long, value_name = "EPISODES")]
+    pub(crate) demos: Option<usize>,
+    /// With --demos: share of each batch drawn from the demonstrations.
+    #[arg(long, default_value_t = 0.25, requires = "demos")]
+    pub(crate) demo_share: f64,
+    /// With --demos: the margin by which the expert's action should lead, in the
+    /// network's welfare unit (distance units with the default units).
+    #[arg(long, default_value_t = 0.05, requires = "demos")]
+    pub(crate) demo_margin: f64,
+    /// With --demos: weight of the large-margin loss.
+    #[arg(long, default_value_t = 1.0, requires = "demos")]
+    pub(crate) demo_weight: f64,
     /// The paper's settings where ours differ: squared loss, raw rewards, no clipping,
     /// target sync every 1000 steps, constant learning rate 1e-4 (an explicit --lr still
     /// wins).
@@ -183,6 +199,12 @@ impl TrainArgs {
             c.eps_start = e;
         }
         c.init_from = self.init_from.clone();
+        c.demonstrations = self.demos.map(|episodes| Demonstrations {
+            episodes,
+            share: self.demo_share,
+            margin: self.demo_margin,
+            weight: self.demo_weight,
+        });
         // The gain residual adds the unshaped reward to Q: it implies no shaping.
         if self.no_shaping || self.gain_residual {
             c.greedy_shaping = false;
@@ -207,6 +229,7 @@ impl TrainArgs {
             || self.no_shaping
             || self.gain_residual
             || self.price_head
+            || self.demos.is_some()
             || self.paper
             || self.init_from.is_some()
             || self.eps_start.is_some()
@@ -392,6 +415,8 @@ mod tests {
             "--scale 20 --paper --target-sync 50",
             "--scale 60 --no-shaping",
             "--scale 100 --init-from models/afgnet_ddqn_n60 --eps-start 0.1",
+            "--scale 60 --price-head --algo qstar",
+            "--scale 60 --price-head --demos 64 --demo-margin 0.1 --demo-share 0.5",
         ] {
             let argv = ["cargo xtask", "train"]
                 .into_iter()

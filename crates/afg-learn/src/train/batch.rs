@@ -69,9 +69,18 @@ impl Trainer {
         (k / n, k % n)
     }
 
+    /// A uniformly drawn demonstration step: (expert episode, robot index).
+    fn sample_demonstration(&mut self) -> (usize, usize) {
+        let k = self
+            .rng
+            .random_range(0..self.demos.len() * self.config.robots);
+        (k / self.config.robots, k % self.config.robots)
+    }
+
     /// A sampled batch of transitions: the states, the actions taken and their DQN
-    /// targets, or Double DQN targets with `double`.
-    pub(super) fn td_batch(&mut self, double: bool) -> (GraphBatch, Vec<i64>, Vec<f32>) {
+    /// targets, or Double DQN targets with `double`, and how many of them (the last
+    /// rows) are demonstrations.
+    pub(super) fn td_batch(&mut self, double: bool) -> (GraphBatch, Vec<i64>, Vec<f32>, usize) {
         let (n, m, b) = (
             self.config.robots,
             self.config.network.tasks(),
@@ -85,9 +94,19 @@ impl Trainer {
             Vec::with_capacity(b),
             Vec::with_capacity(b),
         );
-        for _ in 0..b {
-            let (e, t) = self.sample_step();
-            let ep = &self.replay[e];
+        let experts = match &self.config.demonstrations {
+            Some(d) => d.per_batch(b),
+            None => 0,
+        };
+        for row in 0..b {
+            let ep = if row < b - experts {
+                let (e, t) = self.sample_step();
+                (&self.replay[e], t)
+            } else {
+                let (e, t) = self.sample_demonstration();
+                (&self.demos[e], t)
+            };
+            let (ep, t) = ep;
             let (robot, task) = (RobotId(t as u32), TaskId(u32::from(ep.record.actions[t])));
             let mut a = ep.assignment_after(t);
             now.push(
@@ -147,7 +166,7 @@ impl Trainer {
                 }
             })
             .collect();
-        (now, actions, targets)
+        (now, actions, targets, experts)
     }
 }
 
@@ -209,5 +228,95 @@ mod tests {
                 assert!(best.abs() < 1e-4, "last step: {best}");
             }
         });
+    }
+
+    fn with_demonstrations(share: f64, weight: f64) -> TrainConfig {
+        let mut c = TrainConfig::new(6, Algo::Ddqn, NetworkConfig::afgnet(3, 0), 60, 2);
+        c.validation_instances = 2;
+        c.demonstrations = Some(crate::train::Demonstrations {
+            episodes: 8,
+            share,
+            margin: 0.1,
+            weight,
+        });
+        c
+    }
+
+    #[test]
+    fn demonstrations_follow_the_optimum_on_their_own_instances() {
+        let t = Trainer::new(with_demonstrations(0.25, 1.0)).unwrap();
+        assert_eq!(t.demos.len(), 8);
+        for ep in &t.demos {
+            let opt = Optimum.allocate(&ep.instance).unwrap().assignment;
+            let shown = ep.assignment_after(6);
+            assert!((ep.instance.welfare(&shown) - ep.instance.welfare(&opt)).abs() < 1e-9);
+            assert!(ep.record.seed >= (1 << 62) + (1 << 61));
+        }
+    }
+
+    #[test]
+    fn large_margins_by_hand() {
+        let mask = [true, false, true, true, true, true];
+        assert_eq!(
+            super::super::large_margins(&mask, &[2, 0], 3, 0.5),
+            vec![0.5, -1e9, 0.0, 0.0, 0.5, 0.5]
+        );
+    }
+
+    #[test]
+    fn the_large_margin_loss_teaches_the_expert_actions() {
+        // Share of demonstration states whose greedy action is the expert's.
+        let agreement = |t: &Trainer| {
+            let net = t.online.valid();
+            let device = Default::default();
+            let (mut hits, mut total) = (0, 0);
+            for ep in &t.demos {
+                let mut batch = GraphBatch::new(3);
+                for step in 0..6 {
+                    let state = AllocationState::with_units(
+                        &ep.instance,
+                        ep.assignment_after(step),
+                        t.config.network.units(),
+                    );
+                    batch.push(&ep.graph, &state, RobotId(step as u32));
+                }
+                let q: Vec<f32> = net
+                    .forward(&GraphTensors::new(&batch, &device))
+                    .into_data()
+                    .to_vec()
+                    .unwrap();
+                for step in 0..6 {
+                    let range = step * 3..(step + 1) * 3;
+                    let chosen = crate::masked_argmax(&q[range.clone()], &batch.mask[range]);
+                    hits += usize::from(chosen == Some(usize::from(ep.record.actions[step])));
+                    total += 1;
+                }
+            }
+            hits as f64 / total as f64
+        };
+        let trained = |weight: f64| {
+            let mut t = Trainer::new(with_demonstrations(0.9, weight)).unwrap();
+            let before = agreement(&t);
+            while !t.is_finished() {
+                t.step().unwrap();
+            }
+            (before, agreement(&t))
+        };
+        // The same run (same draws) with and without the margin loss.
+        let ((before, with_margin), (_, td_only)) = (trained(10.0), trained(0.0));
+        assert!(
+            with_margin > before + 0.2 && with_margin > td_only + 0.1,
+            "{before} -> {with_margin} (TD only: {td_only})"
+        );
+    }
+
+    #[test]
+    fn bad_demonstrations_are_refused() {
+        for (share, weight) in [(0.0, 1.0), (1.0, 1.0), (0.5, -1.0), (0.5, f64::NAN)] {
+            assert!(Trainer::new(with_demonstrations(share, weight)).is_err());
+        }
+        let mut c = with_demonstrations(0.5, 1.0);
+        c.algo = Algo::QStar;
+        assert!(Trainer::new(c).is_err());
     }
 }

@@ -127,6 +127,46 @@ pub struct TrainConfig {
     /// another N. The network configuration must be the same. Not in the paper.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub init_from: Option<std::path::PathBuf>,
+    /// Learning from demonstrations as in Deep Q-learning from Demonstrations (Hester
+    /// et al., 2018): expert episodes in every batch and a large-margin loss on the
+    /// expert's action. Ours, not in the paper; DQN and Double DQN only.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub demonstrations: Option<Demonstrations>,
+}
+
+/// The demonstrations of a run ([`TrainConfig::demonstrations`]): episodes in which
+/// every robot takes its task in the exact optimum (the optimum's choice maximises
+/// `Q*` at every state along it), on instances seeded apart from the training,
+/// validation and test instances, fixed for the whole run.
+///
+/// Each batch draws `share` of its transitions from them; on those the loss adds
+/// `weight · (max_a [Q(s, a) + margin · 1(a ≠ a_E)] − Q(s, a_E))` (the maximum over
+/// the tasks with room), which is zero only when the expert's action `a_E` leads every
+/// other by `margin`. The TD loss applies to every transition.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Demonstrations {
+    /// Expert episodes.
+    pub episodes: usize,
+    /// Share of each batch drawn from them, in (0, 1).
+    pub share: f64,
+    /// The margin, in the network's welfare unit.
+    pub margin: f64,
+    /// Weight of the large-margin loss.
+    pub weight: f64,
+}
+
+impl Demonstrations {
+    /// Seed of demonstration episode `episode` of a run seeded `run_seed`, apart from
+    /// the training instances (2^62 + …), validation (2^63 + i) and datasets (< 2^40).
+    pub fn instance_seed(run_seed: u64, episode: u64) -> u64 {
+        (1 << 62) + (1 << 61) + (run_seed << 32) + episode
+    }
+
+    /// Transitions of a batch of `batch` drawn from the demonstrations.
+    pub fn per_batch(&self, batch: usize) -> usize {
+        ((batch as f64 * self.share).round() as usize).clamp(1, batch)
+    }
 }
 
 impl TrainConfig {
@@ -162,6 +202,7 @@ impl TrainConfig {
             validate_every: (steps / 40).max(1),
             seed,
             init_from: None,
+            demonstrations: None,
         }
     }
 
@@ -258,6 +299,20 @@ impl TrainConfig {
             return bad(
                 "the gain residual is in the features' unit and adds the unshaped reward: it needs reward scaling and no shaping",
             );
+        }
+        if let Some(d) = &self.demonstrations {
+            if self.algo == Algo::QStar {
+                return bad("demonstrations go with DQN or Double DQN, not Q* regression");
+            }
+            if d.episodes == 0
+                || !(d.share > 0.0 && d.share < 1.0)
+                || !(d.margin >= 0.0 && d.margin.is_finite())
+                || !(d.weight >= 0.0 && d.weight.is_finite())
+            {
+                return bad(
+                    "demonstrations need episodes > 0, a share in (0, 1), and a finite margin and weight ≥ 0",
+                );
+            }
         }
         if let NetworkConfig::AfgNet(c) = &self.network
             && c.price_head == Some(true)

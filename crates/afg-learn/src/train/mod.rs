@@ -34,7 +34,9 @@ use serde::{Deserialize, Serialize};
 
 pub use checkpoint::checkpoint_dir;
 pub(crate) use config::validation_set;
-pub use config::{Algo, Preset, TrainConfig, training_instance_seed, validation_instances};
+pub use config::{
+    Algo, Demonstrations, Preset, TrainConfig, training_instance_seed, validation_instances,
+};
 use replay::{Episode, EpisodeRecord};
 
 use crate::{
@@ -78,6 +80,52 @@ impl Validation {
     }
 }
 
+/// The expert episodes of a run's demonstrations (none without them).
+fn demonstrations(config: &TrainConfig) -> Result<Vec<Episode>, LearnError> {
+    use afg_baseline::{Allocator, Optimum};
+    let Some(d) = &config.demonstrations else {
+        return Ok(Vec::new());
+    };
+    (0..d.episodes as u64)
+        .map(|k| {
+            let seed = Demonstrations::instance_seed(config.seed, k);
+            let instance = config.instance(seed);
+            let optimum = Optimum
+                .allocate(&instance)
+                .map_err(|e| LearnError::InvalidConfig(format!("demonstration {k}: {e}")))?
+                .assignment;
+            let actions = optimum
+                .tasks()
+                .iter()
+                .map(|t| t.expect("the optimum places every robot").0 as u8)
+                .collect();
+            Episode::new(config, EpisodeRecord { seed, actions })
+        })
+        .collect()
+}
+
+/// The large-margin terms of demonstration rows whose action masks are `mask`
+/// (`[rows, M]`) and whose expert actions are `experts`: `margin` for every other task
+/// with room, 0 for the expert's, and a large negative number for full tasks, so that
+/// the maximum runs over the tasks with room. `[rows, M]`.
+fn large_margins(mask: &[bool], experts: &[i64], m: usize, margin: f64) -> Vec<f32> {
+    experts
+        .iter()
+        .zip(mask.chunks_exact(m))
+        .flat_map(|(&expert, row)| {
+            row.iter().enumerate().map(move |(j, &open)| {
+                if !open {
+                    -1e9
+                } else if j as i64 == expert {
+                    0.0
+                } else {
+                    margin as f32
+                }
+            })
+        })
+        .collect()
+}
+
 type Optim = OptimizerAdaptor<Adam, QNetwork<TrainBackend>, TrainBackend>;
 
 /// A training run in memory.
@@ -88,6 +136,9 @@ pub struct Trainer {
     optim: Optim,
     rng: ChaCha8Rng,
     replay: VecDeque<Episode>,
+    /// The expert episodes of [`TrainConfig::demonstrations`] (rebuilt from the
+    /// configuration, never stored in checkpoints).
+    demos: Vec<Episode>,
     running: Vec<Episode>,
     next_episode: u64,
     step: u64,
@@ -169,6 +220,7 @@ impl Trainer {
             .map(|r| Episode::new(&config, r))
             .collect::<Result<_, _>>()?;
         let optim = optim.unwrap_or_else(|| optimizer(&config));
+        let demos = demonstrations(&config)?;
         Ok(Trainer {
             config,
             online,
@@ -176,6 +228,7 @@ impl Trainer {
             optim,
             rng,
             replay,
+            demos,
             running,
             next_episode,
             step,
@@ -272,17 +325,35 @@ impl Trainer {
         let device = Default::default();
         let loss = match self.config.algo {
             Algo::Dqn | Algo::Ddqn => {
-                let (now, actions, targets) = self.td_batch(self.config.algo == Algo::Ddqn);
+                let (now, actions, targets, experts) =
+                    self.td_batch(self.config.algo == Algo::Ddqn);
                 let b = actions.len();
+                let expert_actions = actions[b - experts..].to_vec();
                 let g = GraphTensors::<TrainBackend>::new(&now, &device);
                 let action_index = Tensor::<TrainBackend, 2, Int>::from_data(
                     TensorData::new(actions, [b, 1]),
                     &device,
                 );
-                let q_sa = self.online.forward(&g).gather(1, action_index);
+                let q = self.online.forward(&g);
+                let q_sa = q.clone().gather(1, action_index);
                 let y =
                     Tensor::<TrainBackend, 2>::from_data(TensorData::new(targets, [b, 1]), &device);
-                self.elementwise_loss(q_sa - y).mean()
+                let td = self.elementwise_loss(q_sa.clone() - y).mean();
+                match &self.config.demonstrations {
+                    Some(d) if experts > 0 => {
+                        let m = self.config.network.tasks();
+                        let mask = &now.mask[(b - experts) * m..];
+                        let margins = large_margins(mask, &expert_actions, m, d.margin);
+                        let margins = Tensor::<TrainBackend, 2>::from_data(
+                            TensorData::new(margins, [experts, m]),
+                            &device,
+                        );
+                        let best = (q.slice([b - experts..b, 0..m]) + margins).max_dim(1);
+                        let expert = q_sa.slice([b - experts..b, 0..1]);
+                        td + (best - expert).mean() * d.weight
+                    }
+                    _ => td,
+                }
             }
             Algo::QStar => {
                 let (now, labels, allowed) = self.q_star_batch()?;
