@@ -155,6 +155,7 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
                 rows.push(Row::new(evaluate(&warm.label(), &policy, &insts, &opt)?));
             }
         }
+        rows.extend(price_headed_rows(root, n, &insts, &opt)?);
         rows.extend(
             crate::price::rows(root, n, &insts, &opt)?
                 .into_iter()
@@ -173,6 +174,7 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
         let opt = optima(&insts)?;
         let mut rows = Vec::new();
         rows.extend(classical_rows(n, &insts, &opt)?);
+        rows.extend(price_headed_rows(root, n, &insts, &opt)?);
         rows.extend(
             crate::price::rows(root, n, &insts, &opt)?
                 .into_iter()
@@ -224,6 +226,41 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
         price_ablation_instances: t1_instances,
         missing_models: missing,
     })
+}
+
+/// The committed AFGNet models with a price head (ours, [`ModelSpec::PRICE_HEADED`])
+/// on `insts`, without repair: exact rollouts up to N = 100 and one network pass per
+/// N/20 robots beyond; the Q* model also in one pass for all robots (one-shot).
+fn price_headed_rows(root: &Path, n: usize, insts: &[Instance], opt: &[f64]) -> Result<Vec<Row>> {
+    let mut rows = Vec::new();
+    for spec in ModelSpec::PRICE_HEADED {
+        let run = spec.run_dir(root);
+        if !run.has_weights() {
+            continue;
+        }
+        let trained = if n == spec.trained_at {
+            String::new()
+        } else {
+            format!(" trained at N = {}", spec.trained_at)
+        };
+        let block = if n >= 500 { n / 20 } else { 1 };
+        let mut modes = vec![(
+            block,
+            match block {
+                1 => String::new(),
+                b => format!(", network every {b} robots"),
+            },
+        )];
+        if spec.algo == afg_learn::Algo::QStar {
+            modes.push((n, ", one-shot (one pass)".to_owned()));
+        }
+        for (block, mode) in modes {
+            let policy = LearnedPolicy::load(&run.weights())?.with_block(block)?;
+            let label = format!("{}{mode}{trained}", spec.label());
+            rows.push(Row::new(evaluate(&label, &policy, insts, opt)?));
+        }
+    }
+    Ok(rows)
 }
 
 fn markdown_tables(res: &Results) -> String {
@@ -331,7 +368,8 @@ fn models_table(root: &Path) -> Result<String> {
         .flat_map(|(net, algo, variant)| {
             dataset::TABLE1_SIZES.map(|n| ModelSpec::new(net, algo, variant, n))
         })
-        .chain(ModelSpec::WARM_STARTS);
+        .chain(ModelSpec::WARM_STARTS)
+        .chain(ModelSpec::PRICE_HEADED);
     for spec in specs {
         let n = spec.trained_at;
         let label = spec.label();

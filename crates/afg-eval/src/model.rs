@@ -28,6 +28,12 @@ pub enum Variant {
         /// The N of the model whose weights the run starts from.
         from: usize,
     },
+    /// Ours: AFGNet with a price head (`--price-head`):
+    /// `Q(s, a) = π_a(s) − β d(t, a) + c_a(s)`, Nearest before training.
+    PriceHead,
+    /// Ours: [`Variant::PriceHead`] trained with demonstrations from the exact optimum
+    /// and a large-margin loss (`--demos`, as in Deep Q-learning from Demonstrations).
+    PriceHeadDemos,
 }
 
 /// One trained model: network, algorithm, variant and the N it was trained at.
@@ -50,6 +56,13 @@ pub enum Variant {
 /// assert_eq!(warm.dir_name(), "s2v_ddqn_warm_n60");
 /// assert_eq!(warm.label(), "S2V_DDQN, warm start from the N = 20 model");
 /// assert!(!warm.is_ours());
+/// let [exact, td, demos] = ModelSpec::PRICE_HEADED;
+/// assert_eq!(exact.dir_name(), "afgnet_qstar_price_n60");
+/// assert_eq!(exact.label(), "AFGNet + price head, exact Q* regression (ours)");
+/// assert_eq!(td.dir_name(), "afgnet_ddqn_price_n60");
+/// assert_eq!(demos.dir_name(), "afgnet_ddqn_price_demos_n60");
+/// assert_eq!(demos.label(), "AFGNet_DDQN + price head + demonstrations (ours)");
+/// assert!(td.is_ours() && demos.is_ours());
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ModelSpec {
@@ -126,6 +139,30 @@ impl ModelSpec {
         Self::new(Net::S2v, Algo::Ddqn, Variant::WarmStart { from: 20 }, 100),
     ];
 
+    /// AFGNet with a price head, trained at [`ModelSpec::PRETRAINED_AT`] and run at
+    /// every N (ours): on the exact Q*, by Double DQN, and by Double DQN with
+    /// demonstrations.
+    pub const PRICE_HEADED: [ModelSpec; 3] = [
+        Self::new(
+            Net::AfgNet,
+            Algo::QStar,
+            Variant::PriceHead,
+            Self::PRETRAINED_AT,
+        ),
+        Self::new(
+            Net::AfgNet,
+            Algo::Ddqn,
+            Variant::PriceHead,
+            Self::PRETRAINED_AT,
+        ),
+        Self::new(
+            Net::AfgNet,
+            Algo::Ddqn,
+            Variant::PriceHeadDemos,
+            Self::PRETRAINED_AT,
+        ),
+    ];
+
     /// The run directory's name under `models/`, e.g. `afgnet_ddqn_n60`.
     pub fn dir_name(&self) -> String {
         let net = match self.net {
@@ -136,6 +173,8 @@ impl ModelSpec {
             Variant::Paper => "",
             Variant::GainResidual => "_gain",
             Variant::WarmStart { .. } => "_warm",
+            Variant::PriceHead => "_price",
+            Variant::PriceHeadDemos => "_price_demos",
         };
         format!("{net}_{}{variant}_n{}", self.algo.name(), self.trained_at)
     }
@@ -154,9 +193,16 @@ impl ModelSpec {
         let algo = match self.algo {
             Algo::Dqn => "DQN",
             Algo::Ddqn => "DDQN",
+            Algo::QStar if self.variant == Variant::PriceHead => {
+                return format!("{net} + price head, exact Q* regression (ours)");
+            }
             Algo::QStar => return format!("{net}, exact Q* regression (ours)"),
         };
         match self.variant {
+            Variant::PriceHead => format!("{net}_{algo} + price head (ours)"),
+            Variant::PriceHeadDemos => {
+                format!("{net}_{algo} + price head + demonstrations (ours)")
+            }
             Variant::Paper => format!("{net}_{algo}"),
             Variant::GainResidual => format!("{net}_{algo} + gain residual (ours)"),
             Variant::WarmStart { from } => {
@@ -168,7 +214,10 @@ impl ModelSpec {
     /// Whether the model is ours (not the paper's network and algorithm); the tables
     /// treat ours as optional. A warm start keeps the paper's network and algorithm.
     pub fn is_ours(&self) -> bool {
-        self.variant == Variant::GainResidual || self.algo == Algo::QStar
+        matches!(
+            self.variant,
+            Variant::GainResidual | Variant::PriceHead | Variant::PriceHeadDemos
+        ) || self.algo == Algo::QStar
     }
 }
 

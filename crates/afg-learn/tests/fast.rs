@@ -173,7 +173,12 @@ fn fast_path_matches_burn_with_a_price_head() {
 fn fast_path_matches_burn_with_the_committed_weights() {
     let device = Default::default();
     let mut tried = 0;
-    for name in ["afgnet_ddqn_n20", "s2v_ddqn_n20", "afgnet_ddqn_n60"] {
+    for name in [
+        "afgnet_ddqn_n20",
+        "s2v_ddqn_n20",
+        "afgnet_ddqn_n60",
+        "afgnet_qstar_price_n60",
+    ] {
         let stem = repo(&format!("models/{name}/model"));
         if !stem.with_extension("json").exists() {
             continue;
