@@ -1,6 +1,6 @@
-//! `cargo xtask bench-scale`: the learned policy (fast path, block rollout, repair) and
-//! the price model (ours, no repair) against OPT, GRAPE DA and greedy from N = 100 to
-//! 100 000, with the peak memory of
+//! `cargo xtask bench-scale`: the learned policy (fast path, block rollout, repair),
+//! AFGNet with a price head (ours, no repair) and the price model (ours, no repair)
+//! against OPT, GRAPE DA and greedy from N = 100 to 100 000, with the peak memory of
 //! each run. Every case runs in its own child process (this binary with `--case`), so
 //! the peak resident set size it reports belongs to that case alone.
 
@@ -44,6 +44,10 @@ pub struct ScaleArgs {
     /// directory holds no price.json.
     #[arg(long, default_value = "models/price_n60")]
     price_model: PathBuf,
+    /// AFGNet with a price head (ours), run at M = 5 without repair, with 10 network
+    /// passes and in one pass (one-shot); skipped if the directory holds no model.
+    #[arg(long, default_value = "models/afgnet_qstar_price_n60")]
+    price_headed: PathBuf,
     /// Seed of the instances (one per N and M).
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -72,6 +76,9 @@ struct Case {
     /// The price model's file and mode, instead of the Q network.
     #[serde(default)]
     price: Option<(PathBuf, PriceMode)>,
+    /// Learned policy: no repair after the rollout.
+    #[serde(default)]
+    no_repair: bool,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -134,7 +141,7 @@ fn run_case(case: Case) -> Result<Outcome> {
             let policy = if case.exact_burn {
                 policy.exact_burn()
             } else {
-                policy.with_block(case.block)?.with_repair(true)
+                policy.with_block(case.block)?.with_repair(!case.no_repair)
             };
             let start = Instant::now();
             let run = policy.run(&inst)?;
@@ -181,7 +188,18 @@ fn cases(args: &ScaleArgs) -> Vec<Case> {
                 exact_burn: false,
                 model: (tasks == 5).then(|| args.model.clone()),
                 price: None,
+                no_repair: false,
             };
+            if tasks == 5 && args.price_headed.join("model.json").exists() {
+                for block in [robots.div_ceil(10), robots] {
+                    cases.push(Case {
+                        model: Some(args.price_headed.clone()),
+                        block,
+                        no_repair: true,
+                        ..base.clone()
+                    });
+                }
+            }
             let price = args.price_model.join(PriceModel::FILE_NAME);
             if price.exists() {
                 let modes = [
@@ -233,6 +251,14 @@ fn label(case: &Case) -> String {
             String::new()
         };
         return format!("price model (ours), {}{block}, no repair", mode.name());
+    }
+    if case.no_repair {
+        let mode = if case.block >= case.robots {
+            "one-shot (one pass)".to_owned()
+        } else {
+            format!("network every {} robots", case.block)
+        };
+        return format!("AFGNet + price head (ours), {mode}, no repair");
     }
     match (case.method, case.exact_burn) {
         (Some(m), _) => m.to_string(),

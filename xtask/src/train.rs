@@ -269,7 +269,7 @@ pub fn run(args: TrainArgs) -> Result<()> {
             let trainer = Trainer::new(config.clone())?;
             run.append(&LogEvent::Start {
                 baselines: baselines(&config)?,
-                config,
+                config: Box::new(config),
                 git_revision: git_revision(),
             })?;
             (run, lock, trainer, 0.0)

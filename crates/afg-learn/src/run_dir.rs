@@ -25,7 +25,7 @@ pub enum LogEvent {
     /// The run started.
     Start {
         /// Its settings.
-        config: TrainConfig,
+        config: Box<TrainConfig>,
         /// The git revision it was started from, if known.
         #[serde(default)]
         git_revision: Option<String>,

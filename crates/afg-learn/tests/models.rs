@@ -422,7 +422,7 @@ fn an_untrained_price_head_is_nearest() {
                 .iter()
                 .map(|t| Task {
                     capacity: Some(5),
-                    ..t.clone()
+                    ..*t
                 })
                 .collect();
             inst = Instance::new(inst.robots().to_vec(), tasks, inst.beta()).unwrap();

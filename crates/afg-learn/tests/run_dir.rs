@@ -29,7 +29,7 @@ fn events_round_trip_and_old_validation_lines_still_read() {
     };
     let events = vec![
         LogEvent::Start {
-            config: config(),
+            config: Box::new(config()),
             git_revision: Some("abc".into()),
             baselines: [("opt".to_owned(), 13.0)].into_iter().collect(),
         },
@@ -198,7 +198,7 @@ fn every_committed_run_reads_back_typed() {
         let config = run.config().unwrap();
         let log = run.log().unwrap();
         assert!(
-            matches!(&log[0], LogEvent::Start { config: c, .. } if *c == config),
+            matches!(&log[0], LogEvent::Start { config: c, .. } if **c == config),
             "{}",
             path.display()
         );
