@@ -241,7 +241,7 @@ fn price_headed_rows(root: &Path, n: usize, insts: &[Instance], opt: &[f64]) -> 
         let trained = if n == spec.trained_at {
             String::new()
         } else {
-            format!(" trained at N = {}", spec.trained_at)
+            format!(", trained at N = {}", spec.trained_at)
         };
         let block = if n >= 500 { n / 20 } else { 1 };
         let mut modes = vec![(
@@ -256,7 +256,7 @@ fn price_headed_rows(root: &Path, n: usize, insts: &[Instance], opt: &[f64]) -> 
         }
         for (block, mode) in modes {
             let policy = LearnedPolicy::load(&run.weights())?.with_block(block)?;
-            let label = format!("{}{mode}{trained}", spec.label());
+            let label = spec.label_with(&format!("{mode}{trained}"));
             rows.push(Row::new(evaluate(&label, &policy, insts, opt)?));
         }
     }

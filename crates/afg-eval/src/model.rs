@@ -63,6 +63,10 @@ pub enum Variant {
 /// assert_eq!(demos.dir_name(), "afgnet_ddqn_price_demos_n60");
 /// assert_eq!(demos.label(), "AFGNet_DDQN + price head + demonstrations (ours)");
 /// assert!(td.is_ours() && demos.is_ours());
+/// assert_eq!(
+///     exact.label_with(", one-shot"),
+///     "AFGNet + price head, exact Q* regression, one-shot (ours)"
+/// );
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ModelSpec {
@@ -186,6 +190,12 @@ impl ModelSpec {
 
     /// The row label, in the paper's naming (e.g. `AFGNet_DDQN`); ours end in "(ours)".
     pub fn label(&self) -> String {
+        self.label_with("")
+    }
+
+    /// The row label with `detail` (how the model is run, e.g. ", one-shot") after the
+    /// model's name and before "(ours)".
+    pub fn label_with(&self, detail: &str) -> String {
         let net = match self.net {
             Net::AfgNet => "AFGNet",
             Net::S2v => "S2V",
@@ -193,22 +203,21 @@ impl ModelSpec {
         let algo = match self.algo {
             Algo::Dqn => "DQN",
             Algo::Ddqn => "DDQN",
-            Algo::QStar if self.variant == Variant::PriceHead => {
-                return format!("{net} + price head, exact Q* regression (ours)");
-            }
-            Algo::QStar => return format!("{net}, exact Q* regression (ours)"),
+            Algo::QStar => "",
         };
-        match self.variant {
-            Variant::PriceHead => format!("{net}_{algo} + price head (ours)"),
-            Variant::PriceHeadDemos => {
-                format!("{net}_{algo} + price head + demonstrations (ours)")
-            }
-            Variant::Paper => format!("{net}_{algo}"),
-            Variant::GainResidual => format!("{net}_{algo} + gain residual (ours)"),
-            Variant::WarmStart { from } => {
+        let name = match (self.algo, self.variant) {
+            (Algo::QStar, Variant::PriceHead) => format!("{net} + price head, exact Q* regression"),
+            (Algo::QStar, _) => format!("{net}, exact Q* regression"),
+            (_, Variant::PriceHead) => format!("{net}_{algo} + price head"),
+            (_, Variant::PriceHeadDemos) => format!("{net}_{algo} + price head + demonstrations"),
+            (_, Variant::Paper) => format!("{net}_{algo}"),
+            (_, Variant::GainResidual) => format!("{net}_{algo} + gain residual"),
+            (_, Variant::WarmStart { from }) => {
                 format!("{net}_{algo}, warm start from the N = {from} model")
             }
-        }
+        };
+        let ours = if self.is_ours() { " (ours)" } else { "" };
+        format!("{name}{detail}{ours}")
     }
 
     /// Whether the model is ours (not the paper's network and algorithm); the tables
