@@ -86,6 +86,32 @@ impl Dense {
     }
 }
 
+/// A three-layer MLP shared by every task, `π = out(σ(hidden(σ(first(x) + shift))))`,
+/// applied to each row of `inputs` (`[M, first.inputs]`) into `prices` (`[M]`); `shift`
+/// (`[h]`, zero when `None`) is a per-state term added before the first activation, and
+/// `a` and `b` are `[h]` scratch rows. The price model's MLP and AFGNet's price head.
+pub(crate) fn task_mlp(
+    [first, hidden, output]: [&Dense; 3],
+    inputs: &[f32],
+    shift: Option<&[f32]>,
+    activation: crate::Activation,
+    (a, b): (&mut [f32], &mut [f32]),
+    prices: &mut [f32],
+) {
+    let mut out = [0.0f32];
+    for (x, price) in inputs.chunks_exact(first.inputs).zip(prices) {
+        first.apply_row(x, a);
+        if let Some(shift) = shift {
+            a.iter_mut().zip(shift).for_each(|(h, &s)| *h += s);
+        }
+        a.iter_mut().for_each(|h| *h = activation.scalar(*h));
+        hidden.apply_row(a, b);
+        b.iter_mut().for_each(|h| *h = activation.scalar(*h));
+        output.apply_row(b, &mut out);
+        *price = out[0];
+    }
+}
+
 /// Two weight matrices side by side: `[A | B]`, `[inputs, a + b]`.
 pub(crate) fn side_by_side(a: &Dense, b: &Dense) -> Dense {
     assert_eq!(a.inputs, b.inputs);

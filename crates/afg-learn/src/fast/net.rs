@@ -5,7 +5,7 @@ use burn::tensor::backend::Backend;
 use crate::Activation;
 use crate::PRICE_INPUTS;
 use crate::afgnet::PriceHead;
-use crate::dense::Dense;
+use crate::dense::{Dense, task_mlp};
 use crate::layers::QHead;
 
 /// The Q head: `Q = out(σ(hidden [σ(θ7 pooled) || δ_actor]))`.
@@ -58,28 +58,23 @@ impl FastPriceHead {
 
     /// Every task's price into `prices` from the tasks' inputs (`[M, PRICE_INPUTS]`)
     /// and the pooled embedding's contribution `pooled_term` (`input_pooled` applied
-    /// to it); `a` and `b` are `[d]` scratch.
+    /// to it); `scratch` is two `[d]` rows.
     pub(super) fn prices(
         &self,
         inputs: &[f32],
         pooled_term: &[f32],
         activation: Activation,
-        (a, b): (&mut [f32], &mut [f32]),
+        scratch: (&mut [f32], &mut [f32]),
         prices: &mut [f32],
     ) {
-        for (x, price) in inputs.chunks_exact(PRICE_INPUTS).zip(prices) {
-            self.input_task.apply_row(x, a);
-            for (h, &p) in a.iter_mut().zip(pooled_term) {
-                *h = activation.scalar(*h + p);
-            }
-            self.hidden.apply_row(a, b);
-            for h in b.iter_mut() {
-                *h = activation.scalar(*h);
-            }
-            let mut out = [0.0f32];
-            self.output.apply_row(b, &mut out);
-            *price = out[0];
-        }
+        task_mlp(
+            [&self.input_task, &self.hidden, &self.output],
+            inputs,
+            Some(pooled_term),
+            activation,
+            scratch,
+            prices,
+        );
     }
 }
 

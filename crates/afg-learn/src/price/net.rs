@@ -10,7 +10,8 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::dense::Dense;
+use crate::Activation;
+use crate::dense::{Dense, task_mlp};
 use crate::layers::{seeded_linear, zero_linear};
 use afg_graph::{TASK_FEATURES, task_inputs};
 
@@ -151,15 +152,15 @@ impl PriceMlp {
         a.resize(h, 0.0);
         b.resize(h, 0.0);
         task_inputs(features, inputs);
-        let mut out = [0.0f32];
-        for (input, price) in inputs.chunks_exact(PRICE_INPUTS).zip(prices.iter_mut()) {
-            self.layers[0].apply_row(input, a);
-            a.iter_mut().for_each(|x| *x = x.max(0.0));
-            self.layers[1].apply_row(a, b);
-            b.iter_mut().for_each(|x| *x = x.max(0.0));
-            self.layers[2].apply_row(b, &mut out);
-            *price = out[0];
-        }
+        let [first, hidden, output] = &self.layers;
+        task_mlp(
+            [first, hidden, output],
+            inputs,
+            None,
+            Activation::Relu,
+            (a, b),
+            prices,
+        );
     }
 }
 
