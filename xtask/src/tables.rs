@@ -230,7 +230,8 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
 
 /// The committed AFGNet models with a price head (ours, [`ModelSpec::PRICE_HEADED`])
 /// on `insts`, without repair: exact rollouts up to N = 100 and one network pass per
-/// N/20 robots beyond; the Q* model also in one pass for all robots (one-shot).
+/// N/10 robots beyond (ten passes); the Q* model also in one pass for all robots
+/// (one-shot).
 fn price_headed_rows(root: &Path, n: usize, insts: &[Instance], opt: &[f64]) -> Result<Vec<Row>> {
     let mut rows = Vec::new();
     for spec in ModelSpec::PRICE_HEADED {
@@ -243,7 +244,7 @@ fn price_headed_rows(root: &Path, n: usize, insts: &[Instance], opt: &[f64]) -> 
         } else {
             format!(", trained at N = {}", spec.trained_at)
         };
-        let block = if n >= 500 { n / 20 } else { 1 };
+        let block = if n >= 500 { n / 10 } else { 1 };
         let mut modes = vec![(
             block,
             match block {
