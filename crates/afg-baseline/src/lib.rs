@@ -38,7 +38,9 @@ pub use optimum::Optimum;
 pub use simple::{Blind, Greedy, Nearest, RandomAllocator};
 
 /// An allocation method: instance in, complete assignment and statistics out.
-pub trait Allocator {
+///
+/// `Send + Sync` so that evaluations can run instances on several threads.
+pub trait Allocator: Send + Sync {
     /// Short name used in tables and on the command line (e.g. `"opt"`).
     fn name(&self) -> String;
 

@@ -124,8 +124,9 @@ pub fn table1_markdown(scales: &[Scale]) -> String {
     s
 }
 
-/// Table II in Markdown: per N, every row with its instance count (the slow learned
-/// rollouts run on fewer instances), under the paper's DA and Pretrain_60 numbers.
+/// Table II in Markdown: per N, every row with its instance count (the slow rows, the
+/// decentralised simulation and the exact learned rollouts, run on fewer instances),
+/// under the paper's DA and Pretrain_60 numbers.
 ///
 /// # Panics
 /// If a scale is not one the paper reports (500, 1000), or `scales` is empty.
@@ -133,7 +134,7 @@ pub fn table2_markdown(scales: &[Scale]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "### Table II — large swarms (classical methods on the first {} instances)\n",
+        "### Table II — large swarms (the first {} instances; the slowest rows on fewer, see the instances column)\n",
         scales[0].rows[0].summary.instances
     );
     for scale in scales {

@@ -55,16 +55,45 @@ pub struct GraphBatch {
     pub cost: Vec<f32>,
     /// Per graph and task, the task's [`PriceState::features`] and the mean of all
     /// tasks' ([`task_inputs`]), `[G × M, 2 · TASK_FEATURES]`: what AFGNet's price
-    /// head reads.
+    /// head reads. Empty unless the batch was made by
+    /// [`GraphBatch::with_task_summaries`].
     pub task_inputs: Vec<f32>,
+    /// Whether [`GraphBatch::push`] fills [`GraphBatch::task_inputs`] (O(N·M) per
+    /// graph, so only for the networks that read them).
+    pub task_summaries: bool,
 }
 
 impl GraphBatch {
-    /// An empty batch for instances with `num_tasks` tasks.
+    /// An empty batch for instances with `num_tasks` tasks, without the tasks'
+    /// summaries.
     pub fn new(num_tasks: usize) -> Self {
         GraphBatch {
             num_tasks,
             ..Default::default()
+        }
+    }
+
+    /// An empty batch that also packs every task's summaries
+    /// ([`GraphBatch::task_inputs`]), for a network with a price head.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::{GeneratorConfig, RobotId};
+    /// use afg_graph::{AllocationState, GraphBatch, GraphKind, RobotGraph, TASK_FEATURES};
+    /// let inst = GeneratorConfig::paper(12, 3, 1).generate()?;
+    /// let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
+    /// let state = AllocationState::new(&inst);
+    /// let (mut plain, mut full) = (GraphBatch::new(3), GraphBatch::with_task_summaries(3));
+    /// plain.push(&graph, &state, RobotId(0));
+    /// full.push(&graph, &state, RobotId(0));
+    /// assert!(plain.task_inputs.is_empty());
+    /// assert_eq!(full.task_inputs.len(), 3 * 2 * TASK_FEATURES);
+    /// # Ok::<(), afg_game::GameError>(())
+    /// ```
+    pub fn with_task_summaries(num_tasks: usize) -> Self {
+        GraphBatch {
+            task_summaries: true,
+            ..GraphBatch::new(num_tasks)
         }
     }
 
@@ -121,10 +150,12 @@ impl GraphBatch {
         let unit = state.units().welfare_unit(inst);
         self.cost
             .extend(inst.task_ids().map(|j| (inst.cost(actor, j) / unit) as f32));
-        let mut features = vec![0.0; inst.num_tasks() * TASK_FEATURES];
-        PriceState::from_assignment(inst, state.assignment()).features(&mut features);
-        let at = self.task_inputs.len();
-        self.task_inputs.resize(at + 2 * features.len(), 0.0);
-        task_inputs(&features, &mut self.task_inputs[at..]);
+        if self.task_summaries {
+            let mut features = vec![0.0; inst.num_tasks() * TASK_FEATURES];
+            PriceState::from_assignment(inst, state.assignment()).features(&mut features);
+            let at = self.task_inputs.len();
+            self.task_inputs.resize(at + 2 * features.len(), 0.0);
+            task_inputs(&features, &mut self.task_inputs[at..]);
+        }
     }
 }

@@ -104,11 +104,22 @@ fn a_batch_carries_the_actors_costs_and_the_tasks_summaries() {
     for i in 0..12u32 {
         a.set(RobotId(i), Some(TaskId((i * 7) % 5)));
     }
-    let mut batch = GraphBatch::new(5);
+    let (mut batch, mut plain) = (GraphBatch::with_task_summaries(5), GraphBatch::new(5));
     for units in [Units::MeanReward, Units::Bounded] {
         let state = AllocationState::with_units(&inst, a.clone(), units);
         batch.push(&graph, &state, RobotId(12));
+        plain.push(&graph, &state, RobotId(12));
     }
+    // Without summaries the batch is the same but for them.
+    assert!(plain.task_inputs.is_empty());
+    assert_eq!(
+        GraphBatch {
+            task_inputs: Vec::new(),
+            task_summaries: false,
+            ..batch.clone()
+        },
+        plain
+    );
     // Costs: β d(12, j) in each state's welfare unit (the mean reward, then β = 1).
     for (g, unit) in [feature_scale(&inst), 1.0].into_iter().enumerate() {
         for j in 0..5 {

@@ -236,6 +236,11 @@ impl<B: Backend> PriceHead<B> {
     ) -> Tensor<B, 2> {
         let [graphs, d] = pooled.dims();
         let m = g.cost.dims()[1];
+        assert_eq!(
+            g.task_inputs.dims()[0],
+            graphs * m,
+            "a price head reads the tasks' summaries: pack the batch with GraphBatch::with_task_summaries (NetworkConfig::empty_batch)"
+        );
         // Each graph's pooled embedding beside each of its tasks.       [G M, d]
         let pooled = pooled
             .unsqueeze_dim::<3>(1)

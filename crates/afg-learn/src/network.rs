@@ -1,6 +1,6 @@
 //! One type for "a Q network": AFGNet or S2V, chosen by configuration.
 
-use afg_graph::Units;
+use afg_graph::{GraphBatch, Units};
 use burn::module::Module;
 use burn::tensor::Tensor;
 use burn::tensor::backend::Backend;
@@ -77,6 +77,18 @@ impl NetworkConfig {
         }
     }
 
+    /// An empty batch holding what this network reads: with the tasks' summaries for
+    /// an AFGNet with a price head ([`GraphBatch::with_task_summaries`]), without them
+    /// otherwise.
+    pub fn empty_batch(&self) -> GraphBatch {
+        match self {
+            NetworkConfig::AfgNet(c) if c.price_head == Some(true) => {
+                GraphBatch::with_task_summaries(c.tasks)
+            }
+            _ => GraphBatch::new(self.tasks()),
+        }
+    }
+
     /// Builds the network.
     pub fn init<B: Backend>(&self, device: &B::Device) -> QNetwork<B> {
         match self {
@@ -104,6 +116,15 @@ impl<B: Backend> QNetwork<B> {
         match self {
             QNetwork::AfgNet(n) => n.units(),
             QNetwork::S2v(n) => n.units(),
+        }
+    }
+
+    /// An empty batch holding what this network reads (as
+    /// [`NetworkConfig::empty_batch`]).
+    pub fn empty_batch(&self, tasks: usize) -> GraphBatch {
+        match self {
+            QNetwork::AfgNet(n) if n.price.is_some() => GraphBatch::with_task_summaries(tasks),
+            _ => GraphBatch::new(tasks),
         }
     }
 

@@ -2,7 +2,7 @@
 //! for all unfinished episodes.
 
 use afg_game::{Assignment, Instance, TaskId};
-use afg_graph::{GraphBatch, GraphKind, RobotGraph};
+use afg_graph::{GraphKind, RobotGraph};
 use burn::tensor::backend::Backend;
 
 use crate::{Env, GraphTensors, LearnError, QNetwork, masked_argmax};
@@ -39,7 +39,7 @@ pub fn greedy_rollouts<B: Backend>(
         if live.is_empty() {
             break;
         }
-        let mut batch = GraphBatch::new(tasks);
+        let mut batch = network.empty_batch(tasks);
         for &e in &live {
             batch.push(&graphs[e], envs[e].state(), envs[e].actor().expect("live"));
         }

@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use afg_game::io::read_dataset;
 use afg_game::{GeneratorConfig, Instance, TaskId};
-use afg_graph::{AllocationState, GraphBatch, GraphKind, RobotGraph};
+use afg_graph::{AllocationState, GraphKind, RobotGraph};
 use afg_learn::{
     Activation, FastPolicy, FastRollout, GraphTensors, InferBackend, LearnError, NetworkConfig,
     QNetwork, greedy_rollouts, load_network, masked_argmax,
@@ -37,7 +37,7 @@ fn assert_parity(config: &NetworkConfig, network: &QNetwork<B>, inst: &Instance)
     let (mut q_fast, mut mask) = (vec![0.0; m], vec![false; m]);
     let mut worst = 0.0f32;
     for robot in inst.robot_ids() {
-        let mut batch = GraphBatch::new(m);
+        let mut batch = config.empty_batch();
         batch.push(&graph, &state, robot);
         let q_burn: Vec<f32> = network
             .forward(&GraphTensors::new(&batch, &device))

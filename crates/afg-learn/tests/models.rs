@@ -74,7 +74,7 @@ fn shapes_for_several_sizes_and_batches() {
             .map(|s| GeneratorConfig::paper(n, 5, s).generate().unwrap())
             .collect();
         for graphs in [1, 7] {
-            let mut batch = GraphBatch::new(5);
+            let mut batch = GraphBatch::with_task_summaries(5);
             for (g, inst) in insts.iter().take(graphs).enumerate() {
                 let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
                 let (state, actor) = midway(inst, g * n / 7, g as u64);
@@ -105,13 +105,13 @@ fn relabelling_robots_does_not_change_q_values() {
     let assignment = afg_game::Assignment::from_tasks(&permuted, tasks).unwrap();
     let permuted_state = AllocationState::from_assignment(&permuted, assignment);
     for config in configs() {
-        let mut a = GraphBatch::new(5);
+        let mut a = GraphBatch::with_task_summaries(5);
         a.push(
             &RobotGraph::build(inst.robots(), GraphKind::default()).unwrap(),
             &state,
             actor,
         );
-        let mut b = GraphBatch::new(5);
+        let mut b = GraphBatch::with_task_summaries(5);
         b.push(
             &RobotGraph::build(permuted.robots(), GraphKind::default()).unwrap(),
             &permuted_state,
@@ -135,13 +135,13 @@ fn batched_q_values_equal_single_graph_ones() {
         .enumerate()
         .map(|(s, &n)| GeneratorConfig::paper(n, 5, s as u64).generate().unwrap())
         .collect();
-    let mut batch = GraphBatch::new(5);
+    let mut batch = GraphBatch::with_task_summaries(5);
     let mut singles = Vec::new();
     for (g, inst) in insts.iter().enumerate() {
         let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
         let (state, actor) = midway(inst, inst.num_robots() / 2, g as u64);
         batch.push(&graph, &state, actor);
-        let mut one = GraphBatch::new(5);
+        let mut one = GraphBatch::with_task_summaries(5);
         one.push(&graph, &state, actor);
         singles.push(one);
     }
@@ -221,7 +221,7 @@ fn one_adam_step_reduces_a_fixed_mse() {
     let device = Default::default();
     let inst = GeneratorConfig::paper(20, 5, 4).generate().unwrap();
     let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
-    let mut batch = GraphBatch::new(5);
+    let mut batch = GraphBatch::with_task_summaries(5);
     for g in 0..8 {
         let (state, actor) = midway(&inst, 2 * g, g as u64);
         batch.push(&graph, &state, actor);
@@ -355,7 +355,7 @@ fn same_seed_same_weights() {
     let device = Default::default();
     let inst = GeneratorConfig::paper(20, 5, 1).generate().unwrap();
     let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
-    let mut batch = GraphBatch::new(5);
+    let mut batch = GraphBatch::with_task_summaries(5);
     let (state, actor) = midway(&inst, 5, 0);
     batch.push(&graph, &state, actor);
     let g = GraphTensors::<B>::new(&batch, &device);
@@ -379,7 +379,7 @@ fn same_seed_same_weights() {
 #[test]
 fn dense_and_edge_list_aggregation_agree() {
     let device = Default::default();
-    let mut batch = GraphBatch::new(5);
+    let mut batch = GraphBatch::with_task_summaries(5);
     for s in 0..6u64 {
         let inst = GeneratorConfig::paper(25, 5, s).generate().unwrap();
         let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
@@ -428,7 +428,7 @@ fn an_untrained_price_head_is_nearest() {
             inst = Instance::new(inst.robots().to_vec(), tasks, inst.beta()).unwrap();
         }
         let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
-        let mut batch = GraphBatch::new(5);
+        let mut batch = GraphBatch::with_task_summaries(5);
         for k in 0..8 {
             let (state, actor) = midway(&inst, k * n / 8, k as u64);
             // In the network's units, as the trainer and the policies build states.

@@ -15,7 +15,8 @@
 //! `[N, d] × [d, d]` product (`σ(θ6 …) θ5b`): O(N·d²). Cached between passes:
 //! - `σ(θ1 ν + b1)` as a table over the M + 1 possible ν;
 //! - per layer, `θ6b η_i + b6`, recomputed only for the neighbours of robots that moved
-//!   (η depends on the neighbours' ν and the edge weights only);
+//!   (η depends on the neighbours' ν and the edge weights only), all of a pass's at once
+//!   with two matrix products;
 //! - for S2V, the edge term `θ3 Σ_k relu(θ4 w_ik) + b3`, which never changes.
 //!
 //! μ is rebuilt from the assignment at each pass (O(N·M), negligible next to the
@@ -28,6 +29,7 @@
 //! action mask (capacities) and the assignment stay exact. B = 1 is the exact rollout;
 //! N/B passes replace N.
 //!
+//! The loops over the graph's edges live in `kernels` (vectorised at run time).
 //! Nothing inside the step loop allocates; memory is O(N·(d + M) + edges).
 
 use std::time::{Duration, Instant};
@@ -38,6 +40,7 @@ use afg_graph::{
 };
 use burn::tensor::backend::Backend;
 
+mod kernels;
 mod net;
 mod passes;
 
@@ -231,7 +234,9 @@ pub struct FastRollout<'a> {
     cached: Vec<Vec<f32>>,
     /// Robots whose ν changed since the last pass.
     moved: Vec<RobotId>,
-    /// Per robot, the pass at which its cache was last refreshed (dedupes `moved`).
+    /// The neighbours of the robots in `moved`, whose cache the next pass refreshes.
+    stale: Vec<RobotId>,
+    /// Per robot, the pass at which its cache was last refreshed (dedupes `stale`).
     refreshed_at: Vec<usize>,
     passes: usize,
     /// `b_hidden + σ(θ7 pooled) W_hidden,pooled` of the last pass, `[d]`.
@@ -295,6 +300,7 @@ impl<'a> FastRollout<'a> {
             scratch: vec![0.0; n * d],
             cached: Vec::new(),
             moved: Vec::new(),
+            stale: Vec::with_capacity(n),
             refreshed_at: vec![0; n],
             passes: 0,
             head_state: vec![0.0; d],
@@ -313,9 +319,8 @@ impl<'a> FastRollout<'a> {
         run.cached = match &policy.net {
             FastNet::AfgNet(net) => {
                 let mut cached = vec![vec![0.0; n * d]; net.layers.len()];
-                for i in instance.robot_ids() {
-                    run.eta_terms(net, i, &mut cached);
-                }
+                let everyone: Vec<RobotId> = instance.robot_ids().collect();
+                run.eta_terms(net, &everyone, &mut cached);
                 cached
             }
             FastNet::S2v(net) => vec![run.s2v_edge_term(net)],
@@ -367,17 +372,19 @@ impl<'a> FastRollout<'a> {
         match &policy.net {
             FastNet::AfgNet(net) => {
                 let mut cached = std::mem::take(&mut self.cached);
-                let mut moved = std::mem::take(&mut self.moved);
-                for &a in &moved {
+                let mut stale = std::mem::take(&mut self.stale);
+                for &a in &self.moved {
                     for &k in self.graph.neighbours(a) {
                         if self.refreshed_at[k as usize] != self.passes {
                             self.refreshed_at[k as usize] = self.passes;
-                            self.eta_terms(net, RobotId(k), &mut cached);
+                            stale.push(RobotId(k));
                         }
                     }
                 }
-                moved.clear();
-                self.moved = moved;
+                self.moved.clear();
+                self.eta_terms(net, &stale, &mut cached);
+                stale.clear();
+                self.stale = stale;
                 self.cached = cached;
                 for j in self.instance.task_ids() {
                     write_task_column(

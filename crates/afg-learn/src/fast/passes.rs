@@ -4,6 +4,7 @@ use afg_game::RobotId;
 use faer::{Accum, MatMut, MatRef};
 
 use super::FastRollout;
+use super::kernels::{EdgeMessages, NeighbourMean};
 use super::net::{FastAfgNet, FastS2v};
 
 impl FastRollout<'_> {
@@ -13,47 +14,61 @@ impl FastRollout<'_> {
             .map_or(0, |j| 1 + j.index())
     }
 
-    /// Refreshes `θ6b η_i + b6` of robot `i` in every layer (eq. 5).
-    pub(super) fn eta_terms(&mut self, net: &FastAfgNet, i: RobotId, cached: &mut [Vec<f32>]) {
+    /// Refreshes `θ6b η_i + b6` (eq. 5) of every robot in `robots`, in every layer:
+    /// the neighbour messages robot by robot, then two matrix products for all of them.
+    /// Uses `scratch` and `wide` as work space (the next pass overwrites them).
+    pub(super) fn eta_terms(
+        &mut self,
+        net: &FastAfgNet,
+        robots: &[RobotId],
+        cached: &mut [Vec<f32>],
+    ) {
         let d = self.policy.hidden;
+        let r = robots.len();
+        if r == 0 {
+            return;
+        }
         let s = self.policy.head.activation;
-        let neighbours = self.graph.neighbours(i);
-        let weights = self.graph.weights(i);
-        let degree = neighbours.len();
-        let inv_degree = 1.0 / degree.max(1) as f32;
         for (layer, cache) in net.layers.iter().zip(cached.iter_mut()) {
-            // mean_k σ(θ4 [w_ik || ν_k])
-            let message = &mut self.vec_a;
-            message.fill(0.0);
-            for (&k, &w) in neighbours.iter().zip(weights) {
-                let task = self.assignment.task_of(RobotId(k));
-                let w = w as f32 * self.inv_edge_unit;
-                let base = &layer.edge_task.bias;
-                match task {
-                    Some(j) => {
-                        let row = layer.edge_task.row(j.index());
-                        for c in 0..d {
-                            message[c] += s.scalar(w * layer.edge_weight[c] + row[c] + base[c]);
-                        }
-                    }
-                    None => {
-                        for c in 0..d {
-                            message[c] += s.scalar(w * layer.edge_weight[c] + base[c]);
-                        }
-                    }
+            // mean_k σ(θ4 [w_ik || ν_k]), one row per robot
+            EdgeMessages {
+                graph: self.graph,
+                assignment: &self.assignment,
+                inv_edge_unit: self.inv_edge_unit,
+                layer,
+                activation: s,
+            }
+            .run(robots, d, &mut self.scratch[..r * d]);
+            // η = σ(θ3 [message || |N_i|])
+            let (eta, term) = self.wide.split_at_mut(r * d);
+            layer.eta_message.product_into(
+                MatRef::from_row_major_slice(&self.scratch[..r * d], r, d),
+                MatMut::from_row_major_slice_mut(eta, r, d),
+                Accum::Replace,
+            );
+            for (row, &i) in eta.chunks_exact_mut(d).zip(robots) {
+                let degree = self.graph.neighbours(i).len() as f32;
+                for ((e, &b), &wd) in row
+                    .iter_mut()
+                    .zip(&layer.eta_message.bias)
+                    .zip(&layer.eta_degree)
+                {
+                    *e = s.scalar(*e + b + degree * wd);
                 }
             }
-            for x in message.iter_mut() {
-                *x *= inv_degree;
+            // θ6b η + b6, into the robots' rows of the cache
+            let term = &mut term[..r * d];
+            layer.eta_term.product_into(
+                MatRef::from_row_major_slice(eta, r, d),
+                MatMut::from_row_major_slice_mut(term, r, d),
+                Accum::Replace,
+            );
+            for (row, &i) in term.chunks_exact(d).zip(robots) {
+                let out = &mut cache[i.index() * d..(i.index() + 1) * d];
+                for ((o, &t), &b) in out.iter_mut().zip(row).zip(&layer.eta_term.bias) {
+                    *o = t + b;
+                }
             }
-            // η = σ(θ3 [message || |N_i|])
-            layer.eta_message.apply_row(message, &mut self.vec_b);
-            for (e, &wd) in self.vec_b.iter_mut().zip(&layer.eta_degree) {
-                *e = s.scalar(*e + degree as f32 * wd);
-            }
-            layer
-                .eta_term
-                .apply_row(&self.vec_b, &mut cache[i.index() * d..(i.index() + 1) * d]);
         }
     }
 
@@ -77,23 +92,15 @@ impl FastRollout<'_> {
                 Accum::Replace,
             );
             // inner_i = σ(mean_k w_ik (δ_k θ6a) + θ6b η_i + b6)    (eqs. 6–7)
-            for i in 0..n {
-                let robot = RobotId(i as u32);
-                let neighbours = self.graph.neighbours(robot);
-                let inv_degree = 1.0 / neighbours.len().max(1) as f32;
-                let acc = &mut self.scratch[i * d..(i + 1) * d];
-                acc.fill(0.0);
-                for (&k, &w) in neighbours.iter().zip(self.graph.weights(robot)) {
-                    let w = w as f32 * self.inv_edge_unit;
-                    let row = &self.wide[k as usize * 2 * d..k as usize * 2 * d + d];
-                    for (a, &x) in acc.iter_mut().zip(row) {
-                        *a += x * w;
-                    }
-                }
-                for (a, &e) in acc.iter_mut().zip(&cache[i * d..(i + 1) * d]) {
-                    *a = s.scalar(*a * inv_degree + e);
-                }
+            NeighbourMean {
+                graph: self.graph,
+                inv_edge_unit: self.inv_edge_unit,
+                rows: &self.wide,
+                stride: 2 * d,
+                cached: cache,
+                activation: s,
             }
+            .run(d, &mut self.scratch);
             // wide[:, d..] += inner θ5b;  δ' = σ(wide[:, d..] + b5)     (eq. 8)
             layer.inner.product_into(
                 MatRef::from_row_major_slice(&self.scratch, n, d),

@@ -23,7 +23,7 @@ mod replay;
 use std::collections::VecDeque;
 
 use afg_game::{Instance, RobotId};
-use afg_graph::{AllocationState, GraphBatch, GraphKind};
+use afg_graph::{AllocationState, GraphKind};
 use burn::module::AutodiffModule;
 use burn::optim::adaptor::OptimizerAdaptor;
 use burn::optim::{Adam, AdamConfig, GradientsParams, Optimizer};
@@ -280,7 +280,7 @@ impl Trainer {
             )?);
         }
         let units = self.config.network.units();
-        let mut batch = GraphBatch::new(m);
+        let mut batch = self.config.network.empty_batch();
         for ep in &self.running {
             let t = ep.record.actions.len();
             let state = AllocationState::with_units(&ep.instance, ep.assignment_after(t), units);
