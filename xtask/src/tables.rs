@@ -5,7 +5,9 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use afg_baseline::{Allocator, Method, Optimum};
-use afg_eval::tables::{Row, Scale, headline, table1_markdown, table2_markdown};
+use afg_eval::tables::{
+    Row, Scale, classical_rows, headline, price_headed_rows, table1_markdown, table2_markdown,
+};
 use afg_eval::{ModelSpec, Variant, dataset, evaluate, optima};
 use afg_game::Instance;
 use afg_learn::LearnedPolicy;
@@ -47,27 +49,6 @@ struct Results {
     price_ablation: Vec<crate::price::AblationRow>,
     price_ablation_instances: usize,
     missing_models: Vec<String>,
-}
-
-/// Every classical method on `insts`; the decentralised DA, a message-passing
-/// simulation that ends where its centralised twin does, on the first `simulated`
-/// instances only (none above N = 1000).
-fn classical_rows(n: usize, insts: &[Instance], opt: &[f64], simulated: usize) -> Result<Vec<Row>> {
-    let mut rows = Vec::new();
-    for method in Method::ALL {
-        let k = match method {
-            Method::DaDecentralised if n > 1000 => continue,
-            Method::DaDecentralised => simulated.min(insts.len()),
-            _ => insts.len(),
-        };
-        rows.push(Row::new(evaluate(
-            method.label(),
-            method.allocator(0).as_ref(),
-            &insts[..k],
-            &opt[..k],
-        )?));
-    }
-    Ok(rows)
 }
 
 pub fn run(args: TablesArgs) -> Result<()> {
@@ -161,13 +142,13 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
                 rows.push(Row::new(evaluate(&warm.label(), &policy, &insts, &opt)?));
             }
         }
-        rows.extend(price_headed_rows(root, n, &insts, &opt)?);
+        rows.extend(price_headed_rows(root, &insts, &opt)?);
         rows.extend(
             crate::price::rows(root, n, &insts, &opt)?
                 .into_iter()
                 .map(Row::new),
         );
-        rows.extend(classical_rows(n, &insts, &opt, insts.len())?);
+        rows.extend(classical_rows(&insts, &opt, insts.len())?);
         bar.inc(1);
         table1.push(Scale { robots: n, rows });
     }
@@ -180,8 +161,8 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
         let opt = optima(&insts)?;
         let few = t2_learned.min(insts.len());
         let mut rows = Vec::new();
-        rows.extend(classical_rows(n, &insts, &opt, few)?);
-        rows.extend(price_headed_rows(root, n, &insts, &opt)?);
+        rows.extend(classical_rows(&insts, &opt, few)?);
+        rows.extend(price_headed_rows(root, &insts, &opt)?);
         rows.extend(
             crate::price::rows(root, n, &insts, &opt)?
                 .into_iter()
@@ -232,42 +213,6 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
         price_ablation_instances: t1_instances,
         missing_models: missing,
     })
-}
-
-/// The committed AFGNet models with a price head (ours, [`ModelSpec::PRICE_HEADED`])
-/// on `insts`, without repair: exact rollouts up to N = 100 and one network pass per
-/// N/10 robots beyond (ten passes); the Q* model also in one pass for all robots
-/// (one-shot).
-fn price_headed_rows(root: &Path, n: usize, insts: &[Instance], opt: &[f64]) -> Result<Vec<Row>> {
-    let mut rows = Vec::new();
-    for spec in ModelSpec::PRICE_HEADED {
-        let run = spec.run_dir(root);
-        if !run.has_weights() {
-            continue;
-        }
-        let trained = if n == spec.trained_at {
-            String::new()
-        } else {
-            format!(", trained at N = {}", spec.trained_at)
-        };
-        let block = if n >= 500 { n / 10 } else { 1 };
-        let mut modes = vec![(
-            block,
-            match block {
-                1 => String::new(),
-                b => format!(", network every {b} robots"),
-            },
-        )];
-        if spec.algo == afg_learn::Algo::QStar {
-            modes.push((n, ", one-shot (one pass)".to_owned()));
-        }
-        for (block, mode) in modes {
-            let policy = LearnedPolicy::load(&run.weights())?.with_block(block)?;
-            let label = spec.label_with(&format!("{mode}{trained}"));
-            rows.push(Row::new(evaluate(&label, &policy, insts, opt)?));
-        }
-    }
-    Ok(rows)
 }
 
 fn markdown_tables(res: &Results) -> String {

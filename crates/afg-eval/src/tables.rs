@@ -2,12 +2,15 @@
 //! `cargo xtask reproduce-tables` prints and writes.
 
 use std::fmt::Write as _;
+use std::path::Path;
 use std::time::Duration;
 
 use afg_baseline::Method;
+use afg_game::Instance;
+use afg_learn::{Algo, LearnedPolicy};
 use serde::Serialize;
 
-use crate::{ModelSpec, Summary, paper};
+use crate::{EvalError, ModelSpec, Summary, evaluate, paper};
 
 /// One row of a table: a measured method, and the learned model it measures when it
 /// is one of Table I's models at its own scale (then the paper's number stands beside
@@ -47,6 +50,90 @@ pub struct Scale {
     pub robots: usize,
     /// The rows, in table order.
     pub rows: Vec<Row>,
+}
+
+/// Every classical method ([`Method::ALL`]) on `insts`, whose optima are `opt`; the
+/// decentralised DA, a message-passing simulation that ends where its centralised twin
+/// does, on the first `simulated` instances only, and not at all above N = 1000.
+///
+/// # Errors
+/// The allocators' errors.
+///
+/// # Examples
+/// ```
+/// use afg_eval::{optima, tables::classical_rows};
+/// use afg_game::GeneratorConfig;
+/// let insts: Vec<_> = (0..3).map(|s| GeneratorConfig::paper(20, 5, s).generate()).collect::<Result<_, _>>()?;
+/// let rows = classical_rows(&insts, &optima(&insts)?, 2)?;
+/// let count = |label: &str| rows.iter().find(|r| r.summary.method == label).unwrap().summary.instances;
+/// assert_eq!((count("OPT"), count("GRAPE DA, decentralised")), (3, 2));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn classical_rows(
+    insts: &[Instance],
+    opt: &[f64],
+    simulated: usize,
+) -> Result<Vec<Row>, EvalError> {
+    let n = insts.first().map_or(0, Instance::num_robots);
+    let mut rows = Vec::new();
+    for method in Method::ALL {
+        let k = match method {
+            Method::DaDecentralised if n > 1000 => continue,
+            Method::DaDecentralised => simulated.min(insts.len()),
+            _ => insts.len(),
+        };
+        rows.push(Row::new(evaluate(
+            method.label(),
+            method.allocator(0).as_ref(),
+            &insts[..k],
+            &opt[..k],
+        )?));
+    }
+    Ok(rows)
+}
+
+/// The committed AFGNet models with a price head (ours, [`ModelSpec::PRICE_HEADED`])
+/// under `root` on `insts` (N robots each), without repair: exact rollouts up to
+/// N = 100 and one network pass per N/10 robots beyond (ten passes); the Q* model also
+/// in one pass for all robots (one-shot). Models not committed give no rows.
+///
+/// # Errors
+/// A model that cannot be loaded, and the policies' errors.
+pub fn price_headed_rows(
+    root: &Path,
+    insts: &[Instance],
+    opt: &[f64],
+) -> Result<Vec<Row>, EvalError> {
+    let n = insts.first().map_or(0, Instance::num_robots);
+    let mut rows = Vec::new();
+    for spec in ModelSpec::PRICE_HEADED {
+        let run = spec.run_dir(root);
+        if !run.has_weights() {
+            continue;
+        }
+        let trained = if n == spec.trained_at {
+            String::new()
+        } else {
+            format!(", trained at N = {}", spec.trained_at)
+        };
+        let block = if n >= 500 { n / 10 } else { 1 };
+        let mut modes = vec![(
+            block,
+            match block {
+                1 => String::new(),
+                b => format!(", network every {b} robots"),
+            },
+        )];
+        if spec.algo == Algo::QStar {
+            modes.push((n, ", one-shot (one pass)".to_owned()));
+        }
+        for (block, mode) in modes {
+            let policy = LearnedPolicy::load(&run.weights())?.with_block(block)?;
+            let label = spec.label_with(&format!("{mode}{trained}"));
+            rows.push(Row::new(evaluate(&label, &policy, insts, opt)?));
+        }
+    }
+    Ok(rows)
 }
 
 /// A duration with three significant digits and a unit: `12.3 µs`, `4.56 ms`, `7.89 s`.
@@ -271,6 +358,38 @@ mod tests {
         let mut no_model = scale_60();
         no_model.rows.remove(0);
         assert!(headline(&[no_model]).contains("no AFGNet_DDQN model is committed yet"));
+    }
+
+    #[test]
+    fn the_price_headed_rows_name_their_mode_and_scale() {
+        let root = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."));
+        let labels = |n: usize| -> Vec<String> {
+            let insts = crate::dataset::load(root, n).unwrap();
+            let insts = &insts[..1];
+            let opt = crate::optima(insts).unwrap();
+            price_headed_rows(root, insts, &opt)
+                .unwrap()
+                .into_iter()
+                .map(|r| {
+                    assert!(r.summary.percent_of_opt > 90.0, "{}", r.summary.method);
+                    r.summary.method
+                })
+                .collect()
+        };
+        // The three committed models, the Q* one also in one pass.
+        let at_60 = labels(60);
+        assert_eq!(at_60.len(), 4, "{at_60:?}");
+        assert!(at_60.iter().all(|l| !l.contains("trained at")));
+        assert_eq!(at_60.iter().filter(|l| l.contains("one-shot")).count(), 1);
+        let at_500 = labels(500);
+        assert!(at_500.iter().all(|l| l.contains("trained at N = 60")));
+        assert_eq!(
+            at_500
+                .iter()
+                .filter(|l| l.contains("network every 50 robots"))
+                .count(),
+            3
+        );
     }
 
     #[test]
