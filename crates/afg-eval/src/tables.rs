@@ -53,8 +53,9 @@ pub struct Scale {
 }
 
 /// Every classical method ([`Method::ALL`]) on `insts`, whose optima are `opt`; the
-/// decentralised DA, a message-passing simulation that ends where its centralised twin
-/// does, on the first `simulated` instances only, and not at all above N = 1000.
+/// decentralised DA (the slowest: a message-passing simulation of the dynamics that
+/// [`Method::Da`] runs centrally) on the first `simulated` instances only, and not at
+/// all above N = 1000.
 ///
 /// # Errors
 /// The allocators' errors.
