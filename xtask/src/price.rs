@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use afg_baseline::{Allocator, Method};
-use afg_eval::{PriceSpec, Summary, evaluate, optima};
+use afg_eval::{evaluate, optima};
 use afg_game::Instance;
 use afg_learn::{PriceMode, PriceModel, PricePolicy, PriceRound, PriceTrainConfig, PriceTrainer};
 use anyhow::{Context, Result, bail};
@@ -148,25 +148,6 @@ pub fn run(args: PriceArgs) -> Result<()> {
     )?;
     println!("wrote {} ({:.0} s)", model_path.display(), summary.wall_s);
     Ok(())
-}
-
-/// The committed price model's rows (both modes, and from N = 500 on the sequential
-/// mode with prices once per N/100 robots) on `insts`; none while it is not trained (it
-/// is ours, so optional).
-pub fn rows(root: &Path, n: usize, insts: &[Instance], opt: &[f64]) -> Result<Vec<Summary>> {
-    let mut rows = Vec::new();
-    let [sequential, one_shot] = PriceSpec::committed();
-    let blocked = (n >= 500).then(|| sequential.with_block(n / 100));
-    for spec in [Some(sequential), blocked, Some(one_shot)]
-        .into_iter()
-        .flatten()
-    {
-        if spec.model_path(root).exists() {
-            let policy = spec.load(root)?;
-            rows.push(evaluate(&spec.label(), &policy, insts, opt)?);
-        }
-    }
-    Ok(rows)
 }
 
 /// One ablation of the price model: what it was trained with, and where it lives.

@@ -6,7 +6,8 @@ use std::path::{Path, PathBuf};
 
 use afg_baseline::{Allocator, Method, Optimum};
 use afg_eval::tables::{
-    Row, Scale, classical_rows, headline, price_headed_rows, table1_markdown, table2_markdown,
+    Row, Scale, classical_rows, headline, price_headed_rows, price_model_rows, table1_markdown,
+    table2_markdown,
 };
 use afg_eval::{ModelSpec, Variant, dataset, evaluate, optima};
 use afg_game::Instance;
@@ -143,11 +144,7 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
             }
         }
         rows.extend(price_headed_rows(root, &insts, &opt)?);
-        rows.extend(
-            crate::price::rows(root, n, &insts, &opt)?
-                .into_iter()
-                .map(Row::new),
-        );
+        rows.extend(price_model_rows(root, &insts, &opt)?);
         rows.extend(classical_rows(&insts, &opt, insts.len())?);
         bar.inc(1);
         table1.push(Scale { robots: n, rows });
@@ -163,11 +160,7 @@ fn compute(root: &Path, quick: bool) -> Result<Results> {
         let mut rows = Vec::new();
         rows.extend(classical_rows(&insts, &opt, few)?);
         rows.extend(price_headed_rows(root, &insts, &opt)?);
-        rows.extend(
-            crate::price::rows(root, n, &insts, &opt)?
-                .into_iter()
-                .map(Row::new),
-        );
+        rows.extend(price_model_rows(root, &insts, &opt)?);
         // The paper's model and ours with the gain residual at every training N, then
         // ours trained at N = 60 only.
         let specs = [Variant::Paper, Variant::GainResidual]

@@ -10,7 +10,7 @@ use afg_game::Instance;
 use afg_learn::{Algo, LearnedPolicy};
 use serde::Serialize;
 
-use crate::{EvalError, ModelSpec, Summary, evaluate, paper};
+use crate::{EvalError, ModelSpec, PriceSpec, Summary, evaluate, paper};
 
 /// One row of a table: a measured method, and the learned model it measures when it
 /// is one of Table I's models at its own scale (then the paper's number stands beside
@@ -132,6 +132,33 @@ pub fn price_headed_rows(
             let policy = LearnedPolicy::load(&run.weights())?.with_block(block)?;
             let label = spec.label_with(&format!("{mode}{trained}"));
             rows.push(Row::new(evaluate(&label, &policy, insts, opt)?));
+        }
+    }
+    Ok(rows)
+}
+
+/// The committed price model's rows (ours, [`PriceSpec::committed`]) under `root` on
+/// `insts`: both modes, and from N = 500 on the sequential mode with prices once per
+/// N/100 robots too; none while the model is not committed.
+///
+/// # Errors
+/// A model that cannot be loaded, and the policy's errors.
+pub fn price_model_rows(
+    root: &Path,
+    insts: &[Instance],
+    opt: &[f64],
+) -> Result<Vec<Row>, EvalError> {
+    let n = insts.first().map_or(0, Instance::num_robots);
+    let [sequential, one_shot] = PriceSpec::committed();
+    let blocked = (n >= 500).then(|| sequential.with_block(n / 100));
+    let mut rows = Vec::new();
+    for spec in [Some(sequential), blocked, Some(one_shot)]
+        .into_iter()
+        .flatten()
+    {
+        if spec.model_path(root).exists() {
+            let policy = spec.load(root)?;
+            rows.push(Row::new(evaluate(&spec.label(), &policy, insts, opt)?));
         }
     }
     Ok(rows)
@@ -384,6 +411,12 @@ mod tests {
         assert_eq!(at_60.iter().filter(|l| l.contains("one-shot")).count(), 1);
         let at_500 = labels(500);
         assert!(at_500.iter().all(|l| l.contains("trained at N = 60")));
+        // The price model: both modes, and prices once per N/100 robots from N = 500.
+        let insts = crate::dataset::load(root, 500).unwrap();
+        let opt = crate::optima(&insts[..1]).unwrap();
+        let price = price_model_rows(root, &insts[..1], &opt).unwrap();
+        assert_eq!(price.len(), 3);
+        assert!(price[1].summary.method.contains("prices every 5 robots"));
         assert_eq!(
             at_500
                 .iter()
