@@ -239,7 +239,7 @@ impl<B: Backend> PriceHead<B> {
         assert_eq!(
             g.task_inputs.dims()[0],
             graphs * m,
-            "a price head reads the tasks' summaries: pack the batch with GraphBatch::with_task_summaries (NetworkConfig::empty_batch)"
+            "a price head reads the tasks' summaries: pack the batch with GraphBatch::with_task_summaries (QNetwork::empty_batch)"
         );
         // Each graph's pooled embedding beside each of its tasks.       [G M, d]
         let pooled = pooled

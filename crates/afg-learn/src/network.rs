@@ -77,18 +77,6 @@ impl NetworkConfig {
         }
     }
 
-    /// An empty batch holding what this network reads: with the tasks' summaries for
-    /// an AFGNet with a price head ([`GraphBatch::with_task_summaries`]), without them
-    /// otherwise.
-    pub fn empty_batch(&self) -> GraphBatch {
-        match self {
-            NetworkConfig::AfgNet(c) if c.price_head == Some(true) => {
-                GraphBatch::with_task_summaries(c.tasks)
-            }
-            _ => GraphBatch::new(self.tasks()),
-        }
-    }
-
     /// Builds the network.
     pub fn init<B: Backend>(&self, device: &B::Device) -> QNetwork<B> {
         match self {
@@ -119,8 +107,9 @@ impl<B: Backend> QNetwork<B> {
         }
     }
 
-    /// An empty batch holding what this network reads (as
-    /// [`NetworkConfig::empty_batch`]).
+    /// An empty batch for `tasks` tasks holding what this network reads: with the
+    /// tasks' summaries for an AFGNet with a price head
+    /// ([`GraphBatch::with_task_summaries`]), without them otherwise.
     pub fn empty_batch(&self, tasks: usize) -> GraphBatch {
         match self {
             QNetwork::AfgNet(n) if n.price.is_some() => GraphBatch::with_task_summaries(tasks),

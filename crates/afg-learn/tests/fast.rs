@@ -37,7 +37,7 @@ fn assert_parity(config: &NetworkConfig, network: &QNetwork<B>, inst: &Instance)
     let (mut q_fast, mut mask) = (vec![0.0; m], vec![false; m]);
     let mut worst = 0.0f32;
     for robot in inst.robot_ids() {
-        let mut batch = config.empty_batch();
+        let mut batch = network.empty_batch(m);
         batch.push(&graph, &state, robot);
         let q_burn: Vec<f32> = network
             .forward(&GraphTensors::new(&batch, &device))

@@ -19,7 +19,7 @@ impl Trainer {
     pub(super) fn q_star_batch(&mut self) -> Result<(GraphBatch, Vec<f32>, Vec<f32>), LearnError> {
         let (m, b) = (self.config.network.tasks(), self.config.batch);
         let units = self.config.network.units();
-        let mut now = self.config.network.empty_batch();
+        let mut now = self.online.empty_batch(m);
         let mut labels = Vec::with_capacity(b * m);
         let mut allowed = Vec::with_capacity(b * m);
         for _ in 0..b {
@@ -87,8 +87,8 @@ impl Trainer {
             self.config.batch,
         );
         let units = self.config.network.units();
-        let mut now = self.config.network.empty_batch();
-        let mut next = self.config.network.empty_batch();
+        let mut now = self.online.empty_batch(m);
+        let mut next = self.online.empty_batch(m);
         let (mut actions, mut rewards, mut next_row) = (
             Vec::with_capacity(b),
             Vec::with_capacity(b),
@@ -271,7 +271,7 @@ mod tests {
             let device = Default::default();
             let (mut hits, mut total) = (0, 0);
             for ep in &t.demos {
-                let mut batch = t.config.network.empty_batch();
+                let mut batch = net.empty_batch(3);
                 for step in 0..6 {
                     let state = AllocationState::with_units(
                         &ep.instance,

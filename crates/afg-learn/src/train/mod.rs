@@ -280,7 +280,7 @@ impl Trainer {
             )?);
         }
         let units = self.config.network.units();
-        let mut batch = self.config.network.empty_batch();
+        let mut batch = self.online.empty_batch(m);
         for ep in &self.running {
             let t = ep.record.actions.len();
             let state = AllocationState::with_units(&ep.instance, ep.assignment_after(t), units);
