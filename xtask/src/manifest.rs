@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use afg_graph::Units;
-use afg_learn::{LogEvent, NetworkConfig, Preset, RunDir, RunManifest, TrainConfig};
+use afg_learn::{LogEvent, NetworkConfig, Preset, RunDir, RunManifest, Shaping, TrainConfig};
 use anyhow::Result;
 use clap::Args;
 
@@ -45,9 +45,15 @@ pub fn command_line(c: &TrainConfig, dir: &Path) -> String {
     }
     let gain_residual =
         matches!(&c.network, NetworkConfig::AfgNet(a) if a.gain_residual == Some(true));
-    if !c.greedy_shaping && default.greedy_shaping && !gain_residual {
-        // (--gain-residual implies it)
-        cmd += " --no-shaping";
+    if c.shaping != default.shaping {
+        if c.shaping == Shaping::None {
+            if !gain_residual {
+                // (--gain-residual implies it)
+                cmd += " --no-shaping";
+            }
+        } else {
+            cmd += &format!(" --shaping {}", c.shaping.name());
+        }
     }
     if c.network.units() != Units::Bounded {
         cmd += &format!(" --units {}", c.network.units().name());

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use afg_baseline::{Allocator, Optimum};
 use afg_game::Instance;
 use afg_graph::{GraphKind, RobotGraph};
-use afg_learn::{FastPolicy, LearnedPolicy, greedy_completion_welfare, regret_trace};
+use afg_learn::{FastPolicy, LearnedPolicy, regret_trace};
 use anyhow::{Context, Result};
 use clap::Args;
 use serde::Serialize;
@@ -85,12 +85,8 @@ pub fn summarise(dir: &std::path::Path, instances: &[Instance]) -> Result<Regret
             steps += 1;
             gaps.push(s.gap);
             let unit = if config.reward_scaling { s.unit } else { 1.0 };
-            // A shaped network learns Q − Φ, Φ(s) = W(greedy completion of s) − W(s).
-            let potential = if config.greedy_shaping {
-                greedy_completion_welfare(inst, &before) - inst.welfare(&before)
-            } else {
-                0.0
-            };
+            // A shaped network learns Q − Φ, Φ(s) = W(completion of s) − W(s).
+            let potential = config.shaping.potential(inst, &before);
             let error = s.q[s.action.index()] * unit + potential - s.q_star_taken;
             sq_error += error * error;
             let allowed: Vec<(f64, f64)> =

@@ -5,17 +5,11 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use afg_baseline::{Allocator, Method, Optimum};
-use afg_eval::tables::{
-    Row, Scale, classical_rows, headline, price_headed_rows, price_model_rows, table1_markdown,
-    table2_markdown,
-};
-use afg_eval::{ModelSpec, Variant, dataset, evaluate, optima};
-use afg_game::Instance;
+use afg_eval::tables::{Tables, compute, headline, markdown, models_table};
+use afg_eval::{ModelSpec, dataset};
 use afg_learn::LearnedPolicy;
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use serde::Serialize;
-
 #[derive(Args)]
 pub struct TablesArgs {
     /// A few instances per table (about a minute), to check the pipeline end to end.
@@ -36,21 +30,8 @@ pub struct TablesArgs {
     root: Option<PathBuf>,
 }
 
-/// What Table I's rows are, under it.
-const TABLE1_NOTE: &str = "The learned rows keep the paper's networks and algorithms; where their training departs from the paper (units of the inputs and rewards, reward shaping, loss, learning rate, target sync) is in each model's command under \"The committed models\" in docs/RESULTS.md, and explained in docs/training.md. The rows marked (ours) are not the paper's method: \"AFGNet, exact Q* regression\" is the paper's network trained by regression on the exact Q* of the sequential MDP instead of TD targets (docs/training.md); \"AFGNet + price head\" (docs/price.md) is the paper's AFGNet with a price head added, Q(s, a) = π_a(s) − β d(t, a) + c_a(s), which is Nearest before training, trained on the exact Q*, by Double DQN, or by Double DQN with demonstrations from the optimum, and run without any repair (its one-shot row evaluates the network once for all robots); the price model (docs/price.md) is a per-task price network without the graph embedding, trained on the same Q*, run without any repair. \"Blind round robin\" gives each robot the task with the fewest robots so far and never looks at a task: no policy that cannot see the tasks, such as the paper's S2V, does better on average (docs/training.md).\n\n";
-
 const BEGIN: &str = "<!-- reproduce-tables:begin -->";
 const END: &str = "<!-- reproduce-tables:end -->";
-
-#[derive(Serialize)]
-struct Results {
-    quick: bool,
-    table1: Vec<Scale>,
-    table2: Vec<Scale>,
-    price_ablation: Vec<crate::price::AblationRow>,
-    price_ablation_instances: usize,
-    missing_models: Vec<String>,
-}
 
 pub fn run(args: TablesArgs) -> Result<()> {
     if args.check {
@@ -60,7 +41,7 @@ pub fn run(args: TablesArgs) -> Result<()> {
         let root = crate::repo_root();
         check_readme(&root)?;
         let committed = results_block(&root.join("docs/RESULTS.md"))?;
-        let fresh = markdown_tables(&compute(&root, false)?);
+        let fresh = markdown(&compute_tables(&root, false)?);
         let differences = afg_eval::markdown::table_differences(&committed, &fresh);
         if !differences.is_empty() {
             for d in &differences {
@@ -76,9 +57,9 @@ pub fn run(args: TablesArgs) -> Result<()> {
     }
     let root = args.root.clone().unwrap_or_else(crate::repo_root);
     let start = std::time::Instant::now();
-    let results = compute(&root, args.quick)?;
+    let results = compute_tables(&root, args.quick)?;
     let minutes = start.elapsed().as_secs_f64() / 60.0;
-    let tables = markdown_tables(&results);
+    let tables = markdown(&results);
     if args.json {
         println!("{}", serde_json::to_string_pretty(&results)?);
     } else {
@@ -90,148 +71,15 @@ pub fn run(args: TablesArgs) -> Result<()> {
     Ok(())
 }
 
-/// Evaluates every method on the committed datasets, with the weights under `root/models`.
-fn compute(root: &Path, quick: bool) -> Result<Results> {
-    let (t1_instances, t2_instances, t2_learned) = if quick { (3, 2, 1) } else { (100, 100, 20) };
-    let mut missing = Vec::new();
+/// Every table, with a progress bar over the five test sets.
+fn compute_tables(root: &Path, quick: bool) -> Result<Tables> {
     let bar = crate::progress(5, "reproduce-tables (datasets)");
-    let mut table1 = Vec::new();
-    for n in dataset::TABLE1_SIZES {
-        let insts: Vec<Instance> = crate::datasets::load(n)?
-            .into_iter()
-            .take(t1_instances)
-            .collect();
-        let opt = optima(&insts)?;
-        let mut rows = Vec::new();
-        for spec in ModelSpec::table1(n) {
-            let run = spec.run_dir(root);
-            if !run.has_weights() {
-                // Our variants are optional; the paper's three models are expected.
-                if !spec.is_ours() {
-                    missing.push(format!("models/{}", spec.dir_name()));
-                }
-                continue;
-            }
-            let policy = LearnedPolicy::load(&run.weights())
-                .with_context(|| format!("loading {}", run.path().display()))?;
-            rows.push(Row::of_model(
-                spec,
-                evaluate(&spec.label(), &policy, &insts, &opt)?,
-            ));
-        }
-        // The N = 60 models at the other scales (the paper's "Pretrain_60" at N = 20, 100).
-        for pretrained in ModelSpec::TRANSFERRED {
-            let run = pretrained.run_dir(root);
-            if n != ModelSpec::PRETRAINED_AT && run.has_weights() {
-                let policy = LearnedPolicy::load(&run.weights())?;
-                let label = format!(
-                    "{} trained at N = {}",
-                    pretrained.label(),
-                    ModelSpec::PRETRAINED_AT
-                );
-                rows.push(Row::new(evaluate(&label, &policy, &insts, &opt)?));
-            }
-        }
-        // Models trained further at this N from a smaller one (warm starts).
-        for warm in ModelSpec::WARM_STARTS
-            .into_iter()
-            .filter(|w| w.trained_at == n)
-        {
-            let run = warm.run_dir(root);
-            if run.has_weights() {
-                let policy = LearnedPolicy::load(&run.weights())?;
-                rows.push(Row::new(evaluate(&warm.label(), &policy, &insts, &opt)?));
-            }
-        }
-        rows.extend(price_headed_rows(root, &insts, &opt)?);
-        rows.extend(price_model_rows(root, &insts, &opt)?);
-        rows.extend(classical_rows(&insts, &opt, insts.len())?);
-        bar.inc(1);
-        table1.push(Scale { robots: n, rows });
-    }
-    let mut table2 = Vec::new();
-    for n in dataset::TABLE2_SIZES {
-        let insts: Vec<Instance> = crate::datasets::load(n)?
-            .into_iter()
-            .take(t2_instances)
-            .collect();
-        let opt = optima(&insts)?;
-        let few = t2_learned.min(insts.len());
-        let mut rows = Vec::new();
-        rows.extend(classical_rows(&insts, &opt, few)?);
-        rows.extend(price_headed_rows(root, &insts, &opt)?);
-        rows.extend(price_model_rows(root, &insts, &opt)?);
-        // The paper's model and ours with the gain residual at every training N, then
-        // ours trained at N = 60 only.
-        let specs = [Variant::Paper, Variant::GainResidual]
-            .into_iter()
-            .flat_map(|variant| {
-                dataset::TABLE1_SIZES.map(|trained| ModelSpec {
-                    variant,
-                    ..ModelSpec::afgnet_ddqn(trained)
-                })
-            })
-            .chain(ModelSpec::TRANSFERRED.into_iter().filter(|s| s.is_ours()));
-        for spec in specs {
-            let run = spec.run_dir(root);
-            if !run.has_weights() {
-                continue;
-            }
-            let policy = LearnedPolicy::load(&run.weights())?;
-            let label = format!("{} trained at N = {}", spec.label(), spec.trained_at);
-            rows.push(Row::new(evaluate(
-                &label,
-                &policy,
-                &insts[..few],
-                &opt[..few],
-            )?));
-            if spec == ModelSpec::afgnet_ddqn(spec.trained_at) {
-                // The fast variant: one pass per N/100 robots, then balanced repair.
-                let policy = policy.with_block(n / 100)?.with_repair(true);
-                let label = format!("{label}, block {}, + repair", policy.block());
-                rows.push(Row::new(evaluate(&label, &policy, &insts, &opt)?));
-            }
-        }
-        bar.inc(1);
-        table2.push(Scale { robots: n, rows });
-    }
+    let tables = compute(root, quick, || bar.inc(1))?;
     bar.finish_and_clear();
-    missing.sort();
-    missing.dedup();
-    Ok(Results {
-        quick,
-        table1,
-        table2,
-        price_ablation: crate::price::ablation(root, t1_instances)?,
-        price_ablation_instances: t1_instances,
-        missing_models: missing,
-    })
+    Ok(tables)
 }
 
-fn markdown_tables(res: &Results) -> String {
-    let mut s = table1_markdown(&res.table1);
-    s.push_str(TABLE1_NOTE);
-    s.push_str(&table2_markdown(&res.table2));
-    if !res.price_ablation.is_empty() {
-        s += &crate::price::ablation_markdown(&res.price_ablation, res.price_ablation_instances);
-    }
-    if !res.missing_models.is_empty() {
-        let _ = writeln!(
-            s,
-            "Not trained yet (rows omitted): {}.",
-            res.missing_models.join(", ")
-        );
-    }
-    s
-}
-
-fn write_outputs(
-    root: &Path,
-    res: &Results,
-    tables: &str,
-    quick: bool,
-    minutes: f64,
-) -> Result<()> {
+fn write_outputs(root: &Path, res: &Tables, tables: &str, quick: bool, minutes: f64) -> Result<()> {
     let docs = root.join("docs");
     std::fs::create_dir_all(docs.join("figures"))?;
     for n in dataset::TABLE1_SIZES {
@@ -306,54 +154,6 @@ fn assignment_map(root: &Path, out: &Path) -> Result<()> {
     crate::map::draw_assignments(&inst, &[(Method::Opt.label(), &opt), (&label, &other)], out)
 }
 
-/// The training budget of every committed model the tables use, from its manifest.
-fn models_table(root: &Path) -> Result<String> {
-    let mut md = String::from(
-        "\n## The committed models\n\n\
-         Each row's command retrains it (`manifest.json` beside the weights; \
-         wall times are those of runs that shared the 2 cores with other work).\n\n\
-         | model | N | steps | learning rate | wall time | final validation, % of OPT | command |\n\
-         |---|---|---|---|---|---|---|\n",
-    );
-    let specs = ModelSpec::TABLE1_KINDS
-        .into_iter()
-        .flat_map(|(net, algo, variant)| {
-            dataset::TABLE1_SIZES.map(|n| ModelSpec::new(net, algo, variant, n))
-        })
-        .chain(ModelSpec::WARM_STARTS)
-        .chain(ModelSpec::PRICE_HEADED);
-    for spec in specs {
-        let n = spec.trained_at;
-        let label = spec.label();
-        let run = spec.run_dir(root);
-        if !run.has_manifest() {
-            continue;
-        }
-        let manifest = run.manifest()?;
-        let config = run.config()?;
-        let lr = if config.lr_decay {
-            format!(
-                "{:.1e} → {:.1e} (annealed)",
-                config.lr,
-                config.learning_rate(config.steps)
-            )
-        } else {
-            format!("{:.1e} (constant)", config.lr)
-        };
-        let minutes = manifest.wall_time_s.unwrap_or(f64::NAN) / 60.0;
-        let pct = manifest
-            .final_validation
-            .as_ref()
-            .map_or(f64::NAN, |v| v.percent_of_opt);
-        let _ = writeln!(
-            md,
-            "| {label} | {n} | {} | {lr} | {minutes:.0} min | {pct:.1} % | `{}` |",
-            config.steps, manifest.command
-        );
-    }
-    Ok(md)
-}
-
 /// The tables between the BEGIN and END markers of a file.
 fn results_block(path: &Path) -> Result<String> {
     let text =
@@ -370,51 +170,4 @@ fn check_readme(root: &Path) -> Result<()> {
     }
     println!("README.md shows the tables of docs/RESULTS.md");
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The results with timings removed.
-    fn without_timings(r: &Results) -> serde_json::Value {
-        let mut v = serde_json::to_value(r).unwrap();
-        for table in ["table1", "table2"] {
-            for entry in v[table].as_array_mut().unwrap() {
-                for row in entry["rows"].as_array_mut().unwrap() {
-                    row["seconds_per_instance"] = serde_json::Value::Null;
-                }
-            }
-        }
-        v
-    }
-
-    #[test]
-    fn quick_tables_are_reproducible_and_opt_dominates() {
-        let root = crate::repo_root();
-        let a = compute(&root, true).unwrap();
-        let b = compute(&root, true).unwrap();
-        assert_eq!(without_timings(&a), without_timings(&b));
-        for scale in a.table1.iter().chain(&a.table2) {
-            let rows: Vec<_> = scale.rows.iter().map(|r| &r.summary).collect();
-            let opt = rows
-                .iter()
-                .find(|r| r.method == Method::Opt.label())
-                .unwrap();
-            assert!((opt.percent_of_opt - 100.0).abs() < 1e-9);
-            for r in &rows {
-                assert!(
-                    r.welfare <= opt.welfare + 1e-9 * opt.welfare.abs()
-                        || r.instances < opt.instances,
-                    "{}",
-                    r.method
-                );
-                assert!(r.percent_of_opt <= 100.0 + 1e-9, "{}", r.method);
-            }
-        }
-        let tables = markdown_tables(&a);
-        assert!(
-            tables.contains("Table I") && tables.contains("Table II") && tables.contains("22.61")
-        );
-    }
 }

@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 use afg_baseline::Method;
 use afg_graph::Units;
 use afg_learn::{
-    Algo, Demonstrations, LogEvent, NetworkConfig, Preset, RunDir, TrainConfig, Trainer,
+    Algo, Demonstrations, LogEvent, NetworkConfig, Preset, RunDir, Shaping, TrainConfig, Trainer,
     ValidationLine, save_network, validation_instances,
 };
 use anyhow::{Context, Result, bail};
@@ -35,6 +35,17 @@ pub enum UnitsArg {
     ScaleFree,
     Bounded,
     MeanReward,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ShapingArg {
+    /// The paper's reward, the welfare change.
+    None,
+    /// Potential: the welfare a greedy completion would still add (the default).
+    Greedy,
+    /// Potential: the welfare the optimal completion would still add (one min-cost flow
+    /// per state): the TD targets then carry the exact advantages (ours).
+    Optimal,
 }
 
 #[derive(Args, Default)]
@@ -87,6 +98,9 @@ pub struct TrainArgs {
     /// policy is unchanged; docs/training.md).
     #[arg(long)]
     pub(crate) no_shaping: bool,
+    /// The shaping potential (default greedy; `--no-shaping` is `--shaping none`).
+    #[arg(long, value_enum, conflicts_with = "no_shaping")]
+    pub(crate) shaping: Option<ShapingArg>,
     /// AFGNet only: add each action's immediate reward (the actor's join gain) to the
     /// Q values, so the network learns only the value of what follows (not in the paper).
     #[arg(long)]
@@ -206,8 +220,15 @@ impl TrainArgs {
             weight: self.demo_weight,
         });
         // The gain residual adds the unshaped reward to Q: it implies no shaping.
+        if let Some(shaping) = self.shaping {
+            c.shaping = match shaping {
+                ShapingArg::None => Shaping::None,
+                ShapingArg::Greedy => Shaping::Greedy,
+                ShapingArg::Optimal => Shaping::Optimal,
+            };
+        }
         if self.no_shaping || self.gain_residual {
-            c.greedy_shaping = false;
+            c.shaping = Shaping::None;
         }
         c.check()?;
         Ok(c)
@@ -227,6 +248,7 @@ impl TrainArgs {
             || self.target_sync.is_some()
             || self.parallel_envs.is_some()
             || self.no_shaping
+            || self.shaping.is_some()
             || self.gain_residual
             || self.price_head
             || self.demos.is_some()
@@ -414,6 +436,8 @@ mod tests {
             "--scale 60 --units bounded",
             "--scale 20 --paper --target-sync 50",
             "--scale 60 --no-shaping",
+            "--scale 60 --shaping optimal",
+            "--scale 20 --paper --shaping greedy",
             "--scale 100 --init-from models/afgnet_ddqn_n60 --eps-start 0.1",
             "--scale 60 --price-head --algo qstar",
             "--scale 60 --price-head --demos 64 --demo-margin 0.1 --demo-share 0.5",

@@ -1,7 +1,8 @@
 //! Evaluation of allocators: the fixed test datasets ([`dataset`]), one way to score an
 //! allocation against the exact optimum ([`Score`], [`evaluate`]), the learned models
 //! of the paper's tables ([`ModelSpec`]), the numbers the paper reports ([`paper`]) and
-//! the tables themselves ([`tables`]).
+//! the tables themselves ([`tables`], with the price model's ablation in
+//! [`price_ablation`]).
 //!
 //! Every command that prints "% of OPT" computes it here.
 
@@ -10,6 +11,7 @@ mod error;
 pub mod markdown;
 mod model;
 pub mod paper;
+pub mod price_ablation;
 mod score;
 pub mod tables;
 

@@ -4,7 +4,7 @@
 //! `cargo run --release -p afg-learn --example train_tiny`
 
 use afg_graph::Units;
-use afg_learn::{Algo, NetworkConfig, TrainConfig, Trainer};
+use afg_learn::{Algo, NetworkConfig, Shaping, TrainConfig, Trainer};
 
 fn main() -> Result<(), afg_learn::LearnError> {
     let network = NetworkConfig::afgnet(3, 0).with_units(Units::ScaleFree);
@@ -13,7 +13,7 @@ fn main() -> Result<(), afg_learn::LearnError> {
     config.warmup = 256;
     config.validation_instances = 16;
     config.validate_every = 50;
-    config.greedy_shaping = true;
+    config.shaping = Shaping::Greedy;
     let mut trainer = Trainer::new(config)?;
     while !trainer.is_finished() {
         let report = trainer.step()?;

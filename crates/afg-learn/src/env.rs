@@ -1,9 +1,10 @@
 //! The sequential allocation MDP (paper §III): robots act once each in index order, an
 //! action is a task with room, the reward is the change in welfare, γ = 1.
 
-use afg_baseline::Greedy;
+use afg_baseline::{Greedy, Optimum};
 use afg_game::{Assignment, Instance, Preference, RobotId, TaskId};
 use afg_graph::{AllocationState, Units};
+use serde::{Deserialize, Serialize};
 
 use crate::LearnError;
 
@@ -95,37 +96,88 @@ impl<'a> Env<'a> {
     }
 }
 
-/// `W(greedy completion of assignment)`: the welfare once one-pass greedy has placed
-/// every unassigned robot. The shaping potential of [`n_step_reward`] is this minus
-/// `W(assignment)`. O(N M).
-pub fn greedy_completion_welfare(instance: &Instance, assignment: &Assignment) -> f64 {
-    instance.welfare(&Greedy.complete(instance, assignment))
+/// The potential of potential-based reward shaping (Ng, Harada and Russell, 1999):
+/// `Φ(s) = W(completion of s) − W(s)`, the welfare that a fixed completion rule would
+/// still add from state `s`. The shaped reward of a transition `s → s'` is the change
+/// of `W(completion)`; Φ depends on the state only, so the optimal policy is unchanged,
+/// while the values to learn become what an action gains over finishing by the rule.
+/// Not in the paper (ours).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Shaping {
+    /// The paper's reward, the welfare change (Φ = 0).
+    #[default]
+    None,
+    /// Φ from one-pass greedy ([`afg_baseline::Greedy::complete`]), O(N M) per state.
+    Greedy,
+    /// Φ from the optimal completion ([`afg_baseline::Optimum::complete`]), one min-cost
+    /// flow per state. Then Φ(s) = V*(s), so the shaped reward of one step is exactly
+    /// the advantage `Q*(s, a) − V*(s)` ≤ 0 and the shaped optimal values are 0 along
+    /// optimal play: the TD targets carry the oracle's values.
+    Optimal,
+}
+
+impl Shaping {
+    /// `none`, `greedy` or `optimal`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Shaping::None => "none",
+            Shaping::Greedy => "greedy",
+            Shaping::Optimal => "optimal",
+        }
+    }
+
+    /// `W(completion of assignment)` by this rule; `W(assignment)` for
+    /// [`Shaping::None`] (so that Φ = 0).
+    ///
+    /// # Panics
+    /// If `assignment` does not fit `instance` (more robots than a capacity, other
+    /// sizes), which the trainer's own states never do.
+    pub fn completion_welfare(self, instance: &Instance, assignment: &Assignment) -> f64 {
+        match self {
+            Shaping::None => instance.welfare(assignment),
+            Shaping::Greedy => instance.welfare(&Greedy.complete(instance, assignment)),
+            Shaping::Optimal => instance.welfare(
+                &Optimum
+                    .complete(instance, assignment)
+                    .expect("a state of the MDP fits its instance"),
+            ),
+        }
+    }
+
+    /// `Φ(assignment) = W(completion) − W(assignment)`, in raw welfare.
+    pub fn potential(self, instance: &Instance, assignment: &Assignment) -> f64 {
+        match self {
+            Shaping::None => 0.0,
+            _ => self.completion_welfare(instance, assignment) - instance.welfare(assignment),
+        }
+    }
 }
 
 /// The summed reward (γ = 1, raw welfare) of robots `first, first + 1, …` taking
-/// `actions` from `assignment`, which is advanced past them.
-///
-/// Unshaped, this is the welfare change. With `greedy_shaping` it is the change of
-/// `W(greedy completion)`, i.e. the reward plus `Φ(s') − Φ(s)` with the potential
-/// `Φ(s) = W(greedy completion of s) − W(s)` (Ng, Harada and Russell, 1999): Φ depends
-/// on the state only, so the optimal policy is unchanged, while the values to learn
-/// become what an action gains over finishing greedily.
+/// `actions` from `assignment`, which is advanced past them, shaped by `shaping`: the
+/// welfare change plus `Φ(s') − Φ(s)`, i.e. the change of `W(completion)`.
 ///
 /// # Examples
 /// ```
-/// use afg_baseline::{Allocator, Greedy};
+/// use afg_baseline::{Allocator, Greedy, Optimum};
 /// use afg_game::{Assignment, GeneratorConfig, TaskId};
-/// use afg_learn::n_step_reward;
+/// use afg_learn::{Shaping, n_step_reward};
 /// let inst = GeneratorConfig::paper(6, 2, 1).generate()?;
 /// let actions = [TaskId(0), TaskId(1), TaskId(1), TaskId(0), TaskId(0), TaskId(1)];
 /// let mut a = Assignment::unassigned(6, 2);
-/// let raw = n_step_reward(&inst, &mut a, 0, &actions, false);
+/// let raw = n_step_reward(&inst, &mut a, 0, &actions, Shaping::None);
 /// assert!((raw - inst.welfare(&a)).abs() < 1e-9);
-/// // Shaped, a whole episode returns the final welfare minus greedy's.
+/// // Shaped, a whole episode returns the final welfare minus the rule's.
 /// let mut b = Assignment::unassigned(6, 2);
-/// let shaped = n_step_reward(&inst, &mut b, 0, &actions, true);
+/// let shaped = n_step_reward(&inst, &mut b, 0, &actions, Shaping::Greedy);
 /// let greedy = inst.welfare(&Greedy.allocate(&inst)?.assignment);
 /// assert!((shaped - (inst.welfare(&a) - greedy)).abs() < 1e-9);
+/// // With the optimal completion, an episode's shaped return is its regret, ≤ 0.
+/// let mut c = Assignment::unassigned(6, 2);
+/// let regret = -n_step_reward(&inst, &mut c, 0, &actions, Shaping::Optimal);
+/// let opt = inst.welfare(&Optimum.allocate(&inst)?.assignment);
+/// assert!((regret - (opt - inst.welfare(&a))).abs() < 1e-9 && regret >= -1e-9);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn n_step_reward(
@@ -133,22 +185,23 @@ pub fn n_step_reward(
     assignment: &mut Assignment,
     first: usize,
     actions: &[TaskId],
-    greedy_shaping: bool,
+    shaping: Shaping,
 ) -> f64 {
-    let mut reward = if greedy_shaping {
-        -greedy_completion_welfare(instance, assignment)
+    let shaped = shaping != Shaping::None;
+    let mut reward = if shaped {
+        -shaping.completion_welfare(instance, assignment)
     } else {
         0.0
     };
     for (k, &task) in actions.iter().enumerate() {
         let robot = RobotId((first + k) as u32);
-        if !greedy_shaping {
+        if !shaped {
             reward += instance.score(assignment, robot, task, Preference::Balanced);
         }
         assignment.set(robot, Some(task));
     }
-    if greedy_shaping {
-        reward += greedy_completion_welfare(instance, assignment);
+    if shaped {
+        reward += shaping.completion_welfare(instance, assignment);
     }
     reward
 }

@@ -25,7 +25,7 @@ mod train;
 mod weights;
 
 pub use afgnet::{AfgLayer, AfgNet, AfgNetConfig, PriceHead};
-pub use env::{Env, greedy_completion_welfare, n_step_reward};
+pub use env::{Env, Shaping, n_step_reward};
 pub use error::LearnError;
 pub use fast::{FastPolicy, FastRollout, FastRolloutOutcome};
 pub use layers::{Activation, QHead, linear_of_concat};
@@ -33,7 +33,7 @@ pub use network::{NetworkConfig, QNetwork};
 pub use policy::{LearnedPolicy, LearnedRun};
 pub use price::{
     PRICE_INPUTS, PriceMlp, PriceMode, PriceModel, PriceNet, PriceNetConfig, PricePolicy,
-    PriceRound, PriceTrainConfig, PriceTrainer,
+    PriceRound, PriceRunSummary, PriceTrainConfig, PriceTrainer,
 };
 pub use regret::{RegretStep, q_star, regret_trace};
 pub use rollout::greedy_rollouts;

@@ -2,11 +2,11 @@
 
 use std::path::PathBuf;
 
-use afg_baseline::{Allocator, Greedy};
+use afg_baseline::{Allocator, Greedy, Optimum};
 use afg_game::{Assignment, GeneratorConfig, TaskId};
 use afg_graph::Units;
 use afg_learn::{
-    Algo, InferBackend, LearnError, NetworkConfig, QNetwork, TrainConfig, Trainer,
+    Algo, InferBackend, LearnError, NetworkConfig, QNetwork, Shaping, TrainConfig, Trainer,
     double_dqn_target, dqn_target, n_step_reward,
 };
 use burn::module::{Module, ModuleVisitor, Param};
@@ -201,7 +201,7 @@ proptest! {
 
     /// n-step rewards add up: splitting an episode into chunks of any length gives the
     /// same total, which is the final welfare unshaped and the final welfare minus the
-    /// greedy allocation's shaped (the potential telescopes).
+    /// greedy allocation's or the optimum's shaped (the potential telescopes).
     #[test]
     fn n_step_rewards_telescope(seed in 0u64..1000, n in 2usize..12, m in 1usize..5,
                                 chunk in 1usize..6, picks in prop::collection::vec(0u32..5, 12)) {
@@ -219,15 +219,16 @@ proptest! {
             actions.push(task);
         }
         let greedy = inst.welfare(&Greedy.allocate(&inst).unwrap().assignment);
-        for shaped in [false, true] {
+        let opt = inst.welfare(&Optimum.allocate(&inst).unwrap().assignment);
+        for (shaping, completed) in [(Shaping::None, 0.0), (Shaping::Greedy, greedy), (Shaping::Optimal, opt)] {
             let mut state = Assignment::unassigned(n, m);
             let mut total = 0.0;
             for start in (0..n).step_by(chunk) {
                 let end = (start + chunk).min(n);
-                total += n_step_reward(&inst, &mut state, start, &actions[start..end], shaped);
+                total += n_step_reward(&inst, &mut state, start, &actions[start..end], shaping);
             }
             prop_assert_eq!(&state, &a);
-            let want = inst.welfare(&a) - if shaped { greedy } else { 0.0 };
+            let want = inst.welfare(&a) - completed;
             prop_assert!((total - want).abs() < 1e-9 * want.abs().max(1.0), "{} vs {}", total, want);
         }
     }
@@ -237,7 +238,7 @@ proptest! {
 fn scale_free_and_shaped_runs_train() {
     let net = NetworkConfig::afgnet(5, 1).with_units(Units::ScaleFree);
     let mut c = tiny(Algo::Ddqn, net, 60);
-    c.greedy_shaping = true;
+    c.shaping = Shaping::Greedy;
     c.n_step = 3;
     let mut t = Trainer::new(c).unwrap();
     let mut losses = Vec::new();
@@ -253,6 +254,8 @@ fn scale_free_and_shaped_runs_train() {
 fn the_gain_residual_refuses_shaping() {
     let net = NetworkConfig::AfgNet(afg_learn::AfgNetConfig::new(5).with_gain_residual(Some(true)));
     let mut c = tiny(Algo::Ddqn, net, 10);
-    c.greedy_shaping = true;
-    assert!(matches!(c.check(), Err(LearnError::InvalidConfig(_))));
+    for shaping in [Shaping::Greedy, Shaping::Optimal] {
+        c.shaping = shaping;
+        assert!(matches!(c.check(), Err(LearnError::InvalidConfig(_))));
+    }
 }

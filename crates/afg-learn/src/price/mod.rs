@@ -123,6 +123,66 @@ impl PriceModel {
     }
 }
 
+/// What a price-model training run leaves beside its model ([`PriceModel::FILE_NAME`])
+/// and its log of rounds ([`PriceRunSummary::LOG_FILE_NAME`], one [`PriceRound`] per
+/// line): enough to rerun the run and to say what it cost.
+///
+/// # Examples
+/// ```
+/// use afg_learn::{PriceRound, PriceRunSummary};
+/// let dir = std::env::temp_dir().join(format!("afg_price_summary_doc_{}", std::process::id()));
+/// std::fs::create_dir_all(&dir)?;
+/// let summary = PriceRunSummary {
+///     command: "cargo xtask train-price --scale 60 --tasks 5 --seed 0 --out x".into(),
+///     wall_s: 12.5,
+///     last: PriceRound { round: 3, states: 10, expert_share: 0.5, loss: 0.01, sequential: 99.0, one_shot: 97.0 },
+/// };
+/// summary.save(&dir)?;
+/// assert_eq!(PriceRunSummary::load(&dir)?, summary);
+/// # std::fs::remove_dir_all(&dir)?;
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PriceRunSummary {
+    /// The command that reproduces the run.
+    pub command: String,
+    /// Wall time of the whole run.
+    pub wall_s: f64,
+    /// The last round.
+    pub last: PriceRound,
+}
+
+impl PriceRunSummary {
+    /// The summary's file name in a run directory.
+    pub const FILE_NAME: &str = "summary.json";
+    /// The file name of the run's log, one JSON [`PriceRound`] per line.
+    pub const LOG_FILE_NAME: &str = "log.jsonl";
+
+    /// Writes the summary into run directory `dir` (temporary file, then rename).
+    ///
+    /// # Errors
+    /// [`LearnError::Weights`] if the file cannot be written.
+    pub fn save(&self, dir: &Path) -> Result<(), LearnError> {
+        let json = serde_json::to_string_pretty(self).expect("a summary always serialises");
+        afg_game::io::write_atomic(&dir.join(Self::FILE_NAME), json.as_bytes())?;
+        Ok(())
+    }
+
+    /// Reads the summary of run directory `dir`.
+    ///
+    /// # Errors
+    /// [`LearnError::Weights`] naming the file if it is missing or malformed.
+    pub fn load(dir: &Path) -> Result<Self, LearnError> {
+        let path = dir.join(Self::FILE_NAME);
+        let error = |reason: String| LearnError::Weights {
+            path: path.display().to_string(),
+            reason,
+        };
+        let text = std::fs::read_to_string(&path).map_err(|e| error(e.to_string()))?;
+        serde_json::from_str(&text).map_err(|e| error(format!("not a price-run summary: {e}")))
+    }
+}
+
 /// The price model as an [`Allocator`].
 ///
 /// # Examples

@@ -9,8 +9,7 @@ use rand::Rng;
 use super::Trainer;
 use super::replay::Episode;
 use crate::{
-    GraphTensors, InferBackend, LearnError, double_dqn_target, dqn_target,
-    greedy_completion_welfare, n_step_reward, q_star,
+    GraphTensors, InferBackend, LearnError, double_dqn_target, dqn_target, n_step_reward, q_star,
 };
 
 impl Trainer {
@@ -40,8 +39,8 @@ impl Trainer {
     }
 
     /// The exact `Q*(s_t, ·)` of episode `ep`'s step `t`, whose state is `a`, in the
-    /// run's reward convention: minus the shaping potential
-    /// `Φ(s) = W(greedy completion of s) − W(s)` with `greedy_shaping`, divided by the
+    /// run's reward convention: minus the shaping potential Φ(s) of the run's
+    /// [`Shaping`](crate::Shaping), divided by the
     /// welfare unit with `reward_scaling`; `None` where the task is full.
     fn q_star_labels(
         &self,
@@ -49,11 +48,7 @@ impl Trainer {
         a: &Assignment,
         t: usize,
     ) -> Result<Vec<Option<f32>>, LearnError> {
-        let offset = if self.config.greedy_shaping {
-            ep.instance.welfare(a) - greedy_completion_welfare(&ep.instance, a)
-        } else {
-            0.0
-        };
+        let offset = -self.config.shaping.potential(&ep.instance, a);
         let unit = self.reward_unit(&ep.instance);
         Ok(q_star(&ep.instance, a, RobotId(t as u32))?
             .into_iter()
@@ -121,7 +116,7 @@ impl Trainer {
                 .iter()
                 .map(|&j| TaskId(u32::from(j)))
                 .collect();
-            let reward = n_step_reward(&ep.instance, &mut a, t, &taken, self.config.greedy_shaping);
+            let reward = n_step_reward(&ep.instance, &mut a, t, &taken, self.config.shaping);
             rewards.push((reward / self.reward_unit(&ep.instance)) as f32);
             next_row.push((end < n).then(|| {
                 next.push(
@@ -175,13 +170,13 @@ mod tests {
     use afg_baseline::{Allocator, Optimum};
 
     use super::*;
-    use crate::NetworkConfig;
     use crate::train::{Algo, TrainConfig};
+    use crate::{NetworkConfig, Shaping};
 
     /// Checks every step of every episode in the replay buffer of a small `QStar` run.
-    fn replay_labels(shaping: bool, check: impl Fn(&Episode, usize, f32)) {
+    fn replay_labels(shaping: Shaping, check: impl Fn(&Episode, usize, f32)) {
         let mut c = TrainConfig::new(7, Algo::QStar, NetworkConfig::afgnet(3, 0), 10, 1);
-        (c.greedy_shaping, c.reward_scaling, c.validation_instances) = (shaping, false, 2);
+        (c.shaping, c.reward_scaling, c.validation_instances) = (shaping, false, 2);
         let mut t = Trainer::new(c).unwrap();
         while t.replay.len() < 20 {
             t.act(1.0).unwrap();
@@ -206,7 +201,7 @@ mod tests {
 
     #[test]
     fn unshaped_q_star_labels_start_at_the_optimum() {
-        replay_labels(false, |ep, step, best| {
+        replay_labels(Shaping::None, |ep, step, best| {
             if step == 0 {
                 let opt = Optimum.allocate(&ep.instance).unwrap().assignment;
                 let opt = ep.instance.welfare(&opt) as f32;
@@ -222,11 +217,19 @@ mod tests {
     fn shaped_q_star_labels_are_what_an_optimal_finish_adds_over_greedy() {
         // Greedy's own first choice completes greedily, so the best label is ≥ 0; the
         // last robot's greedy choice is optimal, so there it is 0.
-        replay_labels(true, |_, step, best| {
+        replay_labels(Shaping::Greedy, |_, step, best| {
             assert!(best > -1e-4, "step {step}: {best}");
             if step == 6 {
                 assert!(best.abs() < 1e-4, "last step: {best}");
             }
+        });
+    }
+
+    #[test]
+    fn optimally_shaped_q_star_labels_are_advantages_with_best_zero() {
+        // Φ = V*: the shaped Q* is Q*(s, a) − V*(s), whose maximum is 0 at every state.
+        replay_labels(Shaping::Optimal, |_, step, best| {
+            assert!(best.abs() < 1e-4, "step {step}: {best}");
         });
     }
 

@@ -4,7 +4,7 @@ use afg_baseline::Allocator;
 use afg_game::{GeneratorConfig, Instance};
 use serde::{Deserialize, Serialize};
 
-use crate::{LearnError, NetworkConfig};
+use crate::{LearnError, NetworkConfig, Shaping};
 
 /// What the network's Q values are fitted to: a bootstrap rule, or the exact `Q*`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -17,7 +17,7 @@ pub enum Algo {
     /// Every allowed action's value regressed on the exact `Q*(s, a)` of the sequential
     /// MDP ([`crate::q_star`]), on the states the ε-greedy policy of the network visits
     /// (as in DAgger), in the run's reward convention: divided by the welfare unit with
-    /// `reward_scaling`, minus the shaping potential with `greedy_shaping` (the exact
+    /// `reward_scaling`, minus the shaping potential of `shaping` (the exact
     /// value that the TD targets estimate). Supervised, not reinforcement learning, and
     /// not in the paper (ours).
     QStar,
@@ -104,16 +104,21 @@ pub struct TrainConfig {
     /// Rewards in the network's welfare unit ([`afg_graph::Units::welfare_unit`], the
     /// task features' unit) instead of raw welfare.
     pub reward_scaling: bool,
-    /// Potential-based reward shaping (Ng, Harada and Russell, 1999) with the potential
-    /// Φ(s) = W(greedy completion of s) − W(s), the welfare that one-pass greedy would
-    /// still add from s. The shaped reward of steps t..t+n is then
-    /// `W(greedy completion of s_{t+n}) − W(greedy completion of s_t)`, and the network
-    /// learns `Q(s, a) − Φ(s)`: what the policy gains over finishing greedily, O(action
-    /// gaps) instead of O(N). Φ does not depend on the action, so the optimal policy and
-    /// the greedy policy of a learned Q are unchanged. Not in the paper; files written
-    /// before it existed load as `false`.
-    #[serde(default)]
-    pub greedy_shaping: bool,
+    /// Potential-based reward shaping (Ng, Harada and Russell, 1999; [`Shaping`]): with
+    /// [`Shaping::Greedy`] the potential is Φ(s) = W(greedy completion of s) − W(s), the
+    /// welfare that one-pass greedy would still add from s, and the shaped reward of
+    /// steps t..t+n is `W(greedy completion of s_{t+n}) − W(greedy completion of s_t)`:
+    /// the network learns `Q(s, a) − Φ(s)`, what the policy gains over finishing
+    /// greedily, O(action gaps) instead of O(N). Φ does not depend on the action, so
+    /// the optimal policy and the greedy policy of a learned Q are unchanged. Not in the
+    /// paper. Files written before it was an enum store `"greedy_shaping": true/false`
+    /// (read as greedy / none); files older still load as none.
+    #[serde(
+        default,
+        alias = "greedy_shaping",
+        deserialize_with = "shaping_or_flag"
+    )]
+    pub shaping: Shaping,
     /// Gradient norm clipping.
     pub grad_clip: Option<f32>,
     /// Size of the fixed validation set (seeded, disjoint from datasets and training).
@@ -173,7 +178,7 @@ impl TrainConfig {
     /// Defaults for `robots` and a step budget: batch 256, Adam 1e-3 (the paper's 1e-4
     /// learns too slowly for a CPU budget; docs/training.md), ε 1.0 → 0.05 over
     /// 10 % of the steps, 16 parallel episodes, Huber loss, reward scaling, greedy
-    /// reward shaping ([`TrainConfig::greedy_shaping`]), gradient
+    /// reward shaping ([`TrainConfig::shaping`]), gradient
     /// clipping at norm 10, and a target sync every `clamp(steps / 20, 10, 1000)` steps
     /// (the paper's c = 1000 assumes 2.5 M steps; a CPU budget needs more syncs).
     pub fn new(robots: usize, algo: Algo, network: NetworkConfig, steps: u64, seed: u64) -> Self {
@@ -196,7 +201,7 @@ impl TrainConfig {
             warmup: 2_048,
             huber: true,
             reward_scaling: true,
-            greedy_shaping: true,
+            shaping: Shaping::Greedy,
             grad_clip: Some(10.0),
             validation_instances: 32,
             validate_every: (steps / 40).max(1),
@@ -220,7 +225,7 @@ impl TrainConfig {
     pub fn paper(robots: usize, algo: Algo, network: NetworkConfig, steps: u64, seed: u64) -> Self {
         TrainConfig {
             preset: Preset::Paper,
-            greedy_shaping: false,
+            shaping: Shaping::None,
             huber: false,
             reward_scaling: false,
             grad_clip: None,
@@ -294,7 +299,7 @@ impl TrainConfig {
             return bad("replay_capacity must hold an episode and the warmup");
         }
         if matches!(&self.network, NetworkConfig::AfgNet(c) if c.gain_residual == Some(true))
-            && (!self.reward_scaling || self.greedy_shaping)
+            && (!self.reward_scaling || self.shaping != Shaping::None)
         {
             return bad(
                 "the gain residual is in the features' unit and adds the unshaped reward: it needs reward scaling and no shaping",
@@ -405,4 +410,47 @@ pub(crate) fn validation_set(
         })
         .collect::<Result<_, LearnError>>()?;
     Ok((instances, optima))
+}
+
+/// Reads [`TrainConfig::shaping`] as a name (`"none"`, `"greedy"`, `"optimal"`) or as
+/// the boolean `greedy_shaping` flag of older files.
+fn shaping_or_flag<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Shaping, D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum Stored {
+        Flag(bool),
+        Name(Shaping),
+    }
+    Ok(match Stored::deserialize(d)? {
+        Stored::Flag(true) => Shaping::Greedy,
+        Stored::Flag(false) => Shaping::None,
+        Stored::Name(s) => s,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shaping_reads_its_name_and_the_older_boolean_flag() {
+        let config = TrainConfig::new(20, Algo::Ddqn, NetworkConfig::afgnet(5, 0), 10, 0);
+        let json = serde_json::to_string(&config).unwrap();
+        assert!(json.contains(r#""shaping":"greedy""#), "{json}");
+        let read = |text: &str| serde_json::from_str::<TrainConfig>(text).unwrap().shaping;
+        assert_eq!(read(&json), Shaping::Greedy);
+        let named = json.replace(r#""shaping":"greedy""#, r#""shaping":"optimal""#);
+        assert_eq!(read(&named), Shaping::Optimal);
+        for (flag, shaping) in [("true", Shaping::Greedy), ("false", Shaping::None)] {
+            let old = json.replace(
+                r#""shaping":"greedy""#,
+                &format!(r#""greedy_shaping":{flag}"#),
+            );
+            assert_eq!(read(&old), shaping, "{old}");
+        }
+        let older = json.replace(r#""shaping":"greedy","#, "");
+        assert_eq!(read(&older), Shaping::None);
+        let wrong = json.replace(r#""shaping":"greedy""#, r#""shaping":"perfect""#);
+        assert!(serde_json::from_str::<TrainConfig>(&wrong).is_err());
+    }
 }

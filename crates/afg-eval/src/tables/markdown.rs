@@ -1,168 +1,13 @@
-//! The paper's Tables I and II as data, and their Markdown: what
-//! `cargo xtask reproduce-tables` prints and writes.
+//! The tables in Markdown, the headline under them and the list of committed models.
 
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Duration;
 
 use afg_baseline::Method;
-use afg_game::Instance;
-use afg_learn::{Algo, LearnedPolicy};
-use serde::Serialize;
 
-use crate::{EvalError, ModelSpec, PriceSpec, Summary, evaluate, paper};
-
-/// One row of a table: a measured method, and the learned model it measures when it
-/// is one of Table I's models at its own scale (then the paper's number stands beside
-/// it).
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Row {
-    /// The measurement.
-    #[serde(flatten)]
-    pub summary: Summary,
-    /// The model, for a Table I model at the scale it was trained at.
-    #[serde(skip)]
-    pub model: Option<ModelSpec>,
-}
-
-impl Row {
-    /// A row that is not one of Table I's models at its own scale.
-    pub fn new(summary: Summary) -> Self {
-        Row {
-            summary,
-            model: None,
-        }
-    }
-
-    /// The row of `model` at the scale it was trained at.
-    pub fn of_model(model: ModelSpec, summary: Summary) -> Self {
-        Row {
-            summary,
-            model: Some(model),
-        }
-    }
-}
-
-/// The rows of one N.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Scale {
-    /// Robots per instance.
-    pub robots: usize,
-    /// The rows, in table order.
-    pub rows: Vec<Row>,
-}
-
-/// Every classical method ([`Method::ALL`]) on `insts`, whose optima are `opt`; the
-/// decentralised DA (the slowest: a message-passing simulation of the dynamics that
-/// [`Method::Da`] runs centrally) on the first `simulated` instances only, and not at
-/// all above N = 1000.
-///
-/// # Errors
-/// The allocators' errors.
-///
-/// # Examples
-/// ```
-/// use afg_eval::{optima, tables::classical_rows};
-/// use afg_game::GeneratorConfig;
-/// let insts: Vec<_> = (0..3).map(|s| GeneratorConfig::paper(20, 5, s).generate()).collect::<Result<_, _>>()?;
-/// let rows = classical_rows(&insts, &optima(&insts)?, 2)?;
-/// let count = |label: &str| rows.iter().find(|r| r.summary.method == label).unwrap().summary.instances;
-/// assert_eq!((count("OPT"), count("GRAPE DA, decentralised")), (3, 2));
-/// # Ok::<(), Box<dyn std::error::Error>>(())
-/// ```
-pub fn classical_rows(
-    insts: &[Instance],
-    opt: &[f64],
-    simulated: usize,
-) -> Result<Vec<Row>, EvalError> {
-    let n = insts.first().map_or(0, Instance::num_robots);
-    let mut rows = Vec::new();
-    for method in Method::ALL {
-        let k = match method {
-            Method::DaDecentralised if n > 1000 => continue,
-            Method::DaDecentralised => simulated.min(insts.len()),
-            _ => insts.len(),
-        };
-        rows.push(Row::new(evaluate(
-            method.label(),
-            method.allocator(0).as_ref(),
-            &insts[..k],
-            &opt[..k],
-        )?));
-    }
-    Ok(rows)
-}
-
-/// The committed AFGNet models with a price head (ours, [`ModelSpec::PRICE_HEADED`])
-/// under `root` on `insts` (N robots each), without repair: exact rollouts up to
-/// N = 100 and one network pass per N/10 robots beyond (ten passes); the Q* model also
-/// in one pass for all robots (one-shot). Models not committed give no rows.
-///
-/// # Errors
-/// A model that cannot be loaded, and the policies' errors.
-pub fn price_headed_rows(
-    root: &Path,
-    insts: &[Instance],
-    opt: &[f64],
-) -> Result<Vec<Row>, EvalError> {
-    let n = insts.first().map_or(0, Instance::num_robots);
-    let mut rows = Vec::new();
-    for spec in ModelSpec::PRICE_HEADED {
-        let run = spec.run_dir(root);
-        if !run.has_weights() {
-            continue;
-        }
-        let trained = if n == spec.trained_at {
-            String::new()
-        } else {
-            format!(", trained at N = {}", spec.trained_at)
-        };
-        let block = if n >= 500 { n / 10 } else { 1 };
-        let mut modes = vec![(
-            block,
-            match block {
-                1 => String::new(),
-                b => format!(", network every {b} robots"),
-            },
-        )];
-        if spec.algo == Algo::QStar {
-            modes.push((n, ", one-shot (one pass)".to_owned()));
-        }
-        for (block, mode) in modes {
-            let policy = LearnedPolicy::load(&run.weights())?.with_block(block)?;
-            let label = spec.label_with(&format!("{mode}{trained}"));
-            rows.push(Row::new(evaluate(&label, &policy, insts, opt)?));
-        }
-    }
-    Ok(rows)
-}
-
-/// The committed price model's rows (ours, [`PriceSpec::committed`]) under `root` on
-/// `insts`: both modes, and from N = 500 on the sequential mode with prices once per
-/// N/100 robots too; none while the model is not committed.
-///
-/// # Errors
-/// A model that cannot be loaded, and the policy's errors.
-pub fn price_model_rows(
-    root: &Path,
-    insts: &[Instance],
-    opt: &[f64],
-) -> Result<Vec<Row>, EvalError> {
-    let n = insts.first().map_or(0, Instance::num_robots);
-    let [sequential, one_shot] = PriceSpec::committed();
-    let blocked = (n >= 500).then(|| sequential.with_block(n / 100));
-    let mut rows = Vec::new();
-    for spec in [Some(sequential), blocked, Some(one_shot)]
-        .into_iter()
-        .flatten()
-    {
-        if spec.model_path(root).exists() {
-            let policy = spec.load(root)?;
-            rows.push(Row::new(evaluate(&spec.label(), &policy, insts, opt)?));
-        }
-    }
-    Ok(rows)
-}
+use super::Scale;
+use crate::{EvalError, ModelSpec, Summary, dataset, paper};
 
 /// A duration with three significant digits and a unit: `12.3 µs`, `4.56 ms`, `7.89 s`.
 ///
@@ -319,9 +164,64 @@ pub fn headline(table1: &[Scale]) -> String {
     s
 }
 
+/// The training budget of every committed model the tables use, from its run
+/// directory's manifest and configuration: a Markdown section with the command that
+/// retrains each.
+///
+/// # Errors
+/// A committed manifest or configuration that cannot be read.
+pub fn models_table(root: &Path) -> Result<String, EvalError> {
+    let mut md = String::from(
+        "\n## The committed models\n\n\
+         Each row's command retrains it (`manifest.json` beside the weights; \
+         wall times are those of runs that shared the 2 cores with other work).\n\n\
+         | model | N | steps | learning rate | wall time | final validation, % of OPT | command |\n\
+         |---|---|---|---|---|---|---|\n",
+    );
+    let specs = ModelSpec::TABLE1_KINDS
+        .into_iter()
+        .flat_map(|(net, algo, variant)| {
+            dataset::TABLE1_SIZES.map(|n| ModelSpec::new(net, algo, variant, n))
+        })
+        .chain(ModelSpec::WARM_STARTS)
+        .chain(ModelSpec::PRICE_HEADED);
+    for spec in specs {
+        let run = spec.run_dir(root);
+        if !run.has_manifest() {
+            continue;
+        }
+        let manifest = run.manifest()?;
+        let config = run.config()?;
+        let lr = if config.lr_decay {
+            format!(
+                "{:.1e} → {:.1e} (annealed)",
+                config.lr,
+                config.learning_rate(config.steps)
+            )
+        } else {
+            format!("{:.1e} (constant)", config.lr)
+        };
+        let minutes = manifest.wall_time_s.unwrap_or(f64::NAN) / 60.0;
+        let pct = manifest
+            .final_validation
+            .as_ref()
+            .map_or(f64::NAN, |v| v.percent_of_opt);
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {lr} | {minutes:.0} min | {pct:.1} % | `{}` |",
+            spec.label(),
+            spec.trained_at,
+            config.steps,
+            manifest.command
+        );
+    }
+    Ok(md)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::tables::Row;
 
     fn summary(method: &str, pct: f64) -> Summary {
         Summary {
@@ -386,44 +286,6 @@ mod tests {
         let mut no_model = scale_60();
         no_model.rows.remove(0);
         assert!(headline(&[no_model]).contains("no AFGNet_DDQN model is committed yet"));
-    }
-
-    #[test]
-    fn the_price_headed_rows_name_their_mode_and_scale() {
-        let root = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."));
-        let labels = |n: usize| -> Vec<String> {
-            let insts = crate::dataset::load(root, n).unwrap();
-            let insts = &insts[..1];
-            let opt = crate::optima(insts).unwrap();
-            price_headed_rows(root, insts, &opt)
-                .unwrap()
-                .into_iter()
-                .map(|r| {
-                    assert!(r.summary.percent_of_opt > 90.0, "{}", r.summary.method);
-                    r.summary.method
-                })
-                .collect()
-        };
-        // The three committed models, the Q* one also in one pass.
-        let at_60 = labels(60);
-        assert_eq!(at_60.len(), 4, "{at_60:?}");
-        assert!(at_60.iter().all(|l| !l.contains("trained at")));
-        assert_eq!(at_60.iter().filter(|l| l.contains("one-shot")).count(), 1);
-        let at_500 = labels(500);
-        assert!(at_500.iter().all(|l| l.contains("trained at N = 60")));
-        // The price model: both modes, and prices once per N/100 robots from N = 500.
-        let insts = crate::dataset::load(root, 500).unwrap();
-        let opt = crate::optima(&insts[..1]).unwrap();
-        let price = price_model_rows(root, &insts[..1], &opt).unwrap();
-        assert_eq!(price.len(), 3);
-        assert!(price[1].summary.method.contains("prices every 5 robots"));
-        assert_eq!(
-            at_500
-                .iter()
-                .filter(|l| l.contains("network every 50 robots"))
-                .count(),
-            3
-        );
     }
 
     #[test]

@@ -1,0 +1,268 @@
+//! The paper's Tables I and II as data, and their Markdown: what
+//! `cargo xtask reproduce-tables` prints and writes. [`compute`] evaluates every row
+//! on the committed datasets and weights; [`markdown`] renders them.
+
+mod markdown;
+mod rows;
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use afg_game::Instance;
+use afg_learn::LearnedPolicy;
+use serde::Serialize;
+
+pub use markdown::{duration, headline, models_table, table1_markdown, table2_markdown};
+pub use rows::{classical_rows, price_headed_rows, price_model_rows};
+
+use crate::price_ablation::{PriceAblationRow, price_ablation, price_ablation_markdown};
+use crate::{EvalError, ModelSpec, Summary, Variant, dataset, evaluate, optima};
+
+/// One row of a table: a measured method, and the learned model it measures when it
+/// is one of Table I's models at its own scale (then the paper's number stands beside
+/// it).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Row {
+    /// The measurement.
+    #[serde(flatten)]
+    pub summary: Summary,
+    /// The model, for a Table I model at the scale it was trained at.
+    #[serde(skip)]
+    pub model: Option<ModelSpec>,
+}
+
+impl Row {
+    /// A row that is not one of Table I's models at its own scale.
+    pub fn new(summary: Summary) -> Self {
+        Row {
+            summary,
+            model: None,
+        }
+    }
+
+    /// The row of `model` at the scale it was trained at.
+    pub fn of_model(model: ModelSpec, summary: Summary) -> Self {
+        Row {
+            summary,
+            model: Some(model),
+        }
+    }
+}
+
+/// The rows of one N.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Scale {
+    /// Robots per instance.
+    pub robots: usize,
+    /// The rows, in table order.
+    pub rows: Vec<Row>,
+}
+
+/// Every table: what [`compute`] measures and [`markdown`] renders.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Tables {
+    /// A few instances per table only (a check of the pipeline, not results).
+    pub quick: bool,
+    /// Table I, one entry per N of [`dataset::TABLE1_SIZES`].
+    pub table1: Vec<Scale>,
+    /// Table II, one entry per N of [`dataset::TABLE2_SIZES`].
+    pub table2: Vec<Scale>,
+    /// The price model's ablation (ours).
+    pub price_ablation: Vec<PriceAblationRow>,
+    /// Instances per scale of the ablation.
+    pub price_ablation_instances: usize,
+    /// The paper's models expected under `models/` but not committed (rows omitted).
+    pub missing_models: Vec<String>,
+}
+
+/// Evaluates every method on the committed datasets under `root`, with the weights
+/// under `root/models`: Table I on the first 100 instances of each test set, Table II
+/// on 100 (the slowest rows on 20), or 3, 2 and 1 with `quick`. `on_scale` is called
+/// after each test set (for a progress bar; five calls in all).
+///
+/// # Errors
+/// A missing dataset, a model that cannot be loaded, or an allocator's error.
+pub fn compute(root: &Path, quick: bool, mut on_scale: impl FnMut()) -> Result<Tables, EvalError> {
+    let (t1_instances, t2_instances, t2_learned) = if quick { (3, 2, 1) } else { (100, 100, 20) };
+    let mut missing = Vec::new();
+    let mut table1 = Vec::new();
+    for n in dataset::TABLE1_SIZES {
+        let insts: Vec<Instance> = dataset::load(root, n)?
+            .into_iter()
+            .take(t1_instances)
+            .collect();
+        let opt = optima(&insts)?;
+        let mut rows = Vec::new();
+        for spec in ModelSpec::table1(n) {
+            let run = spec.run_dir(root);
+            if !run.has_weights() {
+                // Our variants are optional; the paper's three models are expected.
+                if !spec.is_ours() {
+                    missing.push(format!("models/{}", spec.dir_name()));
+                }
+                continue;
+            }
+            let policy = LearnedPolicy::load(&run.weights())?;
+            rows.push(Row::of_model(
+                spec,
+                evaluate(&spec.label(), &policy, &insts, &opt)?,
+            ));
+        }
+        // The N = 60 models at the other scales (the paper's "Pretrain_60" at N = 20, 100).
+        for pretrained in ModelSpec::TRANSFERRED {
+            let run = pretrained.run_dir(root);
+            if n != ModelSpec::PRETRAINED_AT && run.has_weights() {
+                let policy = LearnedPolicy::load(&run.weights())?;
+                let label = format!(
+                    "{} trained at N = {}",
+                    pretrained.label(),
+                    ModelSpec::PRETRAINED_AT
+                );
+                rows.push(Row::new(evaluate(&label, &policy, &insts, &opt)?));
+            }
+        }
+        // Models trained further at this N from a smaller one (warm starts).
+        for warm in ModelSpec::WARM_STARTS
+            .into_iter()
+            .filter(|w| w.trained_at == n)
+        {
+            let run = warm.run_dir(root);
+            if run.has_weights() {
+                let policy = LearnedPolicy::load(&run.weights())?;
+                rows.push(Row::new(evaluate(&warm.label(), &policy, &insts, &opt)?));
+            }
+        }
+        rows.extend(price_headed_rows(root, &insts, &opt)?);
+        rows.extend(price_model_rows(root, &insts, &opt)?);
+        rows.extend(classical_rows(&insts, &opt, insts.len())?);
+        on_scale();
+        table1.push(Scale { robots: n, rows });
+    }
+    let mut table2 = Vec::new();
+    for n in dataset::TABLE2_SIZES {
+        let insts: Vec<Instance> = dataset::load(root, n)?
+            .into_iter()
+            .take(t2_instances)
+            .collect();
+        let opt = optima(&insts)?;
+        let few = t2_learned.min(insts.len());
+        let mut rows = Vec::new();
+        rows.extend(classical_rows(&insts, &opt, few)?);
+        rows.extend(price_headed_rows(root, &insts, &opt)?);
+        rows.extend(price_model_rows(root, &insts, &opt)?);
+        // The paper's model and ours with the gain residual at every training N, then
+        // ours trained at N = 60 only.
+        let specs = [Variant::Paper, Variant::GainResidual]
+            .into_iter()
+            .flat_map(|variant| {
+                dataset::TABLE1_SIZES.map(|trained| ModelSpec {
+                    variant,
+                    ..ModelSpec::afgnet_ddqn(trained)
+                })
+            })
+            .chain(ModelSpec::TRANSFERRED.into_iter().filter(|s| s.is_ours()));
+        for spec in specs {
+            let run = spec.run_dir(root);
+            if !run.has_weights() {
+                continue;
+            }
+            let policy = LearnedPolicy::load(&run.weights())?;
+            let label = format!("{} trained at N = {}", spec.label(), spec.trained_at);
+            rows.push(Row::new(evaluate(
+                &label,
+                &policy,
+                &insts[..few],
+                &opt[..few],
+            )?));
+            if spec == ModelSpec::afgnet_ddqn(spec.trained_at) {
+                // The fast variant: one pass per N/100 robots, then balanced repair.
+                let policy = policy.with_block(n / 100)?.with_repair(true);
+                let label = format!("{label}, block {}, + repair", policy.block());
+                rows.push(Row::new(evaluate(&label, &policy, &insts, &opt)?));
+            }
+        }
+        on_scale();
+        table2.push(Scale { robots: n, rows });
+    }
+    missing.sort();
+    missing.dedup();
+    Ok(Tables {
+        quick,
+        table1,
+        table2,
+        price_ablation: price_ablation(root, t1_instances)?,
+        price_ablation_instances: t1_instances,
+        missing_models: missing,
+    })
+}
+
+/// What Table I's rows are, under it.
+const TABLE1_NOTE: &str = "The learned rows keep the paper's networks and algorithms; where their training departs from the paper (units of the inputs and rewards, reward shaping, loss, learning rate, target sync) is in each model's command under \"The committed models\" in docs/RESULTS.md, and explained in docs/training.md. The rows marked (ours) are not the paper's method: \"AFGNet, exact Q* regression\" is the paper's network trained by regression on the exact Q* of the sequential MDP instead of TD targets (docs/training.md); \"AFGNet + price head\" (docs/price.md) is the paper's AFGNet with a price head added, Q(s, a) = π_a(s) − β d(t, a) + c_a(s), which is Nearest before training, trained on the exact Q*, by Double DQN, or by Double DQN with demonstrations from the optimum, and run without any repair (its one-shot row evaluates the network once for all robots); the price model (docs/price.md) is a per-task price network without the graph embedding, trained on the same Q*, run without any repair. \"Blind round robin\" gives each robot the task with the fewest robots so far and never looks at a task: no policy that cannot see the tasks, such as the paper's S2V, does better on average (docs/training.md).\n\n";
+
+/// Every table in Markdown: Table I with the note on its rows, Table II, the price
+/// model's ablation, and the models that are missing.
+pub fn markdown(tables: &Tables) -> String {
+    let mut s = table1_markdown(&tables.table1);
+    s.push_str(TABLE1_NOTE);
+    s.push_str(&table2_markdown(&tables.table2));
+    if !tables.price_ablation.is_empty() {
+        s += &price_ablation_markdown(&tables.price_ablation, tables.price_ablation_instances);
+    }
+    if !tables.missing_models.is_empty() {
+        let _ = writeln!(
+            s,
+            "Not trained yet (rows omitted): {}.",
+            tables.missing_models.join(", ")
+        );
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use afg_baseline::Method;
+
+    use super::*;
+
+    /// The tables with timings removed.
+    fn without_timings(t: &Tables) -> Tables {
+        let mut t = t.clone();
+        for scale in t.table1.iter_mut().chain(&mut t.table2) {
+            for row in &mut scale.rows {
+                row.summary.seconds_per_instance = 0.0;
+            }
+        }
+        t
+    }
+
+    #[test]
+    fn quick_tables_are_reproducible_and_opt_dominates() {
+        let root = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."));
+        let mut calls = 0;
+        let a = compute(root, true, || calls += 1).unwrap();
+        assert_eq!(calls, 5);
+        let b = compute(root, true, || {}).unwrap();
+        assert_eq!(without_timings(&a), without_timings(&b));
+        for scale in a.table1.iter().chain(&a.table2) {
+            let rows: Vec<_> = scale.rows.iter().map(|r| &r.summary).collect();
+            let opt = rows
+                .iter()
+                .find(|r| r.method == Method::Opt.label())
+                .unwrap();
+            assert!((opt.percent_of_opt - 100.0).abs() < 1e-9);
+            for r in &rows {
+                assert!(
+                    r.welfare <= opt.welfare + 1e-9 * opt.welfare.abs()
+                        || r.instances < opt.instances,
+                    "{}",
+                    r.method
+                );
+                assert!(r.percent_of_opt <= 100.0 + 1e-9, "{}", r.method);
+            }
+        }
+        let tables = markdown(&a);
+        assert!(
+            tables.contains("Table I") && tables.contains("Table II") && tables.contains("22.61")
+        );
+    }
+}
