@@ -25,6 +25,9 @@ pub fn command_line(c: &TrainConfig, dir: &Path) -> String {
         c.steps,
         c.seed
     );
+    if c.network.tasks() != afg_eval::dataset::TASKS {
+        cmd += &format!(" --tasks {}", c.network.tasks());
+    }
     if c.batch != default.batch {
         cmd += &format!(" --batch {}", c.batch);
     }

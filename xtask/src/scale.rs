@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 use afg_baseline::Allocator;
 use afg_baseline::Method;
 use afg_game::{GeneratorConfig, Instance};
-use afg_learn::{LearnedPolicy, NetworkConfig, PriceMode, PriceModel, PricePolicy};
+use afg_learn::{LearnedPolicy, NetworkConfig, PriceMode, PriceModel, PricePolicy, RunDir};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use serde::{Deserialize, Serialize};
@@ -44,10 +44,15 @@ pub struct ScaleArgs {
     /// directory holds no price.json.
     #[arg(long, default_value = "models/price_n60")]
     price_model: PathBuf,
-    /// AFGNet with a price head (ours), run at M = 5 without repair, with 10 network
-    /// passes and in one pass (one-shot); skipped if the directory holds no model.
-    #[arg(long, default_value = "models/afgnet_qstar_price_n60")]
-    price_headed: PathBuf,
+    /// AFGNet with a price head (ours): run directories, each used at the M its network
+    /// was built for, without repair, with 10 network passes and in one pass (one-shot);
+    /// a directory that holds no model is skipped.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "models/afgnet_qstar_price_n60,models/afgnet_qstar_price_m50_n60"
+    )]
+    price_headed: Vec<PathBuf>,
     /// Seed of the instances (one per N and M).
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -134,7 +139,7 @@ fn run_case(case: Case) -> Result<Outcome> {
         }
         (None, None) => {
             let policy = match &case.model {
-                Some(dir) => LearnedPolicy::load(&afg_learn::RunDir::new(dir).weights())
+                Some(dir) => LearnedPolicy::load(&RunDir::new(dir).weights())
                     .with_context(|| format!("loading {}", dir.display()))?,
                 None => LearnedPolicy::new(NetworkConfig::afgnet(case.tasks, 0)),
             };
@@ -175,7 +180,20 @@ fn spawn(case: &Case) -> Result<Outcome> {
     Ok(serde_json::from_slice(&output.stdout)?)
 }
 
-fn cases(args: &ScaleArgs) -> Vec<Case> {
+fn cases(args: &ScaleArgs) -> Result<Vec<Case>> {
+    // The committed price-headed models and the M each was built for.
+    let mut price_headed = Vec::new();
+    for dir in &args.price_headed {
+        let run = RunDir::new(dir);
+        if run.has_weights() {
+            let tasks = run
+                .config()
+                .with_context(|| format!("reading {}", dir.display()))?
+                .network
+                .tasks();
+            price_headed.push((dir.clone(), tasks));
+        }
+    }
     let mut cases = Vec::new();
     for &tasks in &args.tasks {
         for &robots in &args.sizes {
@@ -190,10 +208,10 @@ fn cases(args: &ScaleArgs) -> Vec<Case> {
                 price: None,
                 no_repair: false,
             };
-            if tasks == 5 && args.price_headed.join("model.json").exists() {
+            for dir in price_headed.iter().filter(|(_, m)| *m == tasks) {
                 for block in [robots.div_ceil(10), robots] {
                     cases.push(Case {
-                        model: Some(args.price_headed.clone()),
+                        model: Some(dir.0.clone()),
                         block,
                         no_repair: true,
                         ..base.clone()
@@ -240,7 +258,7 @@ fn cases(args: &ScaleArgs) -> Vec<Case> {
             }
         }
     }
-    cases
+    Ok(cases)
 }
 
 fn label(case: &Case) -> String {
@@ -279,7 +297,7 @@ pub fn run(args: ScaleArgs) -> Result<()> {
             args.model.display()
         );
     }
-    let cases = cases(&args);
+    let cases = cases(&args)?;
     let bar = crate::progress(cases.len() as u64, "bench-scale");
     let mut outcomes = Vec::new();
     for case in &cases {

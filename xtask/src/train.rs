@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use afg_baseline::Method;
+use afg_eval::dataset;
 use afg_graph::Units;
 use afg_learn::{
     Algo, Demonstrations, LogEvent, NetworkConfig, Preset, RunDir, Shaping, TrainConfig, Trainer,
@@ -53,6 +54,10 @@ pub struct TrainArgs {
     /// Robots per training instance N (defaults exist for 20, 60 and 100).
     #[arg(long)]
     pub(crate) scale: Option<usize>,
+    /// Tasks per training instance M (the network is built for this M) [default: 5,
+    /// the paper's].
+    #[arg(long)]
+    pub(crate) tasks: Option<usize>,
     /// What the Q values are fitted to (default ddqn).
     #[arg(long, value_enum)]
     pub(crate) algo: Option<AlgoArg>,
@@ -163,9 +168,10 @@ impl TrainArgs {
             })?,
         };
         let seed = self.seed.unwrap_or(0);
+        let tasks = self.tasks.unwrap_or(dataset::TASKS);
         let network = match self.net.unwrap_or(NetArg::Afgnet) {
             NetArg::Afgnet => NetworkConfig::AfgNet(
-                afg_learn::AfgNetConfig::new(5)
+                afg_learn::AfgNetConfig::new(tasks)
                     .with_seed(seed)
                     .with_gain_residual(self.gain_residual.then_some(true))
                     .with_price_head(self.price_head.then_some(true)),
@@ -173,7 +179,7 @@ impl TrainArgs {
             NetArg::S2v if self.gain_residual || self.price_head => {
                 anyhow::bail!("--gain-residual and --price-head exist for AFGNet only")
             }
-            NetArg::S2v => NetworkConfig::s2v(5, seed),
+            NetArg::S2v => NetworkConfig::s2v(tasks, seed),
         };
         let network = network.with_units(match self.units.unwrap_or(UnitsArg::Bounded) {
             UnitsArg::ScaleFree => Units::ScaleFree,
@@ -236,6 +242,7 @@ impl TrainArgs {
 
     fn any_setting_given(&self) -> bool {
         self.scale.is_some()
+            || self.tasks.is_some()
             || self.algo.is_some()
             || self.net.is_some()
             || self.steps.is_some()
@@ -440,6 +447,7 @@ mod tests {
             "--scale 20 --paper --shaping greedy",
             "--scale 100 --init-from models/afgnet_ddqn_n60 --eps-start 0.1",
             "--scale 60 --price-head --algo qstar",
+            "--scale 60 --tasks 50 --price-head --algo qstar",
             "--scale 60 --price-head --demos 64 --demo-margin 0.1 --demo-share 0.5",
         ] {
             let argv = ["cargo xtask", "train"]
