@@ -34,6 +34,10 @@ pub enum Variant {
     /// Ours: [`Variant::PriceHead`] trained with demonstrations from the exact optimum
     /// and a large-margin loss (`--demos`, as in Deep Q-learning from Demonstrations).
     PriceHeadDemos,
+    /// Ours: the paper's network and algorithm with the reward shaped by the optimal
+    /// completion (`--shaping optimal`, [`afg_learn::Shaping::Optimal`]): the optimal
+    /// policy is unchanged, but the rewards carry the exact optimum's values.
+    OptimalShaping,
 }
 
 /// One trained model: network, algorithm, variant and the N it was trained at.
@@ -52,6 +56,9 @@ pub enum Variant {
 /// assert_eq!(exact.dir_name(), "afgnet_qstar_n60");
 /// assert_eq!(exact.label(), "AFGNet, exact Q* regression (ours)");
 /// assert!(exact.is_ours());
+/// let shaped = ModelSpec::TRANSFERRED[2];
+/// assert_eq!(shaped.dir_name(), "afgnet_ddqn_optshape_n60");
+/// assert_eq!(shaped.label(), "AFGNet_DDQN, optimal-completion shaping (ours)");
 /// let warm = ModelSpec::WARM_STARTS[1];
 /// assert_eq!(warm.dir_name(), "s2v_ddqn_warm_n60");
 /// assert_eq!(warm.label(), "S2V_DDQN, warm start from the N = 20 model");
@@ -118,14 +125,20 @@ impl ModelSpec {
     }
 
     /// The models trained at [`ModelSpec::PRETRAINED_AT`] that the tables also run at
-    /// every other N: the paper's AFGNet DDQN, and AFGNet trained on the exact Q*
-    /// (ours).
-    pub const TRANSFERRED: [ModelSpec; 2] = [
+    /// every other N: the paper's AFGNet DDQN, AFGNet trained on the exact Q* (ours)
+    /// and AFGNet DDQN with the optimal completion as shaping potential (ours).
+    pub const TRANSFERRED: [ModelSpec; 3] = [
         Self::afgnet_ddqn(Self::PRETRAINED_AT),
         Self::new(
             Net::AfgNet,
             Algo::QStar,
             Variant::Paper,
+            Self::PRETRAINED_AT,
+        ),
+        Self::new(
+            Net::AfgNet,
+            Algo::Ddqn,
+            Variant::OptimalShaping,
             Self::PRETRAINED_AT,
         ),
     ];
@@ -179,6 +192,7 @@ impl ModelSpec {
             Variant::WarmStart { .. } => "_warm",
             Variant::PriceHead => "_price",
             Variant::PriceHeadDemos => "_price_demos",
+            Variant::OptimalShaping => "_optshape",
         };
         format!("{net}_{}{variant}_n{}", self.algo.name(), self.trained_at)
     }
@@ -212,6 +226,7 @@ impl ModelSpec {
             (_, Variant::PriceHeadDemos) => format!("{net}_{algo} + price head + demonstrations"),
             (_, Variant::Paper) => format!("{net}_{algo}"),
             (_, Variant::GainResidual) => format!("{net}_{algo} + gain residual"),
+            (_, Variant::OptimalShaping) => format!("{net}_{algo}, optimal-completion shaping"),
             (_, Variant::WarmStart { from }) => {
                 format!("{net}_{algo}, warm start from the N = {from} model")
             }
@@ -225,7 +240,10 @@ impl ModelSpec {
     pub fn is_ours(&self) -> bool {
         matches!(
             self.variant,
-            Variant::GainResidual | Variant::PriceHead | Variant::PriceHeadDemos
+            Variant::GainResidual
+                | Variant::PriceHead
+                | Variant::PriceHeadDemos
+                | Variant::OptimalShaping
         ) || self.algo == Algo::QStar
     }
 }

@@ -183,6 +183,11 @@ pub fn models_table(root: &Path) -> Result<String, EvalError> {
         .flat_map(|(net, algo, variant)| {
             dataset::TABLE1_SIZES.map(|n| ModelSpec::new(net, algo, variant, n))
         })
+        .chain(
+            ModelSpec::TRANSFERRED
+                .into_iter()
+                .filter(|s| !ModelSpec::table1(s.trained_at).contains(s)),
+        )
         .chain(ModelSpec::WARM_STARTS)
         .chain(ModelSpec::PRICE_HEADED);
     for spec in specs {

@@ -108,18 +108,25 @@ pub fn compute(root: &Path, quick: bool, mut on_scale: impl FnMut()) -> Result<T
                 evaluate(&spec.label(), &policy, &insts, &opt)?,
             ));
         }
-        // The N = 60 models at the other scales (the paper's "Pretrain_60" at N = 20, 100).
+        // The N = 60 models at the other scales (the paper's "Pretrain_60" at N = 20, 100),
+        // and at N = 60 those that are not one of Table I's kinds.
         for pretrained in ModelSpec::TRANSFERRED {
             let run = pretrained.run_dir(root);
-            if n != ModelSpec::PRETRAINED_AT && run.has_weights() {
-                let policy = LearnedPolicy::load(&run.weights())?;
-                let label = format!(
+            let own_scale = n == ModelSpec::PRETRAINED_AT;
+            if !run.has_weights() || (own_scale && ModelSpec::table1(n).contains(&pretrained)) {
+                continue;
+            }
+            let policy = LearnedPolicy::load(&run.weights())?;
+            let label = if own_scale {
+                pretrained.label()
+            } else {
+                format!(
                     "{} trained at N = {}",
                     pretrained.label(),
                     ModelSpec::PRETRAINED_AT
-                );
-                rows.push(Row::new(evaluate(&label, &policy, &insts, &opt)?));
-            }
+                )
+            };
+            rows.push(Row::new(evaluate(&label, &policy, &insts, &opt)?));
         }
         // Models trained further at this N from a smaller one (warm starts).
         for warm in ModelSpec::WARM_STARTS
