@@ -177,7 +177,8 @@ pub fn run_report(args: ReportArgs) -> Result<()> {
         "| run | N | steps | wall time | final validation welfare | % of OPT | best (step) | collapsed validations |"
     );
     println!("|---|---|---|---|---|---|---|---|");
-    let mut baseline_rows: Vec<(usize, BTreeMap<String, f64>)> = Vec::new();
+    // Keyed by the scale's name: N, with M when it is not the paper's 5.
+    let mut baseline_rows: Vec<(String, BTreeMap<String, f64>)> = Vec::new();
     for dir in &args.dirs {
         let run = RunDir::new(dir);
         let events = run.log()?;
@@ -208,7 +209,10 @@ pub fn run_report(args: ReportArgs) -> Result<()> {
             .rev()
             .find_map(LogEvent::elapsed_s)
             .unwrap_or(0.0);
-        let n = config.robots;
+        let n = match config.network.tasks() {
+            afg_eval::dataset::TASKS => config.robots.to_string(),
+            m => format!("{} (M = {m})", config.robots),
+        };
         // Validations where most robots took one task (logged since the collapse check
         // exists; "–" for older logs).
         let flagged: Vec<bool> = vals.iter().filter_map(|v| v.collapsed).collect();
@@ -232,7 +236,7 @@ pub fn run_report(args: ReportArgs) -> Result<()> {
             best.step
         );
         if !baseline_rows.iter().any(|(m, _)| *m == n) {
-            baseline_rows.push((n, logged.clone()));
+            baseline_rows.push((n.clone(), logged.clone()));
         }
     }
     println!("\nClassical methods on the same validation sets (mean welfare):\n");
