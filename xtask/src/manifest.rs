@@ -46,6 +46,12 @@ pub fn command_line(c: &TrainConfig, dir: &Path) -> String {
     if c.parallel_envs != default.parallel_envs {
         cmd += &format!(" --parallel-envs {}", c.parallel_envs);
     }
+    if c.validation_instances != default.validation_instances {
+        cmd += &format!(" --validation-instances {}", c.validation_instances);
+    }
+    if c.validate_every != default.validate_every {
+        cmd += &format!(" --validate-every {}", c.validate_every);
+    }
     let gain_residual =
         matches!(&c.network, NetworkConfig::AfgNet(a) if a.gain_residual == Some(true));
     if c.shaping != default.shaping {
@@ -70,6 +76,9 @@ pub fn command_line(c: &TrainConfig, dir: &Path) -> String {
         && a.price_head == Some(true)
     {
         cmd += " --price-head";
+    }
+    if c.price_loss > 0.0 {
+        cmd += &format!(" --price-loss {}", c.price_loss);
     }
     if let Some(d) = &c.demonstrations {
         cmd += &format!(

@@ -97,6 +97,13 @@ pub struct TrainArgs {
     /// Episodes run side by side (each acting step adds this many transitions).
     #[arg(long)]
     pub(crate) parallel_envs: Option<usize>,
+    /// Instances in the fixed validation set (default 32); fewer make each validation
+    /// cheaper at large N.
+    #[arg(long)]
+    pub(crate) validation_instances: Option<usize>,
+    /// Gradient steps between validations (default: the run's budget / 40).
+    #[arg(long)]
+    pub(crate) validate_every: Option<u64>,
     /// Turn off the reward shaping. By default rewards are shaped with the potential
     /// "welfare a greedy completion would still add", so the network learns how much
     /// better than finishing greedily each action is (not in the paper; the optimal
@@ -132,6 +139,12 @@ pub struct TrainArgs {
     /// With --demos: weight of the large-margin loss.
     #[arg(long, default_value_t = 1.0, requires = "demos")]
     pub(crate) demo_weight: f64,
+    /// With --price-head: weight of the one-shot price loss (ours, not in the paper):
+    /// every step also fits the Q values of empty states, plus the actor's distance
+    /// cost, to the instance's exact task prices (centred), so that the one-shot mode
+    /// (every robot at once on the empty state's Q values) reproduces the optimum.
+    #[arg(long, value_name = "WEIGHT", requires = "price_head")]
+    pub(crate) price_loss: Option<f64>,
     /// The paper's settings where ours differ: squared loss, raw rewards, no clipping,
     /// target sync every 1000 steps, constant learning rate 1e-4 (an explicit --lr still
     /// wins).
@@ -215,10 +228,19 @@ impl TrainArgs {
         if let Some(k) = self.parallel_envs {
             c.parallel_envs = k;
         }
+        if let Some(k) = self.validation_instances {
+            c.validation_instances = k;
+        }
+        if let Some(k) = self.validate_every {
+            c.validate_every = k;
+        }
         if let Some(e) = self.eps_start {
             c.eps_start = e;
         }
         c.init_from = self.init_from.clone();
+        if let Some(w) = self.price_loss {
+            c.price_loss = w;
+        }
         c.demonstrations = self.demos.map(|episodes| Demonstrations {
             episodes,
             share: self.demo_share,
@@ -448,6 +470,8 @@ mod tests {
             "--scale 100 --init-from models/afgnet_ddqn_n60 --eps-start 0.1",
             "--scale 60 --price-head --algo qstar",
             "--scale 60 --tasks 50 --price-head --algo qstar",
+            "--scale 60 --price-head --algo qstar --price-loss 0.5",
+            "--scale 600 --tasks 50 --steps 100 --validation-instances 8 --validate-every 50",
             "--scale 60 --price-head --demos 64 --demo-margin 0.1 --demo-share 0.5",
         ] {
             let argv = ["cargo xtask", "train"]

@@ -73,27 +73,7 @@ impl Optimum {
         instance: &Instance,
         partial: &Assignment,
     ) -> Result<Assignment, AllocError> {
-        if partial.num_robots() != instance.num_robots()
-            || partial.sizes().len() != instance.num_tasks()
-        {
-            return Err(AllocError::InvalidParameter(format!(
-                "the partial assignment has {} robots and {} tasks, the instance {} and {}",
-                partial.num_robots(),
-                partial.sizes().len(),
-                instance.num_robots(),
-                instance.num_tasks()
-            )));
-        }
-        if let Some(j) = instance
-            .task_ids()
-            .find(|&j| partial.size(j) > instance.capacity(j))
-        {
-            return Err(AllocError::InvalidParameter(format!(
-                "the partial assignment puts {} robots in task {j}, above its capacity {}",
-                partial.size(j),
-                instance.capacity(j)
-            )));
-        }
+        check_partial(instance, partial)?;
         Ok(optimum(instance, partial.clone()).0)
     }
 
@@ -125,6 +105,92 @@ impl Optimum {
         let (assignment, _, prices) = optimum(instance, empty);
         (assignment, prices)
     }
+
+    /// For every task a, the best final welfare with the robots assigned in `partial`
+    /// fixed and `actor` (unassigned there) on a; `None` where a has no room for it.
+    /// The same numbers as one [`Optimum::complete`] per task, from one completion:
+    /// the others are completed without the actor, then the actor on a is one more
+    /// unit entering at task a, and (by the successive-shortest-path argument) the
+    /// cheapest augmenting path from a turns the others' optimum into the optimum with
+    /// the actor on a — one Dijkstra over the M task nodes per task.
+    ///
+    /// # Errors
+    /// As [`Optimum::complete`], and [`AllocError::InvalidParameter`] if `actor` is not
+    /// a robot of the instance or is assigned in `partial`.
+    ///
+    /// # Complexity
+    /// One completion, O(N M² log N), then O(M³) heap reads (amortised); one
+    /// completion per task would cost M times the first term.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::Optimum;
+    /// use afg_game::{Assignment, GeneratorConfig, RobotId, TaskId};
+    /// let inst = GeneratorConfig::paper(30, 5, 1).generate()?;
+    /// let mut partial = Assignment::unassigned(30, 5);
+    /// partial.set(RobotId(0), Some(TaskId(3)));
+    /// let values = Optimum.action_values(&inst, &partial, RobotId(1))?;
+    /// for j in inst.task_ids() {
+    ///     let mut forced = partial.clone();
+    ///     forced.set(RobotId(1), Some(j));
+    ///     let one = inst.welfare(&Optimum.complete(&inst, &forced)?);
+    ///     assert!((values[j.index()].unwrap() - one).abs() < 1e-9);
+    /// }
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn action_values(
+        &self,
+        instance: &Instance,
+        partial: &Assignment,
+        actor: RobotId,
+    ) -> Result<Vec<Option<f64>>, AllocError> {
+        check_partial(instance, partial)?;
+        if actor.index() >= instance.num_robots() || partial.task_of(actor).is_some() {
+            return Err(AllocError::InvalidParameter(format!(
+                "robot {actor} is not an unassigned robot of the instance"
+            )));
+        }
+        let mut s = solved(instance, partial.clone(), Some(actor.index()));
+        let others = instance.welfare(&s.assignment);
+        Ok(instance
+            .task_ids()
+            .map(|a| {
+                if !partial.has_room(instance, actor, a) {
+                    return None;
+                }
+                s.dist.fill(f64::INFINITY);
+                s.dist[a.index()] = s.cost(actor.index(), a.index());
+                s.shortest_paths();
+                Some(others - s.best_end().1)
+            })
+            .collect())
+    }
+}
+
+/// Checks that `partial` fits `instance` and respects its capacities.
+fn check_partial(instance: &Instance, partial: &Assignment) -> Result<(), AllocError> {
+    if partial.num_robots() != instance.num_robots()
+        || partial.sizes().len() != instance.num_tasks()
+    {
+        return Err(AllocError::InvalidParameter(format!(
+            "the partial assignment has {} robots and {} tasks, the instance {} and {}",
+            partial.num_robots(),
+            partial.sizes().len(),
+            instance.num_robots(),
+            instance.num_tasks()
+        )));
+    }
+    if let Some(j) = instance
+        .task_ids()
+        .find(|&j| partial.size(j) > instance.capacity(j))
+    {
+        return Err(AllocError::InvalidParameter(format!(
+            "the partial assignment puts {} robots in task {j}, above its capacity {}",
+            partial.size(j),
+            instance.capacity(j)
+        )));
+    }
+    Ok(())
 }
 
 impl Allocator for Optimum {
@@ -185,9 +251,40 @@ struct Solver<'a> {
     stamps: Vec<u32>,
     /// `heaps[j * m + k]`: robots of task j keyed by `c_rk - c_rj`.
     heaps: Vec<BinaryHeap<Entry>>,
+    /// Johnson potentials of the task nodes: every residual edge's reduced cost
+    /// `c + potential[from] − potential[to]` is non-negative.
+    potential: Vec<f64>,
+    /// Reduced distances of the last [`Solver::shortest_paths`].
+    dist: Vec<f64>,
+    pred: Vec<Pred>,
+    done: Vec<bool>,
+    /// Robot shifts made by the augmentations so far.
+    shifts: u64,
 }
 
-impl Solver<'_> {
+impl<'a> Solver<'a> {
+    /// A solver holding `partial` (robots assigned there are fixed: never in a heap).
+    fn new(inst: &'a Instance, partial: Assignment) -> Self {
+        let (n, m) = (inst.num_robots(), inst.num_tasks());
+        let costs = inst
+            .robot_ids()
+            .flat_map(|i| inst.task_ids().map(move |j| inst.cost(i, j)))
+            .collect();
+        Solver {
+            inst,
+            m,
+            costs,
+            assignment: partial,
+            stamps: vec![0; n],
+            heaps: (0..m * m).map(|_| BinaryHeap::new()).collect(),
+            potential: vec![0.0; m],
+            dist: vec![0.0; m],
+            pred: vec![Pred::Source; m],
+            done: vec![false; m],
+            shifts: 0,
+        }
+    }
+
     fn cost(&self, robot: usize, task: usize) -> f64 {
         self.costs[robot * self.m + task]
     }
@@ -221,6 +318,86 @@ impl Solver<'_> {
         }
         None
     }
+
+    /// Dijkstra over the task nodes with reduced costs, from a new unit that enters
+    /// task j at the real cost the caller wrote into `dist[j]` (infinite: not there);
+    /// only these first edges may be negative. Fills `dist` and `pred`.
+    fn shortest_paths(&mut self) {
+        let m = self.m;
+        for j in 0..m {
+            self.dist[j] -= self.potential[j];
+            self.pred[j] = Pred::Source;
+            self.done[j] = false;
+        }
+        for _ in 0..m {
+            let dist = &self.dist;
+            let j = (0..m)
+                .filter(|&j| !self.done[j])
+                .min_by(|&a, &b| dist[a].total_cmp(&dist[b]))
+                .expect("an unsettled task remains");
+            self.done[j] = true;
+            if self.dist[j] == f64::INFINITY {
+                break;
+            }
+            for k in 0..m {
+                if self.done[k] {
+                    continue;
+                }
+                if let Some(e) = self.cheapest(j, k) {
+                    let d = self.dist[j] + e.key + self.potential[j] - self.potential[k];
+                    if d < self.dist[k] {
+                        self.dist[k] = d;
+                        self.pred[k] = Pred::Shift {
+                            from: j,
+                            robot: e.robot,
+                        };
+                    }
+                }
+            }
+        }
+    }
+
+    /// Where the paths of the last [`Solver::shortest_paths`] should end: the task with
+    /// room where taking one more member is cheapest, and that real cost (the path's
+    /// cost minus the member's marginal value), the change in `−welfare` of the
+    /// augmentation.
+    fn best_end(&self) -> (usize, f64) {
+        let total = |j: usize| {
+            let task = TaskId(j as u32);
+            self.dist[j] + self.potential[j]
+                - self
+                    .inst
+                    .marginal_value(task, self.assignment.size(task) + 1)
+        };
+        (0..self.m)
+            .filter(|&j| {
+                let task = TaskId(j as u32);
+                self.assignment.size(task) < self.inst.capacity(task)
+            })
+            .map(|j| (j, total(j)))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .expect("capacities hold every robot (checked by Instance::new)")
+    }
+
+    /// Adds `robot` along a shortest augmenting path and updates the potentials.
+    fn augment(&mut self, robot: usize) {
+        for j in 0..self.m {
+            self.dist[j] = self.cost(robot, j);
+        }
+        self.shortest_paths();
+        let (end, _) = self.best_end();
+        // Shift robots back along the path, then place the new robot.
+        let mut at = end;
+        while let Pred::Shift { from, robot: r } = self.pred[at] {
+            self.place(r as usize, at);
+            self.shifts += 1;
+            at = from;
+        }
+        self.place(robot, at);
+        for j in 0..self.m {
+            self.potential[j] += self.dist[j];
+        }
+    }
 }
 
 /// Where a task node was reached from on the current shortest-path tree.
@@ -232,85 +409,22 @@ enum Pred {
     Shift { from: usize, robot: u32 },
 }
 
+/// A solver that has completed `partial` optimally, leaving `skip` (if any) out.
+fn solved(inst: &Instance, partial: Assignment, skip: Option<usize>) -> Solver<'_> {
+    let mut s = Solver::new(inst, partial);
+    let free: Vec<usize> = (0..inst.num_robots())
+        .filter(|&i| s.assignment.task_of(RobotId(i as u32)).is_none() && Some(i) != skip)
+        .collect();
+    for robot in free {
+        s.augment(robot);
+    }
+    s
+}
+
 /// The optimal completion of `partial` (robots assigned there stay), the number of
 /// robot shifts the augmentations made and the final task potentials. `partial` must
 /// respect capacities.
 fn optimum(inst: &Instance, partial: Assignment) -> (Assignment, u64, Vec<f64>) {
-    let (n, m) = (inst.num_robots(), inst.num_tasks());
-    let costs = inst
-        .robot_ids()
-        .flat_map(|i| inst.task_ids().map(move |j| inst.cost(i, j)))
-        .collect();
-    let mut s = Solver {
-        inst,
-        m,
-        costs,
-        assignment: partial,
-        stamps: vec![0; n],
-        heaps: (0..m * m).map(|_| BinaryHeap::new()).collect(),
-    };
-    let mut potential = vec![0.0f64; m];
-    let mut dist = vec![0.0f64; m];
-    let mut pred = vec![Pred::Source; m];
-    let mut done = vec![false; m];
-    let mut shifts = 0u64;
-    let free: Vec<usize> = (0..n)
-        .filter(|&i| s.assignment.task_of(RobotId(i as u32)).is_none())
-        .collect();
-    for robot in free {
-        // Dijkstra over task nodes with reduced costs; the source's own edges may be negative.
-        for j in 0..m {
-            dist[j] = s.cost(robot, j) - potential[j];
-            pred[j] = Pred::Source;
-            done[j] = false;
-        }
-        for _ in 0..m {
-            let j = (0..m)
-                .filter(|&j| !done[j])
-                .min_by(|&a, &b| dist[a].total_cmp(&dist[b]))
-                .expect("an unsettled task remains");
-            done[j] = true;
-            for k in 0..m {
-                if done[k] {
-                    continue;
-                }
-                if let Some(e) = s.cheapest(j, k) {
-                    let d = dist[j] + e.key + potential[j] - potential[k];
-                    if d < dist[k] {
-                        dist[k] = d;
-                        pred[k] = Pred::Shift {
-                            from: j,
-                            robot: e.robot,
-                        };
-                    }
-                }
-            }
-        }
-        // The path ends where taking one more member is cheapest (real, not reduced, cost).
-        let end = (0..m)
-            .filter(|&j| s.assignment.size(TaskId(j as u32)) < s.inst.capacity(TaskId(j as u32)))
-            .min_by(|&a, &b| {
-                let total = |j: usize| {
-                    dist[j] + potential[j]
-                        - s.inst.marginal_value(
-                            TaskId(j as u32),
-                            s.assignment.size(TaskId(j as u32)) + 1,
-                        )
-                };
-                total(a).total_cmp(&total(b))
-            })
-            .expect("capacities hold every robot (checked by Instance::new)");
-        // Shift robots back along the path, then place the new robot.
-        let mut at = end;
-        while let Pred::Shift { from, robot: r } = pred[at] {
-            s.place(r as usize, at);
-            shifts += 1;
-            at = from;
-        }
-        s.place(robot, at);
-        for j in 0..m {
-            potential[j] += dist[j];
-        }
-    }
-    (s.assignment, shifts, potential)
+    let s = solved(inst, partial, None);
+    (s.assignment, s.shifts, s.potential)
 }

@@ -87,17 +87,8 @@ fn completion_equals_brute_force_with_fixed_prefixes() {
     let mut rng = ChaCha8Rng::seed_from_u64(2025);
     for case in 0..1200 {
         let inst = small_instance(&mut rng, case);
-        let (n, m) = (inst.num_robots(), inst.num_tasks());
-        // A random prefix of robots on random tasks with room, as in the MDP.
-        let mut partial = Assignment::unassigned(n, m);
-        for i in 0..rng.random_range(0..=n) {
-            let robot = RobotId(i as u32);
-            let open: Vec<TaskId> = inst
-                .task_ids()
-                .filter(|&j| partial.has_room(&inst, robot, j))
-                .collect();
-            partial.set(robot, Some(open[rng.random_range(0..open.len())]));
-        }
+        let k = rng.random_range(0..=inst.num_robots());
+        let partial = random_prefix(&mut rng, &inst, k);
         let done = Optimum.complete(&inst, &partial).unwrap();
         inst.check(&done).unwrap();
         assert!(done.is_complete());
@@ -116,6 +107,88 @@ fn completion_equals_brute_force_with_fixed_prefixes() {
             "case {case}: completion {got} vs brute force {want}"
         );
     }
+}
+
+/// A random prefix of robots 0..k on random tasks with room, as in the MDP.
+fn random_prefix(rng: &mut ChaCha8Rng, inst: &Instance, k: usize) -> Assignment {
+    let mut partial = Assignment::unassigned(inst.num_robots(), inst.num_tasks());
+    for i in 0..k {
+        let robot = RobotId(i as u32);
+        let open: Vec<TaskId> = inst
+            .task_ids()
+            .filter(|&j| partial.has_room(inst, robot, j))
+            .collect();
+        partial.set(robot, Some(open[rng.random_range(0..open.len())]));
+    }
+    partial
+}
+
+/// `Optimum::action_values`, one completion for all tasks, against brute force on
+/// small instances and against one completion per task on larger ones.
+#[test]
+fn action_values_equal_one_completion_per_task() {
+    let mut rng = ChaCha8Rng::seed_from_u64(2027);
+    let close = |a: f64, b: f64| (a - b).abs() < 1e-9 * b.abs().max(1.0);
+    for case in 0..1200 {
+        let inst = small_instance(&mut rng, case);
+        let n = inst.num_robots();
+        let t = rng.random_range(0..n);
+        let partial = random_prefix(&mut rng, &inst, t);
+        let actor = RobotId(t as u32);
+        let values = Optimum.action_values(&inst, &partial, actor).unwrap();
+        for j in inst.task_ids() {
+            let want = partial.has_room(&inst, actor, j).then(|| {
+                let mut forced = partial.clone();
+                forced.set(actor, Some(j));
+                brute_force_completion(&inst, &forced)
+            });
+            match (values[j.index()], want) {
+                (Some(got), Some(want)) => assert!(
+                    close(got, want),
+                    "case {case}, task {j}: {got} vs brute force {want}"
+                ),
+                (got, want) => assert_eq!(got, want, "case {case}, task {j}"),
+            }
+        }
+    }
+    for case in 0..40 {
+        let (n, m) = (rng.random_range(20..200), rng.random_range(2..30));
+        let mut cfg = GeneratorConfig::paper(n, m, case);
+        if case % 2 == 1 {
+            cfg = cfg.with_capacity_slack(1.1);
+        }
+        let inst = cfg.generate().unwrap();
+        let t = rng.random_range(0..n);
+        let partial = random_prefix(&mut rng, &inst, t);
+        let actor = RobotId(t as u32);
+        let values = Optimum.action_values(&inst, &partial, actor).unwrap();
+        for j in inst.task_ids() {
+            let mut forced = partial.clone();
+            forced.set(actor, Some(j));
+            let want = partial
+                .has_room(&inst, actor, j)
+                .then(|| inst.welfare(&Optimum.complete(&inst, &forced).unwrap()));
+            match (values[j.index()], want) {
+                (Some(got), Some(want)) => assert!(
+                    close(got, want),
+                    "N = {n}, M = {m}, task {j}: {got} vs {want}"
+                ),
+                (got, want) => assert_eq!(got, want, "N = {n}, M = {m}, task {j}"),
+            }
+        }
+    }
+    // Bad input is an error, not a panic.
+    let inst = GeneratorConfig::paper(5, 2, 0).generate().unwrap();
+    let mut partial = Assignment::unassigned(5, 2);
+    partial.set(RobotId(0), Some(TaskId(1)));
+    for actor in [RobotId(0), RobotId(5)] {
+        assert!(Optimum.action_values(&inst, &partial, actor).is_err());
+    }
+    assert!(
+        Optimum
+            .action_values(&inst, &Assignment::unassigned(4, 2), RobotId(1))
+            .is_err()
+    );
 }
 
 #[test]

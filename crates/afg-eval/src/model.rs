@@ -34,6 +34,9 @@ pub enum Variant {
     /// Ours: [`Variant::PriceHead`] trained with demonstrations from the exact optimum
     /// and a large-margin loss (`--demos`, as in Deep Q-learning from Demonstrations).
     PriceHeadDemos,
+    /// Ours: [`Variant::PriceHead`] whose one-shot scores are also fitted to the exact
+    /// task prices (`--price-loss`, [`afg_learn::TrainConfig::price_loss`]).
+    PriceHeadPriceLoss,
     /// Ours: the paper's network and algorithm with the reward shaped by the optimal
     /// completion (`--shaping optimal`, [`afg_learn::Shaping::Optimal`]): the optimal
     /// policy is unchanged, but the rewards carry the exact optimum's values.
@@ -63,8 +66,13 @@ pub enum Variant {
 /// assert_eq!(warm.dir_name(), "s2v_ddqn_warm_n60");
 /// assert_eq!(warm.label(), "S2V_DDQN, warm start from the N = 20 model");
 /// assert!(!warm.is_ours());
-/// let [exact, td, demos] = ModelSpec::PRICE_HEADED;
+/// let [exact, prices, td, demos] = ModelSpec::PRICE_HEADED;
 /// assert_eq!(exact.dir_name(), "afgnet_qstar_price_n60");
+/// assert_eq!(prices.dir_name(), "afgnet_qstar_price_oneshot_n60");
+/// assert_eq!(
+///     prices.label(),
+///     "AFGNet + price head, exact Q* and price regression (ours)"
+/// );
 /// assert_eq!(exact.label(), "AFGNet + price head, exact Q* regression (ours)");
 /// assert_eq!(td.dir_name(), "afgnet_ddqn_price_n60");
 /// assert_eq!(demos.dir_name(), "afgnet_ddqn_price_demos_n60");
@@ -157,13 +165,19 @@ impl ModelSpec {
     ];
 
     /// AFGNet with a price head, trained at [`ModelSpec::PRETRAINED_AT`] and run at
-    /// every N (ours): on the exact Q*, by Double DQN, and by Double DQN with
-    /// demonstrations.
-    pub const PRICE_HEADED: [ModelSpec; 3] = [
+    /// every N (ours): on the exact Q*, on the exact Q* and the exact prices, by Double
+    /// DQN, and by Double DQN with demonstrations.
+    pub const PRICE_HEADED: [ModelSpec; 4] = [
         Self::new(
             Net::AfgNet,
             Algo::QStar,
             Variant::PriceHead,
+            Self::PRETRAINED_AT,
+        ),
+        Self::new(
+            Net::AfgNet,
+            Algo::QStar,
+            Variant::PriceHeadPriceLoss,
             Self::PRETRAINED_AT,
         ),
         Self::new(
@@ -192,6 +206,7 @@ impl ModelSpec {
             Variant::WarmStart { .. } => "_warm",
             Variant::PriceHead => "_price",
             Variant::PriceHeadDemos => "_price_demos",
+            Variant::PriceHeadPriceLoss => "_price_oneshot",
             Variant::OptimalShaping => "_optshape",
         };
         format!("{net}_{}{variant}_n{}", self.algo.name(), self.trained_at)
@@ -221,9 +236,15 @@ impl ModelSpec {
         };
         let name = match (self.algo, self.variant) {
             (Algo::QStar, Variant::PriceHead) => format!("{net} + price head, exact Q* regression"),
+            (Algo::QStar, Variant::PriceHeadPriceLoss) => {
+                format!("{net} + price head, exact Q* and price regression")
+            }
             (Algo::QStar, _) => format!("{net}, exact Q* regression"),
             (_, Variant::PriceHead) => format!("{net}_{algo} + price head"),
             (_, Variant::PriceHeadDemos) => format!("{net}_{algo} + price head + demonstrations"),
+            (_, Variant::PriceHeadPriceLoss) => {
+                format!("{net}_{algo} + price head + price regression")
+            }
             (_, Variant::Paper) => format!("{net}_{algo}"),
             (_, Variant::GainResidual) => format!("{net}_{algo} + gain residual"),
             (_, Variant::OptimalShaping) => format!("{net}_{algo}, optimal-completion shaping"),
@@ -243,6 +264,7 @@ impl ModelSpec {
             Variant::GainResidual
                 | Variant::PriceHead
                 | Variant::PriceHeadDemos
+                | Variant::PriceHeadPriceLoss
                 | Variant::OptimalShaping
         ) || self.algo == Algo::QStar
     }

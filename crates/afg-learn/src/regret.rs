@@ -2,7 +2,7 @@
 //!
 //! The reward is the welfare difference and γ = 1, so the optimal action value is an
 //! optimal completion: `Q*(s_t, a) = OPT(robots before t fixed, robot t on a) − W(s_t)`
-//! ([`q_star`], one min-cost flow per action, [`afg_baseline::Optimum::complete`]).
+//! ([`q_star`]: one min-cost flow for all actions, [`afg_baseline::Optimum::action_values`]).
 //! A policy's shortfall then telescopes over its own rollout:
 //! `OPT − W(final) = Σ_t [max_a Q*(s_t, a) − Q*(s_t, a_t)]`, so each step's regret says
 //! exactly where the welfare was lost ([`regret_trace`]).
@@ -47,20 +47,10 @@ pub fn q_star(
         )));
     }
     let now = instance.welfare(assignment);
-    let mut with_actor = assignment.clone();
-    instance
-        .task_ids()
-        .map(|j| {
-            if !assignment.has_room(instance, actor, j) {
-                return Ok(None);
-            }
-            with_actor.set(actor, Some(j));
-            let done = Optimum
-                .complete(instance, &with_actor)
-                .map_err(|e| LearnError::InvalidAction(e.to_string()))?;
-            Ok(Some(instance.welfare(&done) - now))
-        })
-        .collect()
+    let values = Optimum
+        .action_values(instance, assignment, actor)
+        .map_err(|e| LearnError::InvalidAction(e.to_string()))?;
+    Ok(values.into_iter().map(|v| v.map(|w| w - now)).collect())
 }
 
 /// One step of a rollout, seen through Q\*.

@@ -3,11 +3,11 @@
 use std::path::PathBuf;
 
 use afg_baseline::{Allocator, Greedy, Optimum};
-use afg_game::{Assignment, GeneratorConfig, TaskId};
-use afg_graph::Units;
+use afg_game::{Assignment, GeneratorConfig, Instance, TaskId};
+use afg_graph::{AllocationState, GraphKind, RobotGraph, Units};
 use afg_learn::{
-    Algo, InferBackend, LearnError, NetworkConfig, QNetwork, Shaping, TrainConfig, Trainer,
-    double_dqn_target, dqn_target, n_step_reward,
+    AfgNetConfig, Algo, GraphTensors, InferBackend, LearnError, NetworkConfig, QNetwork, Shaping,
+    TrainConfig, Trainer, double_dqn_target, dqn_target, n_step_reward,
 };
 use burn::module::{Module, ModuleVisitor, Param};
 use burn::tensor::Tensor;
@@ -182,9 +182,97 @@ fn bad_settings_are_refused() {
     let mut c = base.clone();
     c.lr = 0.0;
     assert!(Trainer::new(c).is_err());
-    let mut c = base;
+    let mut c = base.clone();
     c.n_step = 0;
     assert!(matches!(Trainer::new(c), Err(LearnError::InvalidConfig(_))));
+    let mut c = base;
+    c.price_loss = 1.0;
+    assert!(
+        matches!(Trainer::new(c.clone()), Err(LearnError::InvalidConfig(e)) if e.contains("price head"))
+    );
+    c.network = price_headed();
+    assert!(c.check().is_ok());
+    for bad in [-1.0, f64::NAN, f64::INFINITY] {
+        c.price_loss = bad;
+        assert!(
+            matches!(c.check(), Err(LearnError::InvalidConfig(_))),
+            "{bad}"
+        );
+    }
+}
+
+fn price_headed() -> NetworkConfig {
+    NetworkConfig::AfgNet(
+        AfgNetConfig::new(5)
+            .with_seed(1)
+            .with_price_head(Some(true)),
+    )
+}
+
+/// Mean squared error, over every robot and task of `insts`, of the centred one-shot
+/// scores `Q(s_0, i, j) + β d(i, j)` against the centred exact prices (both in the
+/// network's welfare unit).
+fn one_shot_price_error(network: &QNetwork<InferBackend>, insts: &[Instance]) -> f64 {
+    let device = Default::default();
+    let centre = |v: &mut [f64]| {
+        let mean = v.iter().sum::<f64>() / v.len() as f64;
+        v.iter_mut().for_each(|x| *x -= mean);
+    };
+    let (mut sum, mut count) = (0.0, 0);
+    for inst in insts {
+        let (n, m) = (inst.num_robots(), inst.num_tasks());
+        let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
+        let state =
+            AllocationState::with_units(inst, Assignment::unassigned(n, m), network.units());
+        let mut batch = network.empty_batch(m);
+        for robot in inst.robot_ids() {
+            batch.push(&graph, &state, robot);
+        }
+        let q: Vec<f32> = network
+            .forward(&GraphTensors::new(&batch, &device))
+            .into_data()
+            .to_vec()
+            .unwrap();
+        let unit = network.units().welfare_unit(inst);
+        let (_, mut prices) = Optimum.with_prices(inst);
+        prices.iter_mut().for_each(|p| *p /= unit);
+        centre(&mut prices);
+        for row in 0..n {
+            let mut scores: Vec<f64> = (0..m)
+                .map(|j| f64::from(q[row * m + j] + batch.cost[row * m + j]))
+                .collect();
+            centre(&mut scores);
+            sum += scores
+                .iter()
+                .zip(&prices)
+                .map(|(s, p)| (s - p).powi(2))
+                .sum::<f64>();
+            count += m;
+        }
+    }
+    sum / count as f64
+}
+
+#[test]
+fn the_price_loss_fits_the_one_shot_scores_to_the_exact_prices() {
+    let insts: Vec<Instance> = (0..8)
+        .map(|s| GeneratorConfig::paper(10, 5, 900 + s).generate().unwrap())
+        .collect();
+    let untrained = one_shot_price_error(&price_headed().init(&Default::default()), &insts);
+    let trained = |weight: f64| {
+        let mut c = tiny(Algo::QStar, price_headed(), 80);
+        c.price_loss = weight;
+        let mut t = Trainer::new(c).unwrap();
+        while !t.is_finished() {
+            assert!(t.step().unwrap().loss.is_finite());
+        }
+        one_shot_price_error(&t.network(), &insts)
+    };
+    let (with, without) = (trained(10.0), trained(0.0));
+    assert!(
+        with < 0.5 * untrained && with < without,
+        "untrained {untrained}, Q* only {without}, with the price loss {with}"
+    );
 }
 
 #[test]

@@ -142,11 +142,11 @@ mod tests {
                 })
                 .collect()
         };
-        // The three committed models, the Q* one also in one pass.
+        // The four committed models, the two Q* ones also in one pass.
         let at_60 = labels(60);
-        assert_eq!(at_60.len(), 4, "{at_60:?}");
+        assert_eq!(at_60.len(), 6, "{at_60:?}");
         assert!(at_60.iter().all(|l| !l.contains("trained at")));
-        assert_eq!(at_60.iter().filter(|l| l.contains("one-shot")).count(), 1);
+        assert_eq!(at_60.iter().filter(|l| l.contains("one-shot")).count(), 2);
         let at_500 = labels(500);
         assert!(at_500.iter().all(|l| l.contains("trained at N = 60")));
         // The price model: both modes, and prices once per N/100 robots from N = 500.
@@ -160,7 +160,7 @@ mod tests {
                 .iter()
                 .filter(|l| l.contains("network every 50 robots"))
                 .count(),
-            3
+            4
         );
     }
 }

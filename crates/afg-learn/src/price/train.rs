@@ -2,7 +2,7 @@
 //! rollouts visit (DAgger).
 //!
 //! Each round rolls out `episodes_per_round` fresh instances. At every step the exact
-//! `Q*(s_t, a)` of every task is computed ([`crate::q_star`], M min-cost flows), and the
+//! `Q*(s_t, a)` of every task is computed ([`crate::q_star`], one min-cost flow for all tasks), and the
 //! acting robot follows the expert (the best Q\*) with probability `expert_decay^round`,
 //! otherwise the current model (with a random task instead in a share `explore` of the
 //! steps). Every visited state is kept (up to `buffer_states`, oldest dropped), and

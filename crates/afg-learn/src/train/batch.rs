@@ -1,6 +1,7 @@
 //! The sampled batches a gradient step learns from: TD transitions with their DQN or
 //! Double DQN targets, or states with the exact `Q*` of every task.
 
+use afg_baseline::Optimum;
 use afg_game::{Assignment, RobotId, TaskId};
 use afg_graph::{AllocationState, GraphBatch};
 use burn::module::AutodiffModule;
@@ -54,6 +55,29 @@ impl Trainer {
             .into_iter()
             .map(|q| q.map(|v| ((v + offset) / unit) as f32))
             .collect())
+    }
+
+    /// A quarter batch (at least one) of empty states of the replay's instances, each
+    /// with a uniformly drawn acting robot, and their exact task prices in the
+    /// network's welfare unit, centred over the tasks, row-major `[b / 4, M]`
+    /// ([`TrainConfig::price_loss`](super::TrainConfig::price_loss)).
+    pub(super) fn price_batch(&mut self) -> (GraphBatch, Vec<f32>) {
+        let (n, m) = (self.config.robots, self.config.network.tasks());
+        let units = self.config.network.units();
+        let mut empty = self.online.empty_batch(m);
+        let mut prices = Vec::with_capacity(self.config.batch / 4 * m);
+        for _ in 0..(self.config.batch / 4).max(1) {
+            let ep = &self.replay[self.rng.random_range(0..self.replay.len())];
+            let actor = RobotId(self.rng.random_range(0..n) as u32);
+            let (_, exact) = Optimum.with_prices(&ep.instance);
+            let mean = exact.iter().sum::<f64>() / m as f64;
+            let unit = units.welfare_unit(&ep.instance);
+            prices.extend(exact.iter().map(|p| ((p - mean) / unit) as f32));
+            let state =
+                AllocationState::with_units(&ep.instance, Assignment::unassigned(n, m), units);
+            empty.push(&ep.graph, &state, actor);
+        }
+        (empty, prices)
     }
 
     /// A uniformly drawn stored step: (episode, robot index). One draw of the run's

@@ -137,6 +137,17 @@ pub struct TrainConfig {
     /// expert's action. Ours, not in the paper; DQN and Double DQN only.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub demonstrations: Option<Demonstrations>,
+    /// Weight of the one-shot price loss (ours, not in the paper; 0, the default, turns
+    /// it off; needs a price head). Each gradient step then also draws a quarter batch
+    /// of empty states of the replay's instances, each with a random acting robot i,
+    /// and adds `price_loss · mean_j (ĉ_j − π̂*_j)²`, where `ĉ_j = Q(s_0, j) + β d(i, j)`
+    /// (the price plus the correction, what the one-shot mode compares), `π*` are the
+    /// instance's exact task prices ([`afg_baseline::Optimum::with_prices`]) in the
+    /// network's welfare unit, and a hat centres a row over the tasks (prices are
+    /// defined up to a constant). The one-shot mode, every robot at once on
+    /// `argmax_j Q(s_0, j)`, is then supervised on what it should reproduce.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub price_loss: f64,
 }
 
 /// The demonstrations of a run ([`TrainConfig::demonstrations`]): episodes in which
@@ -208,6 +219,7 @@ impl TrainConfig {
             seed,
             init_from: None,
             demonstrations: None,
+            price_loss: 0.0,
         }
     }
 
@@ -319,6 +331,14 @@ impl TrainConfig {
                 );
             }
         }
+        let price_head =
+            matches!(&self.network, NetworkConfig::AfgNet(c) if c.price_head == Some(true));
+        if !(self.price_loss.is_finite() && self.price_loss >= 0.0) {
+            return bad("price_loss must be finite and at least 0");
+        }
+        if self.price_loss > 0.0 && !price_head {
+            return bad("the price loss supervises a price head: it needs --price-head");
+        }
         if let NetworkConfig::AfgNet(c) = &self.network
             && c.price_head == Some(true)
             && (!self.reward_scaling || c.gain_residual == Some(true))
@@ -373,6 +393,10 @@ impl TrainConfig {
 
 fn one() -> usize {
     1
+}
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }
 
 /// Seed of training episode `episode` of a run seeded `run_seed`. Datasets use seeds

@@ -369,6 +369,11 @@ impl Trainer {
                 self.elementwise_loss(diff).sum() / count
             }
         };
+        let loss = if self.config.price_loss > 0.0 {
+            loss + self.price_loss() * self.config.price_loss
+        } else {
+            loss
+        };
         let loss_value: f32 = loss.clone().into_scalar();
         if !loss_value.is_finite() {
             return Err(LearnError::NonFiniteLoss {
@@ -380,6 +385,20 @@ impl Trainer {
         let lr = self.config.learning_rate(self.step);
         self.online = self.optim.step(lr, self.online.clone(), grads);
         Ok(loss_value)
+    }
+
+    /// The one-shot price loss ([`TrainConfig::price_loss`], without its weight): the
+    /// mean squared error of the centred `Q(s_0, j) + β d(i, j)` against the centred
+    /// exact prices on [`Trainer::price_batch`].
+    fn price_loss(&mut self) -> Tensor<TrainBackend, 1> {
+        let device = Default::default();
+        let (empty, prices) = self.price_batch();
+        let shape = [empty.num_graphs(), self.config.network.tasks()];
+        let g = GraphTensors::<TrainBackend>::new(&empty, &device);
+        let scores = self.online.forward(&g) + g.cost.clone();
+        let centred = scores.clone() - scores.mean_dim(1);
+        let y = Tensor::<TrainBackend, 2>::from_data(TensorData::new(prices, shape), &device);
+        (centred - y).powi_scalar(2).mean()
     }
 
     /// The Huber (δ = 1) or squared error of every entry of `diff`.
