@@ -4,7 +4,6 @@ mod bench;
 mod curves;
 mod datasets;
 mod manifest;
-mod map;
 mod plain;
 mod price;
 mod realloc;
@@ -110,4 +109,13 @@ pub fn repo_root() -> std::path::PathBuf {
         .parent()
         .expect("xtask has a parent")
         .to_path_buf()
+}
+
+/// Writes an SVG atomically, creating its folder.
+pub fn write_svg(out: &std::path::Path, svg: &str) -> Result<()> {
+    if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent)?;
+    }
+    afg_game::io::write_atomic(out, svg.as_bytes())?;
+    Ok(())
 }

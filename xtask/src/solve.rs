@@ -3,11 +3,10 @@
 use std::path::PathBuf;
 
 use afg_baseline::{Allocator, Method, Optimum};
-use afg_eval::{Score, optimum_welfare};
-use afg_game::{Assignment, Instance, Preference};
+use afg_eval::solve::{ModelOptions, Report, Row, load_model};
+use afg_game::{Assignment, Instance};
 use anyhow::{Context, Result};
 use clap::Args;
-use serde::Serialize;
 
 #[derive(Args)]
 #[command(group = clap::ArgGroup::new("source").required(true))]
@@ -67,46 +66,6 @@ pub struct SolveArgs {
     pub(crate) json: bool,
 }
 
-/// One instance's result.
-#[derive(Serialize)]
-pub struct Row {
-    #[serde(flatten)]
-    pub score: Score,
-    pub stats: afg_baseline::AllocStats,
-}
-
-impl Row {
-    /// Runs `method` and OPT on `inst`; the row and the method's assignment.
-    fn compute(inst: &Instance, method: &dyn Allocator) -> Result<(Row, Assignment)> {
-        let out = method.allocate(inst)?;
-        let score = Score::of(
-            "the allocation",
-            inst,
-            &out.assignment,
-            optimum_welfare(inst)?,
-        )?;
-        let row = Row {
-            score,
-            stats: out.stats,
-        };
-        Ok((row, out.assignment))
-    }
-
-    /// The line `--out` writes for this row's assignment.
-    fn assignment_line(&self, method: &str, inst: &Instance, a: &Assignment) -> String {
-        a.to_json_with_summary(Some(serde_json::json!({
-            "method": method,
-            "welfare": self.score.welfare,
-            "opt_welfare": self.score.opt_welfare,
-            "percent_of_opt": self.score.percent_of_opt,
-            "coalition_sizes": a.sizes(),
-            "stable_balanced": inst.is_stable(a, Preference::Balanced),
-            "ns_rate_balanced": self.score.ns_rate_balanced,
-            "ns_rate_selfish": self.score.ns_rate_selfish,
-        })))
-    }
-}
-
 /// Reads `--input`: a file or standard input ("-"), one instance or JSON Lines.
 fn read_instances(path: &std::path::Path) -> Result<Vec<Instance>> {
     let text = if path.as_os_str() == "-" {
@@ -120,28 +79,6 @@ fn read_instances(path: &std::path::Path) -> Result<Vec<Instance>> {
         anyhow::bail!("{} holds no instance", path.display());
     }
     Ok(instances)
-}
-
-#[derive(Serialize)]
-struct Report {
-    method: String,
-    source: String,
-    instances: usize,
-    mean: Mean,
-    rows: Vec<Row>,
-}
-
-#[derive(Serialize)]
-struct Mean {
-    welfare: f64,
-    opt_welfare: f64,
-    percent_of_opt: f64,
-    ns_rate_balanced: f64,
-    ns_rate_selfish: f64,
-    iterations: f64,
-    rounds: f64,
-    messages: f64,
-    seconds: f64,
 }
 
 pub fn run(args: SolveArgs) -> Result<()> {
@@ -161,42 +98,14 @@ pub fn run(args: SolveArgs) -> Result<()> {
     }
     let (name, method): (String, Box<dyn Allocator>) = match (&args.method, &args.model) {
         (Some(m), _) => (m.to_string(), m.allocator(args.seed)),
-        (None, Some(dir)) if dir.join(afg_learn::PriceModel::FILE_NAME).exists() => {
-            if args.repair || args.exact_burn {
-                anyhow::bail!("--repair and --exact-burn apply to Q networks, not price models");
-            }
-            if args.one_shot && args.block.is_some() {
-                anyhow::bail!("--block applies to the sequential mode; drop --one-shot or --block");
-            }
-            let mode = if args.one_shot {
-                afg_learn::PriceMode::OneShot
-            } else {
-                afg_learn::PriceMode::Sequential
-            };
-            let policy =
-                afg_learn::PricePolicy::load(&dir.join(afg_learn::PriceModel::FILE_NAME), mode)?
-                    .with_block(args.block.unwrap_or(1))?;
-            (dir.display().to_string(), Box::new(policy))
-        }
         (None, Some(dir)) => {
-            if args.one_shot {
-                anyhow::bail!(
-                    "--one-shot applies to price models (a directory holding price.json)"
-                );
-            }
-            let policy = afg_learn::LearnedPolicy::load(&afg_learn::RunDir::new(dir).weights())
-                .with_context(|| format!("loading the policy in {}", dir.display()))?
-                .with_repair(args.repair);
-            let policy = match (args.exact_burn, args.block) {
-                (true, Some(b)) if b != 1 => {
-                    anyhow::bail!(
-                        "--exact-burn rolls out one robot at a time (block 1); drop --block"
-                    )
-                }
-                (true, _) => policy.exact_burn(),
-                (false, block) => policy.with_block(block.unwrap_or(1))?,
+            let options = ModelOptions {
+                block: args.block,
+                repair: args.repair,
+                one_shot: args.one_shot,
+                exact_burn: args.exact_burn,
             };
-            (dir.display().to_string(), Box::new(policy))
+            (dir.display().to_string(), load_model(dir, options)?)
         }
         (None, None) => unreachable!("clap requires an allocator"),
     };
@@ -208,31 +117,12 @@ pub fn run(args: SolveArgs) -> Result<()> {
             bar.inc(1);
             row
         })
-        .collect::<Result<Vec<_>>>()?
+        .collect::<Result<Vec<_>, _>>()?
         .into_iter()
         .unzip();
     bar.finish_and_clear();
     write_outputs(&args, &name, &instances, &rows, &assignments)?;
-    let k = rows.len() as f64;
-    let mean = |f: &dyn Fn(&Row) -> f64| rows.iter().map(f).sum::<f64>() / k;
-    let m = Mean {
-        welfare: mean(&|r| r.score.welfare),
-        opt_welfare: mean(&|r| r.score.opt_welfare),
-        percent_of_opt: mean(&|r| r.score.percent_of_opt),
-        ns_rate_balanced: mean(&|r| r.score.ns_rate_balanced),
-        ns_rate_selfish: mean(&|r| r.score.ns_rate_selfish),
-        iterations: mean(&|r| r.stats.iterations as f64),
-        rounds: mean(&|r| r.stats.rounds as f64),
-        messages: mean(&|r| r.stats.messages as f64),
-        seconds: mean(&|r| r.stats.wall_time.as_secs_f64()),
-    };
-    let report = Report {
-        method: name,
-        source,
-        instances: rows.len(),
-        mean: m,
-        rows,
-    };
+    let report = Report::new(name, source, rows)?;
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
         return Ok(());
@@ -282,10 +172,12 @@ fn write_outputs(
     }
     if let Some(svg) = &args.svg {
         let opt = Optimum.allocate(&instances[0])?.assignment;
-        crate::map::draw_assignments(
-            &instances[0],
-            &[("OPT", &opt), (name, &assignments[0])],
+        crate::write_svg(
             svg,
+            &afg_eval::figures::assignments_svg(
+                &instances[0],
+                &[("OPT", &opt), (name, &assignments[0])],
+            )?,
         )?;
     }
     Ok(())

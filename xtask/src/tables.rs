@@ -151,7 +151,13 @@ fn assignment_map(root: &Path, out: &Path) -> Result<()> {
             Method::Da.allocator(0).allocate(&inst)?.assignment,
         )
     };
-    crate::map::draw_assignments(&inst, &[(Method::Opt.label(), &opt), (&label, &other)], out)
+    crate::write_svg(
+        out,
+        &afg_eval::figures::assignments_svg(
+            &inst,
+            &[(Method::Opt.label(), &opt), (&label, &other)],
+        )?,
+    )
 }
 
 /// The tables between the BEGIN and END markers of a file.

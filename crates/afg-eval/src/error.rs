@@ -23,6 +23,32 @@ pub enum EvalError {
         #[source]
         source: GameError,
     },
+    /// A trained model could not be loaded from its run directory.
+    #[error("loading the model in {path}: {source}")]
+    Model {
+        /// The run directory.
+        path: String,
+        /// What is wrong.
+        #[source]
+        source: LearnError,
+    },
+    /// Options that do not apply to the model or method at hand.
+    #[error("{0}")]
+    BadOptions(&'static str),
+    /// A training run's log lacks what is needed.
+    #[error("{path}: the log has {what}")]
+    Log {
+        /// The run directory.
+        path: String,
+        /// What is missing.
+        what: &'static str,
+    },
+    /// A figure could not be drawn.
+    #[error("drawing a figure: {0}")]
+    Figure(String),
+    /// A measurement was asked for on no instance.
+    #[error("no instances to evaluate on")]
+    NoInstances,
     /// An instance could not be generated.
     #[error(transparent)]
     Game(#[from] GameError),

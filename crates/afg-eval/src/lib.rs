@@ -8,11 +8,17 @@
 
 pub mod dataset;
 mod error;
+pub mod figures;
 pub mod markdown;
 mod model;
 pub mod paper;
 pub mod price_ablation;
+pub mod realloc;
+pub mod regret;
+pub mod runs;
+pub mod scale;
 mod score;
+pub mod solve;
 pub mod tables;
 
 pub use error::EvalError;

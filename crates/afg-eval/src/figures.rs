@@ -1,0 +1,168 @@
+//! SVG figures: validation curves of training runs and maps of assignments.
+
+use afg_game::{Assignment, Instance};
+use plotters::prelude::*;
+
+use crate::EvalError;
+use crate::runs::Curve;
+
+impl<E: std::error::Error + Send + Sync> From<DrawingAreaErrorKind<E>> for EvalError {
+    fn from(e: DrawingAreaErrorKind<E>) -> Self {
+        EvalError::Figure(e.to_string())
+    }
+}
+
+/// Validation welfare against gradient steps as an SVG, one line per run, the
+/// classical methods dashed.
+///
+/// # Errors
+/// [`EvalError::Figure`] if no curve has a point, or drawing fails.
+pub fn curves_svg(curves: &[Curve], title: &str) -> Result<String, EvalError> {
+    let all = curves.iter().flat_map(|c| c.points.iter().copied()).chain(
+        curves
+            .iter()
+            .flat_map(|c| c.baselines.iter().map(|b| (0.0, b.1))),
+    );
+    let (mut x_max, mut y_min, mut y_max) = (1.0f64, f64::INFINITY, f64::NEG_INFINITY);
+    for (x, y) in all {
+        x_max = x_max.max(x);
+        y_min = y_min.min(y);
+        y_max = y_max.max(y);
+    }
+    if !y_min.is_finite() {
+        return Err(EvalError::Figure(format!(
+            "no validation points in {} run(s)",
+            curves.len()
+        )));
+    }
+    let pad = ((y_max - y_min) * 0.05).max(1e-6);
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (800, 500)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 20))
+            .margin(15)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0.0..x_max, (y_min - pad)..(y_max + pad))?;
+        chart
+            .configure_mesh()
+            .x_desc("gradient step")
+            .y_desc("validation welfare (mean)")
+            .draw()?;
+        for (i, Curve { label, points, .. }) in curves.iter().enumerate() {
+            let color = Palette99::pick(i).to_rgba();
+            chart
+                .draw_series(LineSeries::new(
+                    points.iter().copied(),
+                    color.stroke_width(2),
+                ))?
+                .label(label.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                });
+        }
+        // The classical methods on each distinct validation set, dashed, in greys.
+        let mut drawn: Vec<(String, f64)> = Vec::new();
+        for c in curves {
+            for (name, w) in &c.baselines {
+                if drawn
+                    .iter()
+                    .any(|(n, v)| n == name && (v - w).abs() < 1e-12)
+                {
+                    continue;
+                }
+                drawn.push((name.clone(), *w));
+                let grey = 40 + 45 * (drawn.len() % 4) as u8;
+                let shade = RGBColor(grey, grey, grey);
+                chart
+                    .draw_series(DashedLineSeries::new(
+                        vec![(0.0, *w), (x_max, *w)],
+                        6,
+                        4,
+                        shade.stroke_width(1),
+                    ))?
+                    .label(format!("{name}, {w:.2}"))
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], shade.stroke_width(1))
+                    });
+            }
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()?;
+        root.present()?;
+    }
+    Ok(svg)
+}
+
+/// Assignments of one instance side by side as an SVG map: robots coloured by task
+/// (black if unassigned), tasks as squares sized by coalition, welfare in each title.
+///
+/// # Errors
+/// [`EvalError::Figure`] if drawing fails.
+///
+/// # Examples
+/// ```
+/// use afg_baseline::{Allocator, Optimum};
+/// use afg_game::GeneratorConfig;
+/// let inst = GeneratorConfig::paper(10, 3, 1).generate()?;
+/// let opt = Optimum.allocate(&inst)?.assignment;
+/// let svg = afg_eval::figures::assignments_svg(&inst, &[("OPT", &opt)])?;
+/// assert!(svg.starts_with("<svg"));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn assignments_svg(
+    inst: &Instance,
+    panels: &[(&str, &Assignment)],
+) -> Result<String, EvalError> {
+    let mut svg = String::new();
+    {
+        let width = 500 * panels.len().max(1) as u32;
+        let root_area = SVGBackend::with_string(&mut svg, (width, 520)).into_drawing_area();
+        root_area.fill(&WHITE)?;
+        let areas = root_area.split_evenly((1, panels.len().max(1)));
+        // The unit square, widened to hold every robot and task of other instances.
+        let points = inst
+            .robots()
+            .iter()
+            .chain(inst.tasks().iter().map(|t| &t.position));
+        let (mut x, mut y) = ((0.0f64, 1.0f64), (0.0f64, 1.0f64));
+        for p in points {
+            x = (x.0.min(p.x), x.1.max(p.x));
+            y = (y.0.min(p.y), y.1.max(p.y));
+        }
+        for (area, (name, a)) in areas.iter().zip(panels) {
+            let title = format!("{name}: welfare {:.2}", inst.welfare(a));
+            let mut chart = ChartBuilder::on(area)
+                .caption(title, ("sans-serif", 18))
+                .margin(10)
+                .x_label_area_size(25)
+                .y_label_area_size(35)
+                .build_cartesian_2d(x.0..x.1, y.0..y.1)?;
+            chart.configure_mesh().disable_mesh().draw()?;
+            for (i, p) in inst.robots().iter().enumerate() {
+                let color =
+                    a.tasks()[i].map_or(BLACK.to_rgba(), |j| Palette99::pick(j.index()).to_rgba());
+                chart.draw_series(std::iter::once(Circle::new((p.x, p.y), 3, color.filled())))?;
+            }
+            for j in inst.task_ids() {
+                let t = inst.task(j).position;
+                let size = 4 + 2 * (a.size(j) as f64).sqrt() as i32;
+                let color = Palette99::pick(j.index()).to_rgba();
+                chart.draw_series(std::iter::once(Rectangle::new(
+                    [
+                        (t.x - 0.004 * size as f64, t.y - 0.004 * size as f64),
+                        (t.x + 0.004 * size as f64, t.y + 0.004 * size as f64),
+                    ],
+                    color.stroke_width(3),
+                )))?;
+            }
+        }
+        root_area.present()?;
+    }
+    Ok(svg)
+}

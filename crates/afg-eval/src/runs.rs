@@ -1,0 +1,152 @@
+//! What the logs of training runs show: validation curves ([`read_curve`], drawn by
+//! [`crate::figures::curves_svg`]) and the summary table of finished runs
+//! ([`report_markdown`]).
+
+use std::collections::BTreeMap;
+use std::fmt::Write;
+use std::path::{Path, PathBuf};
+
+use afg_baseline::Method;
+use afg_learn::{LogEvent, RunDir, ValidationLine};
+
+use crate::EvalError;
+
+/// The validation curve of one run.
+pub struct Curve {
+    /// "net_algo (N = n)".
+    pub label: String,
+    /// (gradient step, mean validation welfare).
+    pub points: Vec<(f64, f64)>,
+    /// Mean welfare of the classical methods on the validation set, as logged.
+    pub baselines: Vec<(String, f64)>,
+}
+
+/// Reads the validation curve from `dir/log.jsonl`.
+///
+/// # Errors
+/// A missing or unreadable log.
+pub fn read_curve(dir: &Path) -> Result<Curve, EvalError> {
+    let run = RunDir::new(dir);
+    let (mut label, mut points, mut baselines) =
+        (dir.display().to_string(), Vec::new(), Vec::new());
+    for event in run.log()? {
+        match event {
+            LogEvent::Start {
+                config,
+                baselines: logged,
+                ..
+            } => {
+                label = format!(
+                    "{} ({}_{}, N = {})",
+                    run.name(),
+                    config.network.name(),
+                    config.algo.name(),
+                    config.robots
+                );
+                for m in [Method::Opt, Method::Greedy, Method::Nearest, Method::Random] {
+                    if let Some(&w) = logged.get(m.name()) {
+                        baselines.push((m.name().to_owned(), w));
+                    }
+                }
+            }
+            LogEvent::Validation(v) => points.push((v.step as f64, v.welfare)),
+            _ => {}
+        }
+    }
+    Ok(Curve {
+        label,
+        points,
+        baselines,
+    })
+}
+
+/// A Markdown table of finished runs: final and best validation welfare against the
+/// classical methods on the same validation set (all read from the runs' logs), then
+/// the classical methods on each distinct validation set.
+///
+/// # Errors
+/// A missing log, or a log without a start event or a validation.
+pub fn report_markdown(dirs: &[PathBuf]) -> Result<String, EvalError> {
+    let mut out = String::from(
+        "| run | N | steps | wall time | final validation welfare | % of OPT | best (step) | collapsed validations |\n|---|---|---|---|---|---|---|---|\n",
+    );
+    // Keyed by the scale's name: N, with M when it is not the paper's 5.
+    let mut baseline_rows: Vec<(String, BTreeMap<String, f64>)> = Vec::new();
+    for dir in dirs {
+        let run = RunDir::new(dir);
+        let events = run.log()?;
+        let incomplete = |what| EvalError::Log {
+            path: dir.display().to_string(),
+            what,
+        };
+        let (config, logged) = events
+            .iter()
+            .find_map(|e| match e {
+                LogEvent::Start {
+                    config, baselines, ..
+                } => Some((config, baselines)),
+                _ => None,
+            })
+            .ok_or_else(|| incomplete("no start event"))?;
+        let vals: Vec<&ValidationLine> = events
+            .iter()
+            .filter_map(|e| match e {
+                LogEvent::Validation(v) => Some(v),
+                _ => None,
+            })
+            .collect();
+        let last = vals.last().ok_or_else(|| incomplete("no validation"))?;
+        let best = vals
+            .iter()
+            .max_by(|a, b| a.welfare.total_cmp(&b.welfare))
+            .expect("non-empty");
+        let wall = events
+            .iter()
+            .rev()
+            .find_map(LogEvent::elapsed_s)
+            .unwrap_or(0.0);
+        let n = match config.network.tasks() {
+            crate::dataset::TASKS => config.robots.to_string(),
+            m => format!("{} (M = {m})", config.robots),
+        };
+        // Validations where most robots took one task (logged since the collapse check
+        // exists; "–" for older logs).
+        let flagged: Vec<bool> = vals.iter().filter_map(|v| v.collapsed).collect();
+        let collapsed = if flagged.is_empty() {
+            "–".to_owned()
+        } else {
+            format!(
+                "{} of {}",
+                flagged.iter().filter(|&&c| c).count(),
+                flagged.len()
+            )
+        };
+        let _ = writeln!(
+            out,
+            "| {} | {n} | {} | {:.0} min | {:.3} | {:.2} % | {:.3} ({}) | {collapsed} |",
+            run.name(),
+            last.step,
+            wall / 60.0,
+            last.welfare,
+            last.percent_of_opt,
+            best.welfare,
+            best.step
+        );
+        if !baseline_rows.iter().any(|(m, _)| *m == n) {
+            baseline_rows.push((n.clone(), logged.clone()));
+        }
+    }
+    out += "\nClassical methods on the same validation sets (mean welfare):\n\n";
+    let methods = Method::CENTRALISED;
+    let header: Vec<&str> = methods.iter().map(|m| m.label()).collect();
+    let _ = writeln!(out, "| N | {} |", header.join(" | "));
+    let _ = writeln!(out, "|---|{}", "---|".repeat(methods.len()));
+    for (n, b) in baseline_rows {
+        let cells: Vec<String> = methods
+            .iter()
+            .map(|m| b.get(m.name()).map_or("–".into(), |v| format!("{v:.3}")))
+            .collect();
+        let _ = writeln!(out, "| {n} | {} |", cells.join(" | "));
+    }
+    Ok(out)
+}

@@ -1,0 +1,231 @@
+//! One allocator on a set of instances, instance by instance (`cargo xtask solve`): the
+//! trained model of a run directory as an allocator, each instance's score and the
+//! means.
+
+use std::path::Path;
+
+use afg_baseline::{AllocStats, Allocator};
+use afg_game::{Assignment, Instance, Preference};
+use afg_learn::{LearnedPolicy, PriceMode, PriceModel, PricePolicy, RunDir};
+use serde::Serialize;
+
+use crate::{EvalError, Score, optimum_welfare};
+
+/// How the model of a directory is run ([`load_model`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ModelOptions {
+    /// Robots per network evaluation (Q networks and sequential price models; default
+    /// 1, the exact greedy rollout).
+    pub block: Option<usize>,
+    /// Q networks: balanced best-response sweeps after the rollout.
+    pub repair: bool,
+    /// Price models: every robot uses the prices of the empty state.
+    pub one_shot: bool,
+    /// Q networks: roll out with the Burn network (the slow reference path).
+    pub exact_burn: bool,
+}
+
+/// The trained model in `dir` as an allocator: a price model if the directory holds a
+/// price file ([`PriceModel::FILE_NAME`]), else the Q network of a training run.
+///
+/// # Errors
+/// [`EvalError::BadOptions`] for options that do not apply to the model found, and
+/// [`EvalError::Model`] if it cannot be loaded.
+///
+/// # Examples
+/// ```
+/// use afg_eval::solve::{ModelOptions, load_model};
+/// let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/afgnet_ddqn_n20");
+/// let one_shot = ModelOptions { one_shot: true, ..ModelOptions::default() };
+/// assert!(load_model(&dir, one_shot).is_err()); // a Q network has no one-shot mode
+/// assert!(load_model(&dir, ModelOptions::default()).is_ok());
+/// ```
+pub fn load_model(dir: &Path, options: ModelOptions) -> Result<Box<dyn Allocator>, EvalError> {
+    let bad = |why| Err(EvalError::BadOptions(why));
+    let loading = |source| EvalError::Model {
+        path: dir.display().to_string(),
+        source,
+    };
+    let price = dir.join(PriceModel::FILE_NAME);
+    if price.exists() {
+        if options.repair || options.exact_burn {
+            return bad("--repair and --exact-burn apply to Q networks, not price models");
+        }
+        if options.one_shot && options.block.is_some() {
+            return bad("--block applies to the sequential mode; drop --one-shot or --block");
+        }
+        let mode = if options.one_shot {
+            PriceMode::OneShot
+        } else {
+            PriceMode::Sequential
+        };
+        let policy = PricePolicy::load(&price, mode)
+            .and_then(|p| p.with_block(options.block.unwrap_or(1)))
+            .map_err(loading)?;
+        return Ok(Box::new(policy));
+    }
+    if options.one_shot {
+        return bad("--one-shot applies to price models (a directory holding price.json)");
+    }
+    let policy = LearnedPolicy::load(&RunDir::new(dir).weights())
+        .map_err(loading)?
+        .with_repair(options.repair);
+    let policy = match (options.exact_burn, options.block) {
+        (true, Some(b)) if b != 1 => {
+            return bad("--exact-burn rolls out one robot at a time (block 1); drop --block");
+        }
+        (true, _) => policy.exact_burn(),
+        (false, block) => policy.with_block(block.unwrap_or(1)).map_err(loading)?,
+    };
+    Ok(Box::new(policy))
+}
+
+/// One instance's result.
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    /// The allocation against OPT.
+    #[serde(flatten)]
+    pub score: Score,
+    /// What the allocator reported.
+    pub stats: AllocStats,
+}
+
+impl Row {
+    /// Runs `method` and OPT on `instance`: the row and the method's assignment.
+    ///
+    /// # Errors
+    /// The allocators' errors, or [`EvalError::BeatsOptimum`].
+    pub fn compute(
+        instance: &Instance,
+        method: &dyn Allocator,
+    ) -> Result<(Row, Assignment), EvalError> {
+        let out = method.allocate(instance)?;
+        let opt = optimum_welfare(instance)?;
+        let score = Score::of("the allocation", instance, &out.assignment, opt)?;
+        let row = Row {
+            score,
+            stats: out.stats,
+        };
+        Ok((row, out.assignment))
+    }
+
+    /// The JSON line of `assignment` (format "afg-assignment") with a summary of this
+    /// row: welfare, % of OPT, coalition sizes, stability and NS rates.
+    pub fn assignment_line(
+        &self,
+        method: &str,
+        instance: &Instance,
+        assignment: &Assignment,
+    ) -> String {
+        assignment.to_json_with_summary(Some(serde_json::json!({
+            "method": method,
+            "welfare": self.score.welfare,
+            "opt_welfare": self.score.opt_welfare,
+            "percent_of_opt": self.score.percent_of_opt,
+            "coalition_sizes": assignment.sizes(),
+            "stable_balanced": instance.is_stable(assignment, Preference::Balanced),
+            "ns_rate_balanced": self.score.ns_rate_balanced,
+            "ns_rate_selfish": self.score.ns_rate_selfish,
+        })))
+    }
+}
+
+/// The rows of one allocator on a set of instances, and their means.
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    /// The allocator.
+    pub method: String,
+    /// Where the instances came from.
+    pub source: String,
+    /// Instances solved.
+    pub instances: usize,
+    /// Means over the rows.
+    pub mean: Mean,
+    /// One per instance.
+    pub rows: Vec<Row>,
+}
+
+/// Means of a [`Report`]'s rows (NS rates as shares in 0..=1, as in [`Score`]).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Mean {
+    /// Welfare.
+    pub welfare: f64,
+    /// OPT's welfare.
+    pub opt_welfare: f64,
+    /// Per-instance % of OPT.
+    pub percent_of_opt: f64,
+    /// Balanced NS rate.
+    pub ns_rate_balanced: f64,
+    /// Selfish NS rate.
+    pub ns_rate_selfish: f64,
+    /// [`AllocStats::iterations`].
+    pub iterations: f64,
+    /// [`AllocStats::rounds`].
+    pub rounds: f64,
+    /// [`AllocStats::messages`].
+    pub messages: f64,
+    /// Wall time per instance, seconds.
+    pub seconds: f64,
+}
+
+impl Report {
+    /// The report of `rows` (at least one).
+    ///
+    /// # Errors
+    /// [`EvalError::NoInstances`] if `rows` is empty.
+    pub fn new(method: String, source: String, rows: Vec<Row>) -> Result<Report, EvalError> {
+        if rows.is_empty() {
+            return Err(EvalError::NoInstances);
+        }
+        let k = rows.len() as f64;
+        let mean = |f: &dyn Fn(&Row) -> f64| rows.iter().map(f).sum::<f64>() / k;
+        let mean = Mean {
+            welfare: mean(&|r| r.score.welfare),
+            opt_welfare: mean(&|r| r.score.opt_welfare),
+            percent_of_opt: mean(&|r| r.score.percent_of_opt),
+            ns_rate_balanced: mean(&|r| r.score.ns_rate_balanced),
+            ns_rate_selfish: mean(&|r| r.score.ns_rate_selfish),
+            iterations: mean(&|r| r.stats.iterations as f64),
+            rounds: mean(&|r| r.stats.rounds as f64),
+            messages: mean(&|r| r.stats.messages as f64),
+            seconds: mean(&|r| r.stats.wall_time.as_secs_f64()),
+        };
+        Ok(Report {
+            method,
+            source,
+            instances: rows.len(),
+            mean,
+            rows,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use afg_baseline::{Greedy, Optimum};
+    use afg_game::GeneratorConfig;
+
+    use super::*;
+
+    #[test]
+    fn the_means_are_those_of_the_rows() {
+        let insts: Vec<Instance> = (0..3)
+            .map(|s| GeneratorConfig::paper(15, 3, s).generate().unwrap())
+            .collect();
+        let rows: Vec<Row> = insts
+            .iter()
+            .map(|i| Row::compute(i, &Greedy).unwrap().0)
+            .collect();
+        let by_hand = rows.iter().map(|r| r.score.welfare).sum::<f64>() / 3.0;
+        let report = Report::new("greedy".into(), "here".into(), rows).unwrap();
+        assert_eq!(report.instances, 3);
+        assert!((report.mean.welfare - by_hand).abs() < 1e-12);
+        assert!(report.mean.percent_of_opt <= 100.0 + 1e-9);
+        let (opt, _) = Row::compute(&insts[0], &Optimum).unwrap();
+        assert_eq!(opt.score.percent_of_opt, 100.0);
+        assert!(matches!(
+            Report::new("x".into(), "y".into(), Vec::new()),
+            Err(EvalError::NoInstances)
+        ));
+    }
+}
