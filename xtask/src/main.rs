@@ -4,7 +4,6 @@ mod bench;
 mod curves;
 mod datasets;
 mod manifest;
-mod plain;
 mod price;
 mod realloc;
 mod regret;

@@ -1,15 +1,12 @@
 //! `cargo xtask train`.
 
-use std::collections::BTreeMap;
 use std::path::PathBuf;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-use afg_baseline::Method;
 use afg_eval::dataset;
 use afg_graph::Units;
 use afg_learn::{
-    Algo, Demonstrations, LogEvent, NetworkConfig, Preset, RunDir, Shaping, TrainConfig, Trainer,
-    ValidationLine, save_network, validation_instances,
+    Algo, Demonstrations, NetworkConfig, Preset, RunDir, Session, Shaping, TrainConfig,
 };
 use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
@@ -288,45 +285,30 @@ impl TrainArgs {
 }
 
 pub fn run(args: TrainArgs) -> Result<()> {
-    let (run, _lock, mut trainer, elapsed_before) = match &args.resume {
+    let mut session = match &args.resume {
         Some(dir) => {
-            let run = RunDir::new(dir);
-            let stored = run.config()?;
-            if args.any_setting_given() && args.config()? != stored {
+            if args.any_setting_given() && args.config()? != RunDir::new(dir).config()? {
                 bail!(
                     "{} holds a run with other settings; resume it without settings, or start a new run with --out",
                     dir.display()
                 );
             }
-            let lock = run.lock()?;
-            let trainer =
-                Trainer::resume(dir).with_context(|| format!("resuming {}", dir.display()))?;
-            let elapsed_before = run.truncate_log(trainer.steps_done())?;
-            eprintln!(
-                "resuming {} at step {}",
-                dir.display(),
-                trainer.steps_done()
-            );
-            (run, lock, trainer, elapsed_before)
+            let session =
+                Session::resume(dir).with_context(|| format!("resuming {}", dir.display()))?;
+            let step = session.trainer().steps_done();
+            eprintln!("resuming {} at step {step}", dir.display());
+            session
         }
         None => {
             let config = args.config()?;
             let dir = args
                 .out
-                .clone()
+                .as_ref()
                 .context("pass --out DIR for a new run (or --resume DIR)")?;
-            let run = RunDir::create(&dir, &config)?;
-            let lock = run.lock()?;
-            let trainer = Trainer::new(config.clone())?;
-            run.append(&LogEvent::Start {
-                baselines: baselines(&config)?,
-                config: Box::new(config),
-                git_revision: git_revision(),
-            })?;
-            (run, lock, trainer, 0.0)
+            Session::start(dir, config, git_revision())?
         }
     };
-    let config = trainer.config().clone();
+    let config = session.trainer().config().clone();
     let name = format!(
         "{}_{} N={}",
         config.network.name(),
@@ -339,33 +321,12 @@ pub fn run(args: TrainArgs) -> Result<()> {
             .expect("valid template")
             .progress_chars("=> "),
     );
-    bar.set_position(trainer.steps_done());
-    let started = Instant::now();
-    // Seconds of training so far, across resumes (time lost after a run's last
-    // checkpoint is not counted).
-    let elapsed = || elapsed_before + started.elapsed().as_secs_f64();
-    let mut last_checkpoint = Instant::now();
+    bar.set_position(session.trainer().steps_done());
     let mut last_val = f64::NAN;
-    let mut window = Vec::new();
-    while !trainer.is_finished() {
-        let report = trainer.step()?;
+    let every = Duration::from_secs(args.checkpoint_secs);
+    let v = session.run(every, |report| {
         let (step, loss, epsilon) = (report.step, report.loss, report.epsilon);
-        window.push(loss);
-        bar.set_position(step);
-        bar.set_message(format!(
-            "{name} ε {epsilon:.2} loss {loss:.4} val {last_val:.2}"
-        ));
-        if step.is_multiple_of(10) {
-            let mean = window.iter().sum::<f32>() / window.len() as f32;
-            window.clear();
-            run.append(&LogEvent::Step {
-                step,
-                loss: mean,
-                epsilon,
-                elapsed_s: elapsed(),
-            })?;
-        }
-        if let Some(result) = report.validation {
+        if let Some(result) = &report.validation {
             last_val = result.welfare;
             if result.collapsed() {
                 bar.suspend(|| {
@@ -375,52 +336,21 @@ pub fn run(args: TrainArgs) -> Result<()> {
                     )
                 });
             }
-            run.append(&LogEvent::Validation(ValidationLine::new(
-                step,
-                &result,
-                elapsed(),
-            )))?;
         }
-        if last_checkpoint.elapsed() >= Duration::from_secs(args.checkpoint_secs) {
-            trainer.save_checkpoint(run.path())?;
-            last_checkpoint = Instant::now();
-        }
-    }
-    trainer.save_checkpoint(run.path())?;
-    save_network(trainer.network(), &config.network, &run.weights())?;
-    run.append(&LogEvent::End {
-        step: trainer.steps_done(),
-        elapsed_s: elapsed(),
+        bar.set_position(step);
+        bar.set_message(format!(
+            "{name} ε {epsilon:.2} loss {loss:.4} val {last_val:.2}"
+        ));
     })?;
     bar.finish_and_clear();
-    let v = trainer.validate()?;
     println!(
         "{name}: {} steps; validation welfare {:.3} ({:.2} % of OPT); model in {}",
-        trainer.steps_done(),
+        session.trainer().steps_done(),
         v.welfare,
         v.percent_of_opt,
-        run.weights().display()
+        session.run_dir().weights().display()
     );
     Ok(())
-}
-
-/// Mean welfare of the classical methods on the validation set, for the log.
-fn baselines(config: &TrainConfig) -> Result<BTreeMap<String, f64>> {
-    let insts = validation_instances(
-        config.robots,
-        config.network.tasks(),
-        config.validation_instances,
-    )?;
-    let mut out = BTreeMap::new();
-    for m in Method::CENTRALISED {
-        let alloc = m.allocator(0);
-        let mut total = 0.0;
-        for inst in &insts {
-            total += inst.welfare(&alloc.allocate(inst)?.assignment);
-        }
-        out.insert(m.name().to_owned(), total / insts.len() as f64);
-    }
-    Ok(out)
 }
 
 /// The checked-out git revision, if there is one.
@@ -510,30 +440,9 @@ mod tests {
             out,
         ])
         .unwrap();
-        for f in [
-            "config.json",
-            "log.jsonl",
-            "model.json",
-            "model.mpk",
-            "checkpoint/state.json",
-        ] {
-            assert!(run_dir.join(f).exists(), "{f} missing");
-        }
-        let log = std::fs::read_to_string(run_dir.join("log.jsonl")).unwrap();
-        let events: Vec<serde_json::Value> = log
-            .lines()
-            .map(|l| serde_json::from_str(l).unwrap())
-            .collect();
-        assert_eq!(events[0]["event"], "start");
-        assert!(
-            events
-                .iter()
-                .filter(|e| e["event"] == "step")
-                .all(|e| e["loss"].as_f64().unwrap().is_finite())
-        );
-        assert!(events.iter().any(|e| e["event"] == "validation"));
-        assert_eq!(events.last().unwrap()["event"], "end");
+        // What the run directory holds is tested in afg-learn (Session).
         afg_learn::LearnedPolicy::load(&run_dir.join("model")).unwrap();
+        assert!(run_dir.join("checkpoint/state.json").exists());
 
         let svg = dir.join("curves.svg");
         xtask(&["plot-curves", out, "--out", svg.to_str().unwrap()]).unwrap();
@@ -551,20 +460,6 @@ mod tests {
         // Resuming with other settings is refused too.
         let err = xtask(&["train", "--resume", out, "--scale", "20", "--steps", "5"]).unwrap_err();
         assert!(err.to_string().contains("other settings"), "{err}");
-        // A directory another trainer holds is refused.
-        let lock = RunDir::new(&run_dir).lock().unwrap();
-        let err = xtask(&["train", "--resume", out]).unwrap_err();
-        assert!(err.to_string().contains("in use"), "{err}");
-        drop(lock);
-        // A truncated checkpoint is a clear error.
-        let state = run_dir.join("checkpoint/state.json");
-        let text = std::fs::read_to_string(&state).unwrap();
-        std::fs::write(&state, &text[..text.len() / 2]).unwrap();
-        let err = xtask(&["train", "--resume", out]).unwrap_err();
-        assert!(
-            format!("{err:#}").contains("corrupt or truncated"),
-            "{err:#}"
-        );
         assert_eq!(std::fs::read(run_dir.join("model.mpk")).unwrap(), before);
         // Unknown values are refused by the parser.
         assert!(xtask(&["train", "--scale", "20", "--net", "gcn", "--out", out]).is_err());

@@ -6,6 +6,7 @@
 //!
 //! Every command that prints "% of OPT" computes it here.
 
+pub mod bench;
 pub mod dataset;
 mod error;
 pub mod figures;

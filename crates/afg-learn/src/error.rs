@@ -1,5 +1,6 @@
 //! The crate's error type.
 
+use afg_baseline::AllocError;
 use afg_game::GameError;
 use afg_graph::GraphError;
 use thiserror::Error;
@@ -13,6 +14,9 @@ pub enum LearnError {
     /// The robot graph could not be built.
     #[error(transparent)]
     Graph(#[from] GraphError),
+    /// A classical allocator failed (they do not on valid instances).
+    #[error(transparent)]
+    Alloc(#[from] AllocError),
     /// An action that the environment does not allow.
     #[error("invalid action: {0}")]
     InvalidAction(String),

@@ -42,8 +42,8 @@ pub use s2v::{S2v, S2vConfig};
 pub use targets::{double_dqn_target, dqn_target, masked_argmax};
 pub use tensors::{DENSE_MAX_NODES, DenseAdjacency, GraphTensors};
 pub use train::{
-    Algo, Demonstrations, Preset, StepReport, TrainConfig, Trainer, Validation, checkpoint_dir,
-    training_instance_seed, validation_instances,
+    Algo, Demonstrations, Preset, Session, StepReport, TrainConfig, Trainer, Validation,
+    checkpoint_dir, training_instance_seed, validation_instances,
 };
 pub use weights::{load_network, save_network};
 

@@ -6,8 +6,9 @@ use afg_baseline::{Allocator, Greedy, Optimum};
 use afg_game::{Assignment, GeneratorConfig, Instance, TaskId};
 use afg_graph::{AllocationState, GraphKind, RobotGraph, Units};
 use afg_learn::{
-    AfgNetConfig, Algo, GraphTensors, InferBackend, LearnError, NetworkConfig, QNetwork, Shaping,
-    TrainConfig, Trainer, double_dqn_target, dqn_target, n_step_reward,
+    AfgNetConfig, Algo, GraphTensors, InferBackend, LearnError, LearnedPolicy, LogEvent,
+    NetworkConfig, QNetwork, RunDir, Session, Shaping, TrainConfig, Trainer, double_dqn_target,
+    dqn_target, n_step_reward,
 };
 use burn::module::{Module, ModuleVisitor, Param};
 use burn::tensor::Tensor;
@@ -142,6 +143,61 @@ fn resumed_run_ends_with_bit_identical_weights() {
     resumed.save_checkpoint(&dir).unwrap();
     assert_eq!(Trainer::resume(&dir).unwrap().steps_done(), 60);
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_session_logs_and_saves_its_run_and_refuses_a_second_writer() {
+    let dir = temp_dir("session").join("run");
+    let config = tiny(Algo::Ddqn, NetworkConfig::s2v(5, 4), 40);
+    let mut session = Session::start(&dir, config.clone(), Some("abc".into())).unwrap();
+    // The directory is locked while the session lives.
+    assert!(matches!(
+        Session::resume(&dir),
+        Err(LearnError::RunInUse { .. })
+    ));
+    let mut seen = 0;
+    let v = session
+        .run(std::time::Duration::from_secs(3600), |r| {
+            seen += 1;
+            assert_eq!(r.step, seen);
+        })
+        .unwrap();
+    assert_eq!(seen, 40);
+    drop(session);
+    let run = RunDir::new(&dir);
+    let log = run.log().unwrap();
+    let LogEvent::Start {
+        config: logged,
+        git_revision,
+        baselines,
+    } = &log[0]
+    else {
+        panic!("the log starts with {:?}", log[0]);
+    };
+    assert_eq!(
+        (**logged == config, git_revision.as_deref()),
+        (true, Some("abc"))
+    );
+    assert!(baselines["opt"] >= baselines["greedy"]);
+    let steps: Vec<u64> = log
+        .iter()
+        .filter_map(|e| matches!(e, LogEvent::Step { .. }).then(|| e.step().unwrap()))
+        .collect();
+    assert_eq!(steps, [10, 20, 30, 40]);
+    let validations = log
+        .iter()
+        .filter(|e| matches!(e, LogEvent::Validation(_)))
+        .count();
+    assert_eq!(validations, 2);
+    assert!(matches!(log.last(), Some(LogEvent::End { step: 40, .. })));
+    // The final weights are the trainer's: the same validation.
+    let policy = LearnedPolicy::load(&run.weights()).unwrap();
+    assert_eq!(policy.config(), &config.network);
+    assert_eq!(Trainer::resume(&dir).unwrap().validate().unwrap(), v);
+    // A second run into the same directory is refused; resuming a finished one is not.
+    assert!(Session::start(&dir, config, None).is_err());
+    Session::resume(&dir).unwrap();
+    std::fs::remove_dir_all(dir.parent().unwrap()).unwrap();
 }
 
 #[test]

@@ -19,6 +19,7 @@ mod batch;
 mod checkpoint;
 mod config;
 mod replay;
+mod session;
 
 use std::collections::VecDeque;
 
@@ -38,6 +39,7 @@ pub use config::{
     Algo, Demonstrations, Preset, TrainConfig, training_instance_seed, validation_instances,
 };
 use replay::{Episode, EpisodeRecord};
+pub use session::Session;
 
 use crate::{
     GraphTensors, InferBackend, LearnError, QNetwork, TrainBackend, greedy_rollouts, masked_argmax,

@@ -1,4 +1,4 @@
-//! The "plain" AFGNet of `the first Burn notes of this project`, kept as the reference that
+//! The "plain" AFGNet of the project's first Burn notes, kept as the reference that
 //! `bench-models` measures our training step against: every node's neighbours padded
 //! to the batch's largest degree, gathered with `select`, reshaped to `[V, D, ·]` and
 //! summed over the slots — no dense per-graph path. It reads the parameters of an
@@ -23,6 +23,7 @@ pub struct PaddedGraph<B: Backend> {
 }
 
 impl<B: Backend> PaddedGraph<B> {
+    /// Uploads `batch` with its neighbour lists padded to the largest degree.
     pub fn new(batch: &GraphBatch, device: &B::Device) -> Self {
         let v = batch.num_nodes();
         let mut lists: Vec<Vec<(u32, f32)>> = vec![Vec::new(); v];
@@ -98,7 +99,7 @@ mod tests {
     fn the_plain_model_computes_our_q_values() {
         let device = Default::default();
         for n in [20, 60] {
-            let batch = crate::bench::random_batch(n, 8).unwrap();
+            let batch = super::super::random_batch(n, 8).unwrap();
             let net = NetworkConfig::afgnet(5, 0).init::<InferBackend>(&device);
             let QNetwork::AfgNet(afgnet) = &net else {
                 unreachable!("an AFGNet configuration")

@@ -1,0 +1,212 @@
+//! Measurements behind `cargo xtask bench-baselines` and `bench-models`: median wall
+//! times of allocators, of the networks' forward pass and training step (edge lists
+//! against dense adjacency, and against the [`plain`] padded-gather model), and of the
+//! greedy rollout (Burn path against the fast path).
+//!
+//! The machine is shared and noisy: compare ratios measured in one run.
+
+pub mod plain;
+
+use std::time::{Duration, Instant};
+
+use afg_baseline::Allocator;
+use afg_game::{GeneratorConfig, Instance, TaskId};
+use afg_graph::{GraphBatch, GraphKind, RobotGraph};
+use afg_learn::{
+    Activation, Env, GraphTensors, InferBackend, LearnError, LearnedPolicy, NetworkConfig,
+    QNetwork, TrainBackend,
+};
+use burn::optim::{AdamConfig, GradientsParams, Optimizer};
+use burn::tensor::Tensor;
+use rand::{Rng, SeedableRng};
+
+use crate::EvalError;
+use plain::PaddedGraph;
+
+/// Median wall time of `alloc` on `instance` over repeated runs (at least one, at most
+/// 20, until `budget_s` seconds are spent), and the welfare of its allocation.
+///
+/// # Errors
+/// The allocator's.
+pub fn allocator_time(
+    alloc: &dyn Allocator,
+    instance: &Instance,
+    budget_s: f64,
+) -> Result<(Duration, f64), EvalError> {
+    let mut times = Vec::new();
+    let mut welfare = 0.0;
+    let mut spent = 0.0;
+    while times.is_empty() || (spent < budget_s && times.len() < 20) {
+        let out = alloc.allocate(instance)?;
+        welfare = instance.welfare(&out.assignment);
+        spent += out.stats.wall_time.as_secs_f64();
+        times.push(out.stats.wall_time);
+    }
+    times.sort();
+    Ok((times[times.len() / 2], welfare))
+}
+
+/// A batch of `size` states from random partial episodes on fresh instances of `n`
+/// robots and five tasks (seeded by `n`).
+///
+/// # Errors
+/// `n` = 0, or an instance that cannot be generated.
+pub fn random_batch(n: usize, size: usize) -> Result<GraphBatch, EvalError> {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(n as u64);
+    let mut batch = GraphBatch::new(5);
+    for s in 0..size {
+        let inst = GeneratorConfig::paper(n, 5, s as u64).generate()?;
+        let graph =
+            RobotGraph::build(inst.robots(), GraphKind::default()).map_err(LearnError::from)?;
+        let mut env = Env::reset(&inst);
+        for _ in 0..rng.random_range(0..n) {
+            env.step(TaskId(rng.random_range(0..5)))?;
+        }
+        batch.push(&graph, env.state(), env.actor().expect("a robot is left"));
+    }
+    Ok(batch)
+}
+
+/// Median wall time of `repeats` (at least one) calls of `f`.
+fn median<T, E>(repeats: usize, mut f: impl FnMut() -> Result<T, E>) -> Result<Duration, E> {
+    let mut times = Vec::with_capacity(repeats);
+    for _ in 0..repeats.max(1) {
+        let start = Instant::now();
+        f()?;
+        times.push(start.elapsed());
+    }
+    times.sort();
+    Ok(times[times.len() / 2])
+}
+
+/// Median time of one training step (forward, backward, Adam) on a fixed batch, with
+/// `forward` computing the `[rows, M]` Q values; the loss is the MSE to zero.
+fn step_time(
+    repeats: usize,
+    config: &NetworkConfig,
+    rows: usize,
+    forward: impl Fn(&QNetwork<TrainBackend>) -> Tensor<TrainBackend, 2>,
+) -> Duration {
+    let device = Default::default();
+    let mut train = config.init::<TrainBackend>(&device);
+    let mut optim = AdamConfig::new().init();
+    let target = Tensor::<TrainBackend, 2>::zeros([rows, config.tasks()], &device);
+    let time = median(repeats, || {
+        let loss = (forward(&train) - target.clone()).powi_scalar(2).mean();
+        let grads = GradientsParams::from_grads(loss.backward(), &train);
+        train = optim.step(1e-4, train.clone(), grads);
+        Ok::<_, EvalError>(())
+    });
+    time.expect("the step cannot fail")
+}
+
+/// One network's forward pass and training step on one batch, with edge lists and with
+/// dense adjacency.
+#[derive(Clone, Debug)]
+pub struct NetworkTiming {
+    /// The network's name.
+    pub network: &'static str,
+    /// Robots N of the batch's states.
+    pub robots: usize,
+    /// Forward pass with edge lists, then with dense adjacency.
+    pub forward: [Duration; 2],
+    /// Training step with edge lists, then with dense adjacency.
+    pub step: [Duration; 2],
+}
+
+/// [`NetworkTiming`] of AFGNet and S2V (M = 5) for each N of `sizes`, on a
+/// [`random_batch`] of `batch` states, medians of `repeats` runs.
+///
+/// # Errors
+/// An instance that cannot be generated.
+pub fn network_timings(
+    sizes: &[usize],
+    batch: usize,
+    repeats: usize,
+) -> Result<Vec<NetworkTiming>, EvalError> {
+    let device = Default::default();
+    let mut out = Vec::new();
+    for &n in sizes {
+        let states = random_batch(n, batch)?;
+        for config in [NetworkConfig::afgnet(5, 0), NetworkConfig::s2v(5, 0)] {
+            let mut forward = [Duration::ZERO; 2];
+            let mut step = [Duration::ZERO; 2];
+            for (k, dense) in [false, true].into_iter().enumerate() {
+                let upload = |b: &GraphBatch| {
+                    if dense {
+                        GraphTensors::<InferBackend>::new(b, &device)
+                    } else {
+                        GraphTensors::sparse(b, &device)
+                    }
+                };
+                let net = config.init::<InferBackend>(&device);
+                forward[k] = median(repeats, || {
+                    Ok::<_, EvalError>(net.forward(&upload(&states)).into_data())
+                })?;
+                step[k] = step_time(repeats, &config, batch, |net| {
+                    net.forward(&if dense {
+                        GraphTensors::<TrainBackend>::new(&states, &device)
+                    } else {
+                        GraphTensors::sparse(&states, &device)
+                    })
+                });
+            }
+            out.push(NetworkTiming {
+                network: config.name(),
+                robots: n,
+                forward,
+                step,
+            });
+        }
+    }
+    Ok(out)
+}
+
+/// AFGNet's training step, [`plain`] model against ours (dense), for each N of `sizes`
+/// on a [`random_batch`] of `batch` states: `(N, plain, ours)`.
+///
+/// # Errors
+/// An instance that cannot be generated.
+pub fn plain_timings(
+    sizes: &[usize],
+    batch: usize,
+    repeats: usize,
+) -> Result<Vec<(usize, Duration, Duration)>, EvalError> {
+    let device = Default::default();
+    let config = NetworkConfig::afgnet(5, 0);
+    let plain_q = |net: &QNetwork<TrainBackend>, b: &GraphBatch| match net {
+        QNetwork::AfgNet(a) => plain::forward(a, Activation::Relu, &PaddedGraph::new(b, &device)),
+        QNetwork::S2v(_) => unreachable!("an AFGNet configuration"),
+    };
+    let mut out = Vec::new();
+    for &n in sizes {
+        let states = random_batch(n, batch)?;
+        let plain = step_time(repeats, &config, batch, |net| plain_q(net, &states));
+        let ours = step_time(repeats, &config, batch, |net| {
+            net.forward(&GraphTensors::new(&states, &device))
+        });
+        out.push((n, plain, ours));
+    }
+    Ok(out)
+}
+
+/// The greedy rollout of untrained AFGNet and S2V on one instance of `robots` robots
+/// (seed 7, M = 5): `(network, Burn path, fast path)`, the fast path the median of
+/// three runs.
+///
+/// # Errors
+/// An instance that cannot be generated, or a failed rollout.
+pub fn rollout_timings(
+    robots: usize,
+) -> Result<Vec<(&'static str, Duration, Duration)>, EvalError> {
+    let inst = GeneratorConfig::paper(robots, 5, 7).generate()?;
+    let mut out = Vec::new();
+    for config in [NetworkConfig::afgnet(5, 0), NetworkConfig::s2v(5, 0)] {
+        let policy = LearnedPolicy::new(config.clone());
+        let fast = median(3, || policy.allocate(&inst))?;
+        let policy = policy.exact_burn();
+        let burn = median(1, || policy.allocate(&inst))?;
+        out.push((config.name(), burn, fast));
+    }
+    Ok(out)
+}
