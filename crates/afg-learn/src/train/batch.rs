@@ -1,7 +1,6 @@
 //! The sampled batches a gradient step learns from: TD transitions with their DQN or
 //! Double DQN targets, or states with the exact `Q*` of every task.
 
-use afg_baseline::Optimum;
 use afg_game::{Assignment, RobotId, TaskId};
 use afg_graph::{AllocationState, GraphBatch};
 use burn::module::AutodiffModule;
@@ -69,10 +68,7 @@ impl Trainer {
         for _ in 0..(self.config.batch / 4).max(1) {
             let ep = &self.replay[self.rng.random_range(0..self.replay.len())];
             let actor = RobotId(self.rng.random_range(0..n) as u32);
-            let (_, exact) = Optimum.with_prices(&ep.instance);
-            let mean = exact.iter().sum::<f64>() / m as f64;
-            let unit = units.welfare_unit(&ep.instance);
-            prices.extend(exact.iter().map(|p| ((p - mean) / unit) as f32));
+            prices.extend_from_slice(ep.centred_prices(units));
             let state =
                 AllocationState::with_units(&ep.instance, Assignment::unassigned(n, m), units);
             empty.push(&ep.graph, &state, actor);

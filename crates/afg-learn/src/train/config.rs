@@ -339,9 +339,9 @@ impl TrainConfig {
         if self.price_loss > 0.0 && !price_head {
             return bad("the price loss supervises a price head: it needs --price-head");
         }
-        if let NetworkConfig::AfgNet(c) = &self.network
-            && c.price_head == Some(true)
-            && (!self.reward_scaling || c.gain_residual == Some(true))
+        if price_head
+            && (!self.reward_scaling
+                || matches!(&self.network, NetworkConfig::AfgNet(c) if c.gain_residual == Some(true)))
         {
             return bad(
                 "the price head subtracts the actor's cost in the features' unit: it needs reward scaling, and no gain residual",
