@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use afg_graph::Units;
-use afg_learn::{LogEvent, NetworkConfig, Preset, RunDir, RunManifest, Shaping, TrainConfig};
+use afg_learn::{NetworkConfig, Preset, RunDir, Shaping, TrainConfig};
 use anyhow::Result;
 use clap::Args;
 
@@ -102,25 +102,8 @@ pub fn command_line(c: &TrainConfig, dir: &Path) -> String {
 /// wall time, git revision and final validation welfare.
 pub fn write_manifest(dir: &Path) -> Result<()> {
     let run = RunDir::new(dir);
-    let config = run.config()?;
-    let events = run.log()?;
     let relative = dir.strip_prefix(crate::repo_root()).unwrap_or(dir);
-    let manifest = RunManifest {
-        command: command_line(&config, relative),
-        seed: config.seed,
-        steps: config.steps,
-        wall_time_s: events.iter().rev().find_map(LogEvent::elapsed_s),
-        // The revision the run started from, as its log recorded it.
-        git_revision: events.iter().find_map(|e| match e {
-            LogEvent::Start { git_revision, .. } => git_revision.clone(),
-            _ => None,
-        }),
-        final_validation: events.iter().rev().find_map(|e| match e {
-            LogEvent::Validation(v) => Some(v.clone()),
-            _ => None,
-        }),
-        weights: RunDir::WEIGHT_FILES.map(str::to_owned).to_vec(),
-    };
+    let manifest = run.manifest_from_log(command_line(&run.config()?, relative))?;
     run.write_manifest(&manifest)?;
     Ok(())
 }

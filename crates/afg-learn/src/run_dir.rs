@@ -382,6 +382,31 @@ impl RunDir {
         self.read_json("manifest.json", "no manifest", "a run manifest")
     }
 
+    /// The manifest of this finished run, from its config and log: `command`, seed,
+    /// steps, wall time, the git revision the run started from and the last validation.
+    ///
+    /// # Errors
+    /// [`LearnError::RunFile`] if the config or the log is missing or unreadable.
+    pub fn manifest_from_log(&self, command: String) -> Result<RunManifest, LearnError> {
+        let config = self.config()?;
+        let events = self.log()?;
+        Ok(RunManifest {
+            command,
+            seed: config.seed,
+            steps: config.steps,
+            wall_time_s: events.iter().rev().find_map(LogEvent::elapsed_s),
+            git_revision: events.iter().find_map(|e| match e {
+                LogEvent::Start { git_revision, .. } => git_revision.clone(),
+                _ => None,
+            }),
+            final_validation: events.iter().rev().find_map(|e| match e {
+                LogEvent::Validation(v) => Some(v.clone()),
+                _ => None,
+            }),
+            weights: Self::WEIGHT_FILES.map(str::to_owned).to_vec(),
+        })
+    }
+
     /// Writes `manifest.json` atomically.
     ///
     /// # Errors

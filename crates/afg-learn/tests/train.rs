@@ -190,6 +190,13 @@ fn a_session_logs_and_saves_its_run_and_refuses_a_second_writer() {
         .count();
     assert_eq!(validations, 2);
     assert!(matches!(log.last(), Some(LogEvent::End { step: 40, .. })));
+    let manifest = run.manifest_from_log("train it".into()).unwrap();
+    assert_eq!(
+        (manifest.command.as_str(), manifest.steps, manifest.seed),
+        ("train it", 40, config.seed)
+    );
+    assert_eq!(manifest.git_revision.as_deref(), Some("abc"));
+    assert_eq!(manifest.final_validation.map(|v| v.step), Some(40));
     // The final weights are the trainer's: the same validation.
     let policy = LearnedPolicy::load(&run.weights()).unwrap();
     assert_eq!(policy.config(), &config.network);
