@@ -1,15 +1,16 @@
 //! `cargo xtask reproduce-tables`: Tables I and II, Fig. 1 and an assignment map, from
 //! the committed datasets and weights.
 
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use afg_baseline::{Allocator, Method, Optimum};
-use afg_eval::tables::{Tables, compute, headline, markdown, models_table};
+use afg_eval::tables::{
+    BEGIN, END, RunInfo, Tables, assignment_map_svg, block, compute, markdown, results_document,
+    with_block,
+};
 use afg_eval::{ModelSpec, dataset};
-use afg_learn::LearnedPolicy;
 use anyhow::{Context, Result, bail};
 use clap::Args;
+
 #[derive(Args)]
 pub struct TablesArgs {
     /// A few instances per table (about a minute), to check the pipeline end to end.
@@ -29,9 +30,6 @@ pub struct TablesArgs {
     #[arg(long)]
     root: Option<PathBuf>,
 }
-
-const BEGIN: &str = "<!-- reproduce-tables:begin -->";
-const END: &str = "<!-- reproduce-tables:end -->";
 
 pub fn run(args: TablesArgs) -> Result<()> {
     if args.check {
@@ -80,8 +78,7 @@ fn compute_tables(root: &Path, quick: bool) -> Result<Tables> {
 }
 
 fn write_outputs(root: &Path, res: &Tables, tables: &str, quick: bool, minutes: f64) -> Result<()> {
-    let docs = root.join("docs");
-    std::fs::create_dir_all(docs.join("figures"))?;
+    let figures = root.join("docs/figures");
     for n in dataset::TABLE1_SIZES {
         // The paper's three models at this scale (Fig. 1 has no curves of ours).
         let dirs: Vec<PathBuf> = ModelSpec::table1(n)
@@ -94,80 +91,37 @@ fn write_outputs(root: &Path, res: &Tables, tables: &str, quick: bool, minutes: 
         if !dirs.is_empty() {
             crate::curves::plot_curves(
                 &dirs,
-                &docs.join("figures").join(format!("fig1_n{n}.svg")),
+                &figures.join(format!("fig1_n{n}.svg")),
                 &format!("Fig. 1 — N = {n}: validation welfare (dashed: classical methods)"),
             )?;
         }
     }
-    assignment_map(root, &docs.join("figures").join("assignment_n100.svg"))?;
-    let mut md = String::new();
-    let _ = writeln!(md, "# Results\n");
-    let _ = writeln!(
-        md,
-        "Made by `cargo xtask reproduce-tables{}` on {} ({}-core CPU), committed datasets `datasets/` and committed weights `models/`. Defaults: eps = max(2, N/M), no capacities, beta = 1, M = 5 (see decisions.md). Instances run in parallel, one per core; each time / instance is one instance's wall time on one core (`RAYON_NUM_THREADS=1` runs them one after another). The whole run took {minutes:.1} min.\n",
-        if quick { " --quick" } else { "" },
-        std::env::consts::ARCH,
-        rayon::current_num_threads()
-    );
-    md.push_str(BEGIN);
-    md.push('\n');
-    md.push_str(tables);
-    md.push_str(END);
-    md.push('\n');
-    let _ = writeln!(md, "\n{}", headline(&res.table1));
-    md.push_str(&models_table(root)?);
-    afg_game::io::write_atomic(&docs.join("RESULTS.md"), md.as_bytes())?;
+    crate::write_svg(
+        &figures.join("assignment_n100.svg"),
+        &assignment_map_svg(root)?,
+    )?;
+    let threads = rayon::current_num_threads();
+    let info = RunInfo {
+        quick,
+        minutes,
+        threads,
+    };
+    let md = results_document(res, tables, info, root)?;
+    afg_game::io::write_atomic(&root.join("docs/RESULTS.md"), md.as_bytes())?;
     let readme = root.join("README.md");
-    if readme.exists() {
-        let text = std::fs::read_to_string(&readme)?;
-        if let (Some(b), Some(e)) = (text.find(BEGIN), text.find(END)) {
-            let new = format!(
-                "{}{BEGIN}\n{tables}{END}{}",
-                &text[..b],
-                &text[e + END.len()..]
-            );
-            afg_game::io::write_atomic(&readme, new.as_bytes())?;
-        }
+    if readme.exists()
+        && let Some(new) = with_block(&std::fs::read_to_string(&readme)?, tables)
+    {
+        afg_game::io::write_atomic(&readme, new.as_bytes())?;
     }
     Ok(())
 }
 
-/// Instance 0 of the N = 100 test set: OPT beside AFGNet_DDQN (or GRAPE DA while no
-/// N = 100 model is committed). Robots coloured by task, tasks as squares sized by coalition.
-fn assignment_map(root: &Path, out: &Path) -> Result<()> {
-    let inst = crate::datasets::load(100)?.swap_remove(0);
-    let opt = Optimum.allocate(&inst)?.assignment;
-    let run = ModelSpec::afgnet_ddqn(100).run_dir(root);
-    let (label, other) = if run.has_weights() {
-        (
-            ModelSpec::afgnet_ddqn(100).label(),
-            LearnedPolicy::load(&run.weights())?
-                .allocate(&inst)?
-                .assignment,
-        )
-    } else {
-        (
-            format!("{} (no N = 100 model yet)", Method::Da.label()),
-            Method::Da.allocator(0).allocate(&inst)?.assignment,
-        )
-    };
-    crate::write_svg(
-        out,
-        &afg_eval::figures::assignments_svg(
-            &inst,
-            &[(Method::Opt.label(), &opt), (&label, &other)],
-        )?,
-    )
-}
-
-/// The tables between the BEGIN and END markers of a file.
+/// The tables between the markers of a file.
 fn results_block(path: &Path) -> Result<String> {
     let text =
         std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    match (text.find(BEGIN), text.find(END)) {
-        (Some(b), Some(e)) if b < e => Ok(text[b + BEGIN.len()..e].trim_start().to_owned()),
-        _ => bail!("{} has no {BEGIN} … {END} block", path.display()),
-    }
+    block(&text).with_context(|| format!("{} has no {BEGIN} … {END} block", path.display()))
 }
 
 fn check_readme(root: &Path) -> Result<()> {

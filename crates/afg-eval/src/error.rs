@@ -15,7 +15,7 @@ pub enum EvalError {
     #[error(transparent)]
     Learn(#[from] LearnError),
     /// A committed dataset is missing or unreadable.
-    #[error("{path}: {source} (regenerate it with `cargo xtask gen-datasets`)")]
+    #[error("{source} (regenerate it with `cargo xtask gen-datasets`)")]
     Dataset {
         /// The file.
         path: String,

@@ -41,6 +41,12 @@ pub enum Variant {
     /// completion (`--shaping optimal`, [`afg_learn::Shaping::Optimal`]): the optimal
     /// policy is unchanged, but the rewards carry the exact optimum's values.
     OptimalShaping,
+    /// Ours: [`Variant::OptimalShaping`] trained starting from the weights of the same
+    /// kind of model trained at N = `from`.
+    OptimalShapingWarmStart {
+        /// The N of the model whose weights the run starts from.
+        from: usize,
+    },
 }
 
 /// One trained model: network, algorithm, variant and the N it was trained at.
@@ -62,10 +68,16 @@ pub enum Variant {
 /// let shaped = ModelSpec::TRANSFERRED[2];
 /// assert_eq!(shaped.dir_name(), "afgnet_ddqn_optshape_n60");
 /// assert_eq!(shaped.label(), "AFGNet_DDQN, optimal-completion shaping (ours)");
-/// let warm = ModelSpec::WARM_STARTS[1];
+/// let warm = ModelSpec::WARM_STARTS[2];
 /// assert_eq!(warm.dir_name(), "s2v_ddqn_warm_n60");
 /// assert_eq!(warm.label(), "S2V_DDQN, warm start from the N = 20 model");
 /// assert!(!warm.is_ours());
+/// let shaped_warm = ModelSpec::WARM_STARTS[1];
+/// assert_eq!(shaped_warm.dir_name(), "afgnet_ddqn_optshape_warm_n100");
+/// assert_eq!(
+///     shaped_warm.label(),
+///     "AFGNet_DDQN, optimal-completion shaping, warm start from the N = 60 model (ours)"
+/// );
 /// let [exact, prices, td, demos] = ModelSpec::PRICE_HEADED;
 /// assert_eq!(exact.dir_name(), "afgnet_qstar_price_n60");
 /// assert_eq!(prices.dir_name(), "afgnet_qstar_price_oneshot_n60");
@@ -152,12 +164,19 @@ impl ModelSpec {
     ];
 
     /// The warm starts the tables show beside the paper's rows: AFGNet DDQN at N = 100
-    /// from the N = 60 model, S2V DDQN at N = 60 and 100 from the N = 20 model.
-    pub const WARM_STARTS: [ModelSpec; 3] = [
+    /// from the N = 60 model (the paper's, and ours with optimal-completion shaping),
+    /// S2V DDQN at N = 60 and 100 from the N = 20 model.
+    pub const WARM_STARTS: [ModelSpec; 4] = [
         Self::new(
             Net::AfgNet,
             Algo::Ddqn,
             Variant::WarmStart { from: 60 },
+            100,
+        ),
+        Self::new(
+            Net::AfgNet,
+            Algo::Ddqn,
+            Variant::OptimalShapingWarmStart { from: 60 },
             100,
         ),
         Self::new(Net::S2v, Algo::Ddqn, Variant::WarmStart { from: 20 }, 60),
@@ -208,6 +227,7 @@ impl ModelSpec {
             Variant::PriceHeadDemos => "_price_demos",
             Variant::PriceHeadPriceLoss => "_price_oneshot",
             Variant::OptimalShaping => "_optshape",
+            Variant::OptimalShapingWarmStart { .. } => "_optshape_warm",
         };
         format!("{net}_{}{variant}_n{}", self.algo.name(), self.trained_at)
     }
@@ -251,6 +271,9 @@ impl ModelSpec {
             (_, Variant::WarmStart { from }) => {
                 format!("{net}_{algo}, warm start from the N = {from} model")
             }
+            (_, Variant::OptimalShapingWarmStart { from }) => format!(
+                "{net}_{algo}, optimal-completion shaping, warm start from the N = {from} model"
+            ),
         };
         let ours = if self.is_ours() { " (ours)" } else { "" };
         format!("{name}{detail}{ours}")
@@ -266,6 +289,7 @@ impl ModelSpec {
                 | Variant::PriceHeadDemos
                 | Variant::PriceHeadPriceLoss
                 | Variant::OptimalShaping
+                | Variant::OptimalShapingWarmStart { .. }
         ) || self.algo == Algo::QStar
     }
 }

@@ -2,6 +2,7 @@
 //! `cargo xtask reproduce-tables` prints and writes. [`compute`] evaluates every row
 //! on the committed datasets and weights; [`markdown`] renders them.
 
+mod document;
 mod markdown;
 mod rows;
 
@@ -12,6 +13,7 @@ use afg_game::Instance;
 use afg_learn::LearnedPolicy;
 use serde::Serialize;
 
+pub use document::{BEGIN, END, RunInfo, assignment_map_svg, block, results_document, with_block};
 pub use markdown::{duration, headline, models_table, table1_markdown, table2_markdown};
 pub use rows::{classical_rows, price_headed_rows, price_model_rows};
 
