@@ -1,10 +1,9 @@
 //! `cargo xtask train-price`: the price-structured model (ours), trained on the exact Q*.
 
 use std::path::PathBuf;
-use std::time::Instant;
 
-use afg_learn::{PriceModel, PriceRunSummary, PriceTrainConfig, PriceTrainer};
-use anyhow::{Context, Result, bail};
+use afg_learn::{PriceModel, PriceTrainConfig, PriceTrainer};
+use anyhow::{Result, bail};
 use clap::Args;
 
 #[derive(Args)]
@@ -96,36 +95,16 @@ pub fn run(args: PriceArgs) -> Result<()> {
     config.network.hidden = args.hidden.unwrap_or(config.network.hidden);
     config.expert_decay = args.expert_decay.unwrap_or(config.expert_decay);
     config.one_shot_weight = args.one_shot_weight.unwrap_or(config.one_shot_weight);
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
-    let start = Instant::now();
-    let mut trainer = PriceTrainer::new(config)?;
+    let trainer = PriceTrainer::new(config)?;
     let bar = crate::progress(trainer.config().rounds as u64, "train-price");
-    let mut log = String::new();
-    let mut last = None;
-    while !trainer.is_finished() {
-        let round = trainer.round()?;
+    let summary = trainer.run_in(&args.out, command_line(&args), |round| {
         bar.inc(1);
         bar.println(format!(
             "round {:>3}  states {:>7}  expert {:.3}  loss {:.5}  sequential {:.2} %  one-shot {:.2} %",
             round.round, round.states, round.expert_share, round.loss, round.sequential, round.one_shot
         ));
-        log += &serde_json::to_string(&round)?;
-        log.push('\n');
-        afg_game::io::write_atomic(
-            &args.out.join(PriceRunSummary::LOG_FILE_NAME),
-            log.as_bytes(),
-        )?;
-        last = Some(round);
-    }
+    })?;
     bar.finish_and_clear();
-    trainer.model().save(&model_path)?;
-    let summary = PriceRunSummary {
-        command: command_line(&args),
-        wall_s: start.elapsed().as_secs_f64(),
-        last: last.expect("at least one round"),
-    };
-    summary.save(&args.out)?;
     println!("wrote {} ({:.0} s)", model_path.display(), summary.wall_s);
     Ok(())
 }

@@ -183,6 +183,46 @@ impl PriceRunSummary {
     }
 }
 
+impl PriceTrainer {
+    /// Trains to the end with run directory `dir` (created if needed): after each round
+    /// the log ([`PriceRunSummary::LOG_FILE_NAME`], one [`PriceRound`] per line) is
+    /// rewritten atomically and `on_round` called; at the end the model
+    /// ([`PriceModel::FILE_NAME`]) and the summary with `command` are written.
+    ///
+    /// # Errors
+    /// A failed round, or a file that cannot be written.
+    pub fn run_in(
+        mut self,
+        dir: &Path,
+        command: String,
+        mut on_round: impl FnMut(&PriceRound),
+    ) -> Result<PriceRunSummary, LearnError> {
+        let start = std::time::Instant::now();
+        std::fs::create_dir_all(dir).map_err(|source| LearnError::Io {
+            path: dir.display().to_string(),
+            source,
+        })?;
+        let mut log = String::new();
+        let mut last = None;
+        while !self.is_finished() {
+            let round = self.round()?;
+            log += &serde_json::to_string(&round).expect("a round always serialises");
+            log.push('\n');
+            afg_game::io::write_atomic(&dir.join(PriceRunSummary::LOG_FILE_NAME), log.as_bytes())?;
+            on_round(&round);
+            last = Some(round);
+        }
+        self.model().save(&dir.join(PriceModel::FILE_NAME))?;
+        let summary = PriceRunSummary {
+            command,
+            wall_s: start.elapsed().as_secs_f64(),
+            last: last.expect("a checked configuration has at least one round"),
+        };
+        summary.save(dir)?;
+        Ok(summary)
+    }
+}
+
 /// The price model as an [`Allocator`].
 ///
 /// # Examples
@@ -379,6 +419,45 @@ mod tests {
                 .unwrap_err()
                 .to_string()
                 .contains("format")
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_run_writes_its_log_model_and_summary() {
+        let dir = std::env::temp_dir().join(format!("afg-price-run-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let mut config = PriceTrainConfig::new(12, 3, 4);
+        (
+            config.rounds,
+            config.episodes_per_round,
+            config.steps_per_round,
+        ) = (2, 2, 5);
+        config.validation_instances = 2;
+        let mut rounds = Vec::new();
+        let summary = PriceTrainer::new(config.clone())
+            .unwrap()
+            .run_in(&dir.join("run"), "train it".into(), |r| {
+                rounds.push(r.clone())
+            })
+            .unwrap();
+        let run = dir.join("run");
+        assert_eq!(PriceRunSummary::load(&run).unwrap(), summary);
+        assert_eq!(
+            (summary.command.as_str(), &summary.last),
+            ("train it", &rounds[1])
+        );
+        let log = std::fs::read_to_string(run.join(PriceRunSummary::LOG_FILE_NAME)).unwrap();
+        let logged: Vec<PriceRound> = log
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect();
+        assert_eq!(logged, rounds);
+        assert_eq!(
+            PriceModel::load(&run.join(PriceModel::FILE_NAME))
+                .unwrap()
+                .training,
+            config
         );
         std::fs::remove_dir_all(&dir).unwrap();
     }
