@@ -41,10 +41,13 @@ pub struct ReportArgs {
     /// Run directories (each with a log.jsonl).
     #[arg(required = true)]
     dirs: Vec<PathBuf>,
+    /// Read each log only up to this gradient step (compare runs at equal steps).
+    #[arg(long)]
+    at_step: Option<u64>,
 }
 
 /// A Markdown table of finished runs against the classical methods (from their logs).
 pub fn run_report(args: ReportArgs) -> Result<()> {
-    print!("{}", report_markdown(&args.dirs)?);
+    print!("{}", report_markdown(&args.dirs, args.at_step)?);
     Ok(())
 }

@@ -60,13 +60,15 @@ pub fn read_curve(dir: &Path) -> Result<Curve, EvalError> {
     })
 }
 
-/// A Markdown table of finished runs: final and best validation welfare against the
+/// A Markdown table of training runs: final and best validation welfare against the
 /// classical methods on the same validation set (all read from the runs' logs), then
-/// the classical methods on each distinct validation set.
+/// the classical methods on each distinct validation set. With `at_step`, each run is
+/// cut after that gradient step (runs compared at equal steps, or a stopped run
+/// against a finished one).
 ///
 /// # Errors
-/// A missing log, or a log without a start event or a validation.
-pub fn report_markdown(dirs: &[PathBuf]) -> Result<String, EvalError> {
+/// A missing log, or a log without a start event or a validation (up to `at_step`).
+pub fn report_markdown(dirs: &[PathBuf], at_step: Option<u64>) -> Result<String, EvalError> {
     let mut out = String::from(
         "| run | N | steps | wall time | final validation welfare | % of OPT | best (step) | collapsed validations |\n|---|---|---|---|---|---|---|---|\n",
     );
@@ -74,7 +76,10 @@ pub fn report_markdown(dirs: &[PathBuf]) -> Result<String, EvalError> {
     let mut baseline_rows: Vec<(String, BTreeMap<String, f64>)> = Vec::new();
     for dir in dirs {
         let run = RunDir::new(dir);
-        let events = run.log()?;
+        let mut events = run.log()?;
+        if let Some(last) = at_step {
+            events.retain(|e| e.step().is_none_or(|s| s <= last));
+        }
         let incomplete = |what| EvalError::Log {
             path: dir.display().to_string(),
             what,
@@ -149,4 +154,42 @@ pub fn report_markdown(dirs: &[PathBuf]) -> Result<String, EvalError> {
         let _ = writeln!(out, "| {n} | {} |", cells.join(" | "));
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_report_reads_a_log_up_to_a_step() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/afgnet_ddqn_n20");
+        let validations: Vec<ValidationLine> = RunDir::new(&dir)
+            .log()
+            .unwrap()
+            .into_iter()
+            .filter_map(|e| match e {
+                LogEvent::Validation(v) => Some(v),
+                _ => None,
+            })
+            .collect();
+        let cut = validations[3].step + 1;
+        let row = |at: Option<u64>| {
+            let report = report_markdown(std::slice::from_ref(&dir), at).unwrap();
+            report.lines().nth(2).unwrap().to_owned()
+        };
+        let whole = row(None);
+        let early = row(Some(cut));
+        let last = validations.last().unwrap();
+        assert!(whole.contains(&format!("| {} |", last.step)), "{whole}");
+        assert!(whole.contains(&format!("{:.3}", last.welfare)), "{whole}");
+        assert!(
+            early.contains(&format!("| {} |", validations[3].step)),
+            "{early}"
+        );
+        assert!(
+            early.contains(&format!("{:.3}", validations[3].welfare)),
+            "{early}"
+        );
+        assert!(report_markdown(&[dir], Some(0)).is_err());
+    }
 }

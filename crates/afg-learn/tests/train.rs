@@ -181,7 +181,8 @@ fn a_session_logs_and_saves_its_run_and_refuses_a_second_writer() {
     assert!(baselines["opt"] >= baselines["greedy"]);
     let steps: Vec<u64> = log
         .iter()
-        .filter_map(|e| matches!(e, LogEvent::Step { .. }).then(|| e.step().unwrap()))
+        .filter(|e| matches!(e, LogEvent::Step { .. }))
+        .map(|e| e.step().unwrap())
         .collect();
     assert_eq!(steps, [10, 20, 30, 40]);
     let validations = log
