@@ -27,7 +27,7 @@ impl Session {
     /// validation set and `git_revision`.
     ///
     /// # Errors
-    /// [`LearnError::Config`] for invalid settings; a directory that holds a run or is
+    /// [`LearnError::InvalidConfig`] for invalid settings; a directory that holds a run or is
     /// in use; an unwritable directory.
     pub fn start(
         dir: &Path,
