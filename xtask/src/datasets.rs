@@ -132,16 +132,13 @@ pub fn run_custom(args: GenCustomArgs) -> Result<()> {
 
 #[cfg(test)]
 mod tests {
-    use clap::Parser;
-
     use super::*;
 
     fn gen_args(flags: &str) -> GenCustomArgs {
-        let argv = ["cargo xtask", "gen"].into_iter().chain(flags.split(' '));
-        match crate::Cli::try_parse_from(argv).unwrap().command {
-            crate::Command::Gen(a) => a,
-            _ => unreachable!("a gen command"),
-        }
+        let Ok(crate::Command::Gen(args)) = crate::parse(&format!("gen {flags}")) else {
+            unreachable!("a gen command")
+        };
+        args
     }
 
     #[test]

@@ -71,23 +71,72 @@ enum Command {
 }
 
 fn main() -> Result<()> {
-    match Cli::parse().command {
-        Command::ReproduceTables(args) => tables::run(args),
-        Command::GenDatasets(args) => datasets::run(args),
-        Command::Gen(args) => datasets::run_custom(args),
-        Command::Solve(args) => solve::run(args),
-        Command::BenchBaselines(args) => bench::run(args),
-        Command::BenchModels(args) => bench::run_models(args),
-        Command::BenchScale(args) => scale::run(args),
-        Command::Train(args) => train::run(args),
-        Command::PlotCurves(args) => curves::run_plot(args),
-        Command::TrainingReport(args) => curves::run_report(args),
-        Command::TrainPrice(args) => price::run(args),
-        Command::TrainAll(args) => train_all::run_all(args),
-        Command::Manifest(args) => manifest::run_manifest(args),
-        Command::Regret(args) => regret::run(args),
-        Command::ReallocStudy(args) => realloc::run_study(args),
+    Cli::parse().command.run()
+}
+
+impl Command {
+    fn run(self) -> Result<()> {
+        match self {
+            Command::ReproduceTables(args) => tables::run(args),
+            Command::GenDatasets(args) => datasets::run(args),
+            Command::Gen(args) => datasets::run_custom(args),
+            Command::Solve(args) => solve::run(args),
+            Command::BenchBaselines(args) => bench::run(args),
+            Command::BenchModels(args) => bench::run_models(args),
+            Command::BenchScale(args) => scale::run(args),
+            Command::Train(args) => train::run(args),
+            Command::PlotCurves(args) => curves::run_plot(args),
+            Command::TrainingReport(args) => curves::run_report(args),
+            Command::TrainPrice(args) => price::run(args),
+            Command::TrainAll(args) => train_all::run_all(args),
+            Command::Manifest(args) => manifest::run_manifest(args),
+            Command::Regret(args) => regret::run(args),
+            Command::ReallocStudy(args) => realloc::run_study(args),
+        }
     }
+}
+
+/// Parses `cargo xtask LINE` (arguments separated by single spaces).
+#[cfg(test)]
+fn parse(line: &str) -> Result<Command> {
+    let argv = ["cargo xtask"].into_iter().chain(line.split(' '));
+    Ok(Cli::try_parse_from(argv)?.command)
+}
+
+/// Runs `cargo xtask LINE` (arguments separated by single spaces).
+#[cfg(test)]
+fn xtask(line: &str) -> Result<()> {
+    parse(line)?.run()
+}
+
+/// The command-line arguments that give `args` back, in the order its flags are
+/// declared: `--flag` for a set switch, `--flag value` for a given value, nothing for an
+/// unset option or switch. Values are read through `args`' serde form, whose field names
+/// are the flags' ids.
+pub fn command_args<A: clap::Args + serde::Serialize>(args: &A) -> Vec<String> {
+    use serde_json::Value;
+    let values = serde_json::to_value(args).expect("arguments serialise to JSON");
+    let flags = A::augment_args(clap::Command::new("args"));
+    let mut out = Vec::new();
+    for flag in flags.get_arguments() {
+        let (Some(long), Some(value)) = (flag.get_long(), values.get(flag.get_id().as_str()))
+        else {
+            continue;
+        };
+        let value = match value {
+            Value::Null | Value::Bool(false) => continue,
+            Value::Bool(true) => None,
+            Value::String(s) => Some(s.clone()),
+            Value::Number(n) => Some(n.as_u64().map_or_else(
+                || n.as_f64().expect("a finite number").to_string(),
+                |u| u.to_string(),
+            )),
+            other => unreachable!("arguments hold no {other}"),
+        };
+        out.push(format!("--{long}"));
+        out.extend(value);
+    }
+    out
 }
 
 /// A progress bar on stderr (hidden when stderr is not a terminal).
@@ -117,4 +166,32 @@ pub fn write_svg(out: &std::path::Path, svg: &str) -> Result<()> {
     }
     afg_game::io::write_atomic(out, svg.as_bytes())?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    /// The committed price runs' commands are written back as they were given.
+    #[test]
+    fn command_args_write_a_command_back() {
+        for run in [
+            "price_n60",
+            "ablations/price_n60_expert",
+            "ablations/price_n60_qstar",
+        ] {
+            let path = crate::repo_root().join(format!("models/{run}/summary.json"));
+            let summary: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+            let command = summary["command"].as_str().unwrap();
+            let Ok(super::Command::TrainPrice(args)) =
+                super::parse(command.strip_prefix("cargo xtask ").unwrap())
+            else {
+                unreachable!("a train-price command")
+            };
+            let again = format!(
+                "cargo xtask train-price {}",
+                super::command_args(&args).join(" ")
+            );
+            assert_eq!(again, command);
+        }
+    }
 }

@@ -5,15 +5,19 @@ use std::path::PathBuf;
 use afg_learn::{PriceModel, PriceTrainConfig, PriceTrainer};
 use anyhow::{Result, bail};
 use clap::Args;
+use serde::Serialize;
 
-#[derive(Args)]
+#[derive(Args, Serialize)]
 pub struct PriceArgs {
     /// Robots per training instance N.
     #[arg(long, default_value_t = 60)]
     scale: usize,
     /// Tasks per training instance M.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = afg_eval::dataset::TASKS)]
     tasks: usize,
+    /// Seed of everything random in the run.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
     /// DAgger rounds (each: roll out, fit, validate).
     #[arg(long)]
     rounds: Option<usize>,
@@ -39,9 +43,6 @@ pub struct PriceArgs {
     /// 0 trains on Q* alone.
     #[arg(long)]
     one_shot_weight: Option<f64>,
-    /// Seed of everything random in the run.
-    #[arg(long, default_value_t = 0)]
-    seed: u64,
     /// Run directory: price.json (weights and settings), log.jsonl (one line per round),
     /// summary.json (the command and its wall time). An existing model is not overwritten
     /// unless --force is given.
@@ -49,33 +50,8 @@ pub struct PriceArgs {
     out: PathBuf,
     /// Replace an existing model in --out.
     #[arg(long)]
+    #[serde(skip)]
     force: bool,
-}
-
-fn command_line(args: &PriceArgs) -> String {
-    let mut c = format!(
-        "cargo xtask train-price --scale {} --tasks {} --seed {}",
-        args.scale, args.tasks, args.seed
-    );
-    let options: [(&str, Option<String>); 8] = [
-        ("rounds", args.rounds.map(|v| v.to_string())),
-        ("episodes", args.episodes.map(|v| v.to_string())),
-        ("steps", args.steps.map(|v| v.to_string())),
-        ("batch", args.batch.map(|v| v.to_string())),
-        ("lr", args.lr.map(|v| v.to_string())),
-        ("hidden", args.hidden.map(|v| v.to_string())),
-        ("expert-decay", args.expert_decay.map(|v| v.to_string())),
-        (
-            "one-shot-weight",
-            args.one_shot_weight.map(|v| v.to_string()),
-        ),
-    ];
-    for (name, value) in options {
-        if let Some(v) = value {
-            c += &format!(" --{name} {v}");
-        }
-    }
-    c + &format!(" --out {}", args.out.display())
 }
 
 pub fn run(args: PriceArgs) -> Result<()> {
@@ -97,7 +73,11 @@ pub fn run(args: PriceArgs) -> Result<()> {
     config.one_shot_weight = args.one_shot_weight.unwrap_or(config.one_shot_weight);
     let trainer = PriceTrainer::new(config)?;
     let bar = crate::progress(trainer.config().rounds as u64, "train-price");
-    let summary = trainer.run_in(&args.out, command_line(&args), |round| {
+    let command = format!(
+        "cargo xtask train-price {}",
+        crate::command_args(&args).join(" ")
+    );
+    let summary = trainer.run_in(&args.out, command, |round| {
         bar.inc(1);
         bar.println(format!(
             "round {:>3}  states {:>7}  expert {:.3}  loss {:.5}  sequential {:.2} %  one-shot {:.2} %",

@@ -3,7 +3,7 @@
 use std::path::Path;
 
 use afg_baseline::{Allocator, Method, Optimum};
-use afg_eval::realloc::{Reallocation, after_removal, dynamics_after, reallocate};
+use afg_eval::realloc::{after_removal, dynamics_after, reallocate, study_markdown};
 use afg_game::io::PreviousAssignment;
 use afg_game::{Instance, Preference};
 use anyhow::{Context, Result, bail};
@@ -55,19 +55,7 @@ pub fn run(args: &SolveArgs, from: &Path, instances: &[Instance]) -> Result<()> 
         println!("{}", serde_json::to_string_pretty(&r)?);
         return Ok(());
     }
-    println!("{name}");
-    println!(
-        "  welfare           {:>12.3}   (OPT from scratch {:.3})",
-        r.welfare, r.opt_welfare
-    );
-    println!("  % of OPT          {:>12.2}", r.percent_of_opt);
-    println!(
-        "  survivors moved   {:>12}   of {} (from scratch: OPT would move {}, the same dynamics {})",
-        r.moved, r.survivors, r.opt_changes, r.scratch_changes
-    );
-    println!("  robots placed     {:>12}", r.placed);
-    println!("  balanced-stable   {:>12}", r.stable_balanced);
-    println!("  time              {:>10.3} ms", 1e3 * r.seconds);
+    print!("{name}\n{r}");
     Ok(())
 }
 
@@ -108,12 +96,6 @@ pub fn run_study(args: StudyArgs) -> Result<()> {
         let (now, previous) = after_removal(args.robots, removed.max(1), seed, args.previous)?;
         rows.push(reallocate(&now, &previous, preference)?);
     }
-    let k = rows.len() as f64;
-    let mean = |f: &dyn Fn(&Reallocation) -> f64| rows.iter().map(f).sum::<f64>() / k;
-    let min_pct = rows
-        .iter()
-        .map(|r| r.percent_of_opt)
-        .fold(f64::INFINITY, f64::min);
     println!(
         "N = {} robots, {} leave (spread over the indices), M = 5, {} instances; the previous assignment is {}'s.\n",
         args.robots,
@@ -121,30 +103,6 @@ pub fn run_study(args: StudyArgs) -> Result<()> {
         rows.len(),
         args.previous
     );
-    println!(
-        "| method | survivors moved (mean) | % of OPT (mean / worst) | balanced-stable | time (ms, mean) |"
-    );
-    println!("|---|---|---|---|---|");
-    println!(
-        "| warm start ({dynamics} from the old assignment) | {:.1} | {:.3} / {:.3} | {} of {} | {:.2} |",
-        mean(&|r| r.moved as f64),
-        mean(&|r| r.percent_of_opt),
-        min_pct,
-        rows.iter().filter(|r| r.stable_balanced).count(),
-        rows.len(),
-        1e3 * mean(&|r| r.seconds)
-    );
-    println!(
-        "| {dynamics} from scratch | {:.1} | {:.3} / {:.3} | – | – |",
-        mean(&|r| r.scratch_changes as f64),
-        mean(&|r| r.scratch_percent_of_opt),
-        rows.iter()
-            .map(|r| r.scratch_percent_of_opt)
-            .fold(f64::INFINITY, f64::min)
-    );
-    println!(
-        "| OPT from scratch | {:.1} | 100 / 100 | – | – |",
-        mean(&|r| r.opt_changes as f64)
-    );
+    print!("{}", study_markdown(&rows, dynamics));
     Ok(())
 }

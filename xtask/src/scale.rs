@@ -4,7 +4,6 @@
 //! each run. Every case runs in its own child process (this binary with `--case`), so
 //! the peak resident set size it reports belongs to that case alone.
 
-use std::path::PathBuf;
 use std::process::Command;
 
 use afg_eval::scale::{Case, Outcome, Plan, cases, label, markdown, run_case};
@@ -13,42 +12,8 @@ use clap::Args;
 
 #[derive(Args)]
 pub struct ScaleArgs {
-    /// Robot counts N.
-    #[arg(long, value_delimiter = ',', default_value = "100,1000,10000,100000")]
-    sizes: Vec<usize>,
-    /// Task counts M.
-    #[arg(long, value_delimiter = ',', default_value = "5,50")]
-    tasks: Vec<usize>,
-    /// Numbers of network passes to try per rollout (block B = ⌈N / passes⌉), besides
-    /// the exact rollout (B = 1).
-    #[arg(long, value_delimiter = ',', default_value = "1000,100,10")]
-    passes: Vec<usize>,
-    /// Skip learned runs with more than this many robot-passes (N × passes), e.g. the
-    /// exact rollout above N = 1000.
-    #[arg(long, default_value_t = 20_000_000)]
-    max_work: usize,
-    /// Run the Burn reference path up to this N (M = 5 only).
-    #[arg(long, default_value_t = 1000)]
-    burn_up_to: usize,
-    /// Trained run directory used for M = 5; other M use untrained weights (timing only).
-    #[arg(long, default_value = "models/afgnet_ddqn_n20")]
-    model: PathBuf,
-    /// Price model (ours) run at every M, both modes, without repair; skipped if the
-    /// directory holds no price.json.
-    #[arg(long, default_value = "models/price_n60")]
-    price_model: PathBuf,
-    /// AFGNet with a price head (ours): run directories, each used at the M its network
-    /// was built for, without repair, with 10 network passes and in one pass (one-shot);
-    /// a directory that holds no model is skipped.
-    #[arg(
-        long,
-        value_delimiter = ',',
-        default_value = "models/afgnet_qstar_price_n60,models/afgnet_qstar_price_m50_n60"
-    )]
-    price_headed: Vec<PathBuf>,
-    /// Seed of the instances (one per N and M).
-    #[arg(long, default_value_t = 0)]
-    seed: u64,
+    #[command(flatten)]
+    plan: Plan,
     /// Print the results as JSON instead of a Markdown table.
     #[arg(long)]
     json: bool,
@@ -79,23 +44,14 @@ pub fn run(args: ScaleArgs) -> Result<()> {
         println!("{}", serde_json::to_string(&run_case(case)?)?);
         return Ok(());
     }
-    if args.tasks.contains(&5) && !args.model.join("model.json").exists() {
+    let plan = &args.plan;
+    if plan.tasks.contains(&5) && !afg_learn::RunDir::new(&plan.model).has_weights() {
         bail!(
             "{} holds no trained model (model.json); pass --model DIR",
-            args.model.display()
+            plan.model.display()
         );
     }
-    let cases = cases(&Plan {
-        sizes: args.sizes,
-        tasks: args.tasks,
-        passes: args.passes,
-        max_work: args.max_work,
-        burn_up_to: args.burn_up_to,
-        model: args.model,
-        price_model: args.price_model,
-        price_headed: args.price_headed,
-        seed: args.seed,
-    })?;
+    let cases = cases(&args.plan)?;
     let bar = crate::progress(cases.len() as u64, "bench-scale");
     let mut outcomes = Vec::new();
     for case in &cases {

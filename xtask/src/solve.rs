@@ -127,30 +127,7 @@ pub fn run(args: SolveArgs) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&report)?);
         return Ok(());
     }
-    let m = &report.mean;
-    println!(
-        "{} on {} ({} instance{})",
-        report.method,
-        report.source,
-        report.instances,
-        if report.instances == 1 { "" } else { "s" }
-    );
-    println!(
-        "  welfare           {:>12.3}   (OPT {:.3})",
-        m.welfare, m.opt_welfare
-    );
-    println!("  % of OPT          {:>12.2}", m.percent_of_opt);
-    println!("  NS_rate balanced  {:>11.1} %", 100.0 * m.ns_rate_balanced);
-    println!("  NS_rate selfish   {:>11.1} %", 100.0 * m.ns_rate_selfish);
-    println!("  iterations        {:>12.1}", m.iterations);
-    println!("  rounds            {:>12.1}", m.rounds);
-    if m.messages > 0.0 {
-        println!("  messages          {:>12.0}", m.messages);
-    }
-    println!("  time / instance   {:>10.3} ms", 1e3 * m.seconds);
-    if report.instances > 1 {
-        println!("  (means over instances; --json for each one)");
-    }
+    print!("{report}");
     Ok(())
 }
 
@@ -185,53 +162,36 @@ fn write_outputs(
 
 #[cfg(test)]
 mod tests {
-    use clap::Parser;
-
-    fn solve(args: &[&str]) -> anyhow::Result<()> {
-        let mut argv = vec!["cargo xtask", "solve"];
-        argv.extend_from_slice(args);
-        match crate::Cli::try_parse_from(argv)?.command {
-            crate::Command::Solve(a) => super::run(a),
-            _ => unreachable!("only solve here"),
-        }
+    /// Runs `cargo xtask solve ARGS` (arguments separated by single spaces).
+    fn solve(args: &str) -> anyhow::Result<()> {
+        crate::xtask(&format!("solve {args}"))
     }
 
-    fn temp(name: &str) -> std::path::PathBuf {
+    /// An empty temporary directory, as a string.
+    fn temp(name: &str) -> String {
         let d = std::env::temp_dir().join(format!("afg-solve-{name}-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&d);
         std::fs::create_dir_all(&d).unwrap();
-        d
+        d.to_str().unwrap().to_owned()
+    }
+
+    fn instance(robots: usize, tasks: usize, seed: u64) -> afg_game::Instance {
+        afg_game::GeneratorConfig::paper(robots, tasks, seed)
+            .generate()
+            .unwrap()
     }
 
     #[test]
     fn json_lines_in_assignments_and_a_map_out() {
         let dir = temp("out");
-        let a = afg_game::GeneratorConfig::paper(12, 3, 1)
-            .generate()
-            .unwrap();
-        let b = afg_game::GeneratorConfig::paper(9, 3, 2)
-            .generate()
-            .unwrap();
-        let input = dir.join("mine.jsonl");
-        std::fs::write(
-            &input,
-            afg_game::io::dataset_to_jsonl(&[a.clone(), b.clone()]),
-        )
+        let (a, b) = (instance(12, 3, 1), instance(9, 3, 2));
+        let text = afg_game::io::dataset_to_jsonl(&[a.clone(), b.clone()]);
+        std::fs::write(format!("{dir}/mine.jsonl"), text).unwrap();
+        solve(&format!(
+            "--method da-balanced --input {dir}/mine.jsonl --out {dir}/out.jsonl --svg {dir}/map.svg"
+        ))
         .unwrap();
-        let (out, svg) = (dir.join("out.jsonl"), dir.join("map.svg"));
-        let path = |p: &std::path::Path| p.to_str().unwrap().to_owned();
-        solve(&[
-            "--method",
-            "da-balanced",
-            "--input",
-            &path(&input),
-            "--out",
-            &path(&out),
-            "--svg",
-            &path(&svg),
-        ])
-        .unwrap();
-        let text = std::fs::read_to_string(&out).unwrap();
+        let text = std::fs::read_to_string(format!("{dir}/out.jsonl")).unwrap();
         let lines: Vec<&str> = text.lines().collect();
         assert_eq!(lines.len(), 2);
         for (line, inst) in lines.iter().zip([&a, &b]) {
@@ -242,108 +202,65 @@ mod tests {
             let sizes: Vec<usize> =
                 serde_json::from_value(v["summary"]["coalition_sizes"].clone()).unwrap();
             assert_eq!(sizes, assignment.sizes());
-            assert!(
-                (v["summary"]["welfare"].as_f64().unwrap() - inst.welfare(&assignment)).abs()
-                    < 1e-9
-            );
+            let welfare = v["summary"]["welfare"].as_f64().unwrap();
+            assert!((welfare - inst.welfare(&assignment)).abs() < 1e-9);
             assert_eq!(v["summary"]["stable_balanced"], true);
         }
-        assert!(std::fs::read_to_string(&svg).unwrap().starts_with("<svg"));
+        let svg = std::fs::read_to_string(format!("{dir}/map.svg")).unwrap();
+        assert!(svg.starts_with("<svg"));
         // A single instance file (pretty-printed over many lines) is one instance.
-        let single = dir.join("one.json");
-        let pretty = serde_json::to_string_pretty(
-            &serde_json::from_str::<serde_json::Value>(&a.to_json()).unwrap(),
-        )
+        let value: serde_json::Value = serde_json::from_str(&a.to_json()).unwrap();
+        let pretty = serde_json::to_string_pretty(&value).unwrap();
+        std::fs::write(format!("{dir}/one.json"), pretty).unwrap();
+        solve(&format!(
+            "--method greedy --input {dir}/one.json --out {dir}/out.jsonl"
+        ))
         .unwrap();
-        std::fs::write(&single, pretty).unwrap();
-        solve(&[
-            "--method",
-            "greedy",
-            "--input",
-            &path(&single),
-            "--out",
-            &path(&out),
-        ])
-        .unwrap();
-        assert_eq!(std::fs::read_to_string(&out).unwrap().lines().count(), 1);
+        let text = std::fs::read_to_string(format!("{dir}/out.jsonl")).unwrap();
+        assert_eq!(text.lines().count(), 1);
     }
 
     #[test]
     fn a_bad_line_names_its_line_and_writes_nothing() {
         let dir = temp("bad");
-        let a = afg_game::GeneratorConfig::paper(12, 3, 1)
-            .generate()
-            .unwrap();
-        let input = dir.join("mine.jsonl");
-        let bad = a.to_json().replace("\"eps\":4.0", "\"eps\":1.0");
-        let text = format!("{}\n{}\n{}\n", a.to_json(), a.to_json(), bad);
-        assert_ne!(bad, a.to_json(), "the test must break the third line");
-        std::fs::write(&input, text).unwrap();
-        let out = dir.join("out.jsonl");
-        let err = solve(&[
-            "--method",
-            "opt",
-            "--input",
-            input.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ])
+        let a = instance(12, 3, 1).to_json();
+        let bad = a.replace("\"eps\":4.0", "\"eps\":1.0");
+        assert_ne!(bad, a, "the test must break the third line");
+        std::fs::write(format!("{dir}/mine.jsonl"), format!("{a}\n{a}\n{bad}\n")).unwrap();
+        let err = solve(&format!(
+            "--method opt --input {dir}/mine.jsonl --out {dir}/out.jsonl"
+        ))
         .unwrap_err();
         assert!(format!("{err:#}").contains("line 3"), "{err:#}");
-        assert!(!out.exists());
-        std::fs::write(&input, "").unwrap();
-        let err = solve(&["--method", "opt", "--input", input.to_str().unwrap()]).unwrap_err();
+        assert!(!std::path::Path::new(&format!("{dir}/out.jsonl")).exists());
+        std::fs::write(format!("{dir}/mine.jsonl"), "").unwrap();
+        let err = solve(&format!("--method opt --input {dir}/mine.jsonl")).unwrap_err();
         assert!(format!("{err:#}").contains("no instance"), "{err:#}");
     }
 
     #[test]
     fn warm_start_from_a_previous_assignment() {
         let dir = temp("from");
-        let inst = afg_game::GeneratorConfig::paper(40, 5, 3)
-            .generate()
+        instance(40, 5, 3)
+            .write(std::path::Path::new(&format!("{dir}/now.json")))
             .unwrap();
-        let path = |p: &std::path::Path| p.to_str().unwrap().to_owned();
-        let (input, first) = (dir.join("now.json"), dir.join("first.jsonl"));
-        inst.write(&input).unwrap();
-        solve(&[
-            "--method",
-            "opt",
-            "--input",
-            &path(&input),
-            "--out",
-            &path(&first),
-        ])
+        solve(&format!(
+            "--method opt --input {dir}/now.json --out {dir}/first.jsonl"
+        ))
         .unwrap();
         // The same robots again: nothing moves, nothing is placed.
-        let again = dir.join("again.jsonl");
-        solve(&[
-            "--method",
-            "da-balanced",
-            "--input",
-            &path(&input),
-            "--from",
-            &path(&first),
-            "--out",
-            &path(&again),
-        ])
+        solve(&format!(
+            "--method da-balanced --input {dir}/now.json --from {dir}/first.jsonl --out {dir}/again.jsonl"
+        ))
         .unwrap();
-        let v: serde_json::Value =
-            serde_json::from_str(std::fs::read_to_string(&again).unwrap().trim()).unwrap();
-        assert_eq!(
-            (
-                v["summary"]["moved"].as_u64(),
-                v["summary"]["placed"].as_u64()
-            ),
-            (Some(0), Some(0))
-        );
-        let err = solve(&[
-            "--method",
-            "opt",
-            "--input",
-            &path(&input),
-            "--from",
-            &path(&first),
-        ])
+        let text = std::fs::read_to_string(format!("{dir}/again.jsonl")).unwrap();
+        let v: serde_json::Value = serde_json::from_str(text.trim()).unwrap();
+        let summary = &v["summary"];
+        let moved_placed = (summary["moved"].as_u64(), summary["placed"].as_u64());
+        assert_eq!(moved_placed, (Some(0), Some(0)));
+        let err = solve(&format!(
+            "--method opt --input {dir}/now.json --from {dir}/first.jsonl"
+        ))
         .unwrap_err();
         assert!(format!("{err:#}").contains("da-balanced"), "{err:#}");
     }
@@ -352,43 +269,20 @@ mod tests {
     fn learned_policies_solve_and_bad_options_are_refused() {
         let model = crate::repo_root().join("models/afgnet_ddqn_n20");
         let model = model.to_str().unwrap();
-        solve(&[
-            "--model",
-            model,
-            "--dataset",
-            "20",
-            "--limit",
-            "2",
-            "--json",
-        ])
+        solve(&format!("--model {model} --dataset 20 --limit 2 --json")).unwrap();
+        solve(&format!(
+            "--model {model} --dataset 100 --limit 1 --block 7 --repair"
+        ))
         .unwrap();
-        solve(&[
-            "--model",
-            model,
-            "--dataset",
-            "100",
-            "--limit",
-            "1",
-            "--block",
-            "7",
-            "--repair",
-        ])
-        .unwrap();
-        let err = solve(&[
-            "--model",
-            model,
-            "--dataset",
-            "20",
-            "--exact-burn",
-            "--block",
-            "3",
-        ])
+        let err = solve(&format!(
+            "--model {model} --dataset 20 --exact-burn --block 3"
+        ))
         .unwrap_err();
         assert!(format!("{err:#}").contains("block 1"), "{err:#}");
-        let err = solve(&["--model", "/nonexistent", "--dataset", "20"]).unwrap_err();
+        let err = solve("--model /nonexistent --dataset 20").unwrap_err();
         assert!(format!("{err:#}").contains("/nonexistent"), "{err:#}");
         // A method and a model at once, or --block without a model: usage errors.
-        assert!(solve(&["--method", "opt", "--model", model, "--dataset", "20"]).is_err());
-        assert!(solve(&["--method", "opt", "--block", "2", "--dataset", "20"]).is_err());
+        assert!(solve(&format!("--method opt --model {model} --dataset 20")).is_err());
+        assert!(solve("--method opt --block 2 --dataset 20").is_err());
     }
 }

@@ -1,12 +1,12 @@
 //! `cargo xtask train-all`: every paper-form model of the tables, with the default
 //! budgets.
 
-use afg_eval::{ModelSpec, Net};
-use afg_learn::Algo;
+use afg_eval::ModelSpec;
+use afg_learn::TrainSettings;
 use anyhow::Result;
 use clap::Args;
 
-use crate::train::{AlgoArg, NetArg, TrainArgs, run};
+use crate::train::{TrainArgs, run};
 
 #[derive(Args)]
 pub struct TrainAllArgs {
@@ -37,17 +37,13 @@ pub fn run_all(args: TrainAllArgs) -> Result<()> {
                 std::fs::remove_dir_all(&dir)?;
             }
             run(TrainArgs {
-                scale: Some(*scale),
-                algo: Some(match spec.algo {
-                    Algo::Dqn => AlgoArg::Dqn,
-                    Algo::Ddqn => AlgoArg::Ddqn,
-                    Algo::QStar => AlgoArg::QStar,
-                }),
-                net: Some(match spec.net {
-                    Net::AfgNet => NetArg::Afgnet,
-                    Net::S2v => NetArg::S2v,
-                }),
-                seed: Some(0),
+                settings: TrainSettings {
+                    scale: Some(*scale),
+                    algo: Some(spec.algo),
+                    net: Some(spec.net),
+                    seed: Some(0),
+                    ..TrainSettings::default()
+                },
                 out: Some(dir),
                 checkpoint_secs: 300,
                 ..TrainArgs::default()

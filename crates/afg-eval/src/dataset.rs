@@ -25,7 +25,7 @@ pub const SIZES: [usize; 5] = [20, 60, 100, 500, 1000];
 /// Instances per dataset.
 pub const INSTANCES: usize = 100;
 /// Tasks per instance (the paper's M).
-pub const TASKS: usize = 5;
+pub const TASKS: usize = afg_game::GeneratorConfig::PAPER_TASKS;
 
 /// Seed of instance `index` of the dataset with `robots` robots: `robots · 10^6 + index`.
 pub fn seed(robots: usize, index: usize) -> u64 {

@@ -23,5 +23,5 @@ pub mod solve;
 pub mod tables;
 
 pub use error::EvalError;
-pub use model::{ModelSpec, Net, PriceSpec, Variant};
+pub use model::{ModelSpec, PriceSpec, Variant};
 pub use score::{Score, Summary, evaluate, optima, optimum_welfare};

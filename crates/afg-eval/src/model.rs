@@ -2,16 +2,7 @@
 
 use std::path::Path;
 
-use afg_learn::{Algo, RunDir};
-
-/// The network of a model.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Net {
-    /// AFGNet (the paper's network).
-    AfgNet,
-    /// Structure2Vec (the paper's comparison network).
-    S2v,
-}
+use afg_learn::{Algo, Net, RunDir};
 
 /// What a model adds to the paper's method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -53,8 +44,8 @@ pub enum Variant {
 ///
 /// # Examples
 /// ```
-/// use afg_eval::{ModelSpec, Net, Variant};
-/// use afg_learn::Algo;
+/// use afg_eval::{ModelSpec, Variant};
+/// use afg_learn::{Algo, Net};
 /// let m = ModelSpec::new(Net::AfgNet, Algo::Ddqn, Variant::Paper, 60);
 /// assert_eq!(m.dir_name(), "afgnet_ddqn_n60");
 /// assert_eq!(m.label(), "AFGNet_DDQN");
@@ -215,10 +206,7 @@ impl ModelSpec {
 
     /// The run directory's name under `models/`, e.g. `afgnet_ddqn_n60`.
     pub fn dir_name(&self) -> String {
-        let net = match self.net {
-            Net::AfgNet => "afgnet",
-            Net::S2v => "s2v",
-        };
+        let net = self.net.name();
         let variant = match self.variant {
             Variant::Paper => "",
             Variant::GainResidual => "_gain",

@@ -1,7 +1,8 @@
 //! The numbers the paper reports, to print beside ours.
 
-use crate::{ModelSpec, Net, Variant};
-use afg_learn::Algo;
+use afg_learn::{Algo, Net};
+
+use crate::{ModelSpec, Variant};
 
 /// One scale of the paper's Table I.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -11,7 +11,7 @@ use serde::Serialize;
 use crate::EvalError;
 
 /// A warm-started reallocation and what it cost.
-#[derive(Debug, Serialize)]
+#[derive(Clone, Debug, Serialize)]
 pub struct Reallocation {
     /// The reallocated assignment of the new instance.
     #[serde(skip)]
@@ -94,6 +94,26 @@ pub fn reallocate(
     })
 }
 
+/// The reallocation as `cargo xtask solve --from` prints it, one figure per line.
+impl std::fmt::Display for Reallocation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let (welfare, opt) = (self.welfare, self.opt_welfare);
+        writeln!(
+            f,
+            "  welfare           {welfare:>12.3}   (OPT from scratch {opt:.3})"
+        )?;
+        writeln!(f, "  % of OPT          {:>12.2}", self.percent_of_opt)?;
+        writeln!(
+            f,
+            "  survivors moved   {:>12}   of {} (from scratch: OPT would move {}, the same dynamics {})",
+            self.moved, self.survivors, self.opt_changes, self.scratch_changes
+        )?;
+        writeln!(f, "  robots placed     {:>12}", self.placed)?;
+        writeln!(f, "  balanced-stable   {:>12}", self.stable_balanced)?;
+        writeln!(f, "  time              {:>10.3} ms", 1e3 * self.seconds)
+    }
+}
+
 /// The best-response dynamics that warm-start an assignment made by `method`: balanced
 /// after OPT or balanced DA, selfish after GRAPE DA; `None` for other methods.
 pub fn dynamics_after(method: Method) -> Option<Preference> {
@@ -116,7 +136,7 @@ pub fn after_removal(
     seed: u64,
     previous_method: Method,
 ) -> Result<(Instance, PreviousAssignment), EvalError> {
-    let old = GeneratorConfig::paper(n, 5, seed).generate()?;
+    let old = GeneratorConfig::paper(n, GeneratorConfig::PAPER_TASKS, seed).generate()?;
     let opt = previous_method.allocator(seed).allocate(&old)?.assignment;
     let left: Vec<RobotId> = (0..removed)
         .map(|k| RobotId((k * n / removed) as u32))
@@ -137,6 +157,37 @@ pub fn after_removal(
     Ok((now, previous))
 }
 
+/// The removal study's Markdown table: the warm start (`dynamics` run from the old
+/// assignment) against the same dynamics and OPT from scratch, over `rows` (one per
+/// instance, none empty).
+pub fn study_markdown(rows: &[Reallocation], dynamics: &str) -> String {
+    let k = rows.len() as f64;
+    let mean = |f: &dyn Fn(&Reallocation) -> f64| rows.iter().map(f).sum::<f64>() / k;
+    let worst = |f: &dyn Fn(&Reallocation) -> f64| rows.iter().map(f).fold(f64::INFINITY, f64::min);
+    let mut md = String::from(
+        "| method | survivors moved (mean) | % of OPT (mean / worst) | balanced-stable | time (ms, mean) |\n|---|---|---|---|---|\n",
+    );
+    md += &format!(
+        "| warm start ({dynamics} from the old assignment) | {:.1} | {:.3} / {:.3} | {} of {} | {:.2} |\n",
+        mean(&|r| r.moved as f64),
+        mean(&|r| r.percent_of_opt),
+        worst(&|r| r.percent_of_opt),
+        rows.iter().filter(|r| r.stable_balanced).count(),
+        rows.len(),
+        1e3 * mean(&|r| r.seconds)
+    );
+    md += &format!(
+        "| {dynamics} from scratch | {:.1} | {:.3} / {:.3} | – | – |\n",
+        mean(&|r| r.scratch_changes as f64),
+        mean(&|r| r.scratch_percent_of_opt),
+        worst(&|r| r.scratch_percent_of_opt)
+    );
+    md + &format!(
+        "| OPT from scratch | {:.1} | 100 / 100 | – | – |\n",
+        mean(&|r| r.opt_changes as f64)
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -150,6 +201,24 @@ mod tests {
         assert!(r.percent_of_opt > 99.0, "{}", r.percent_of_opt);
         assert!(r.moved < r.survivors / 5, "moved {}", r.moved);
         now.check(&r.assignment).unwrap();
+        // The study's table of two copies of it: means equal the row, worst too.
+        let md = study_markdown(&[r.clone(), r.clone()], "balanced DA");
+        let warm = md.lines().nth(2).unwrap();
+        let pct = format!("{:.3} / {:.3}", r.percent_of_opt, r.percent_of_opt);
+        assert!(warm.contains(&pct) && warm.contains("| 2 of 2 |"), "{md}");
+        assert!(
+            md.lines()
+                .nth(3)
+                .unwrap()
+                .starts_with("| balanced DA from scratch |")
+        );
+        assert_eq!(md.lines().count(), 5);
+        let text = r.to_string();
+        let moved = format!("survivors moved   {:>12}   of 270 (", r.moved);
+        assert!(
+            text.contains(&moved) && text.contains(&format!("robots placed     {:>12}", 0)),
+            "{text}"
+        );
     }
 
     #[test]

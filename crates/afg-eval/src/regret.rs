@@ -9,7 +9,7 @@ use std::path::Path;
 use afg_baseline::{Allocator, Optimum};
 use afg_game::Instance;
 use afg_graph::{GraphKind, RobotGraph};
-use afg_learn::{FastPolicy, LearnError, LearnedPolicy, RunDir, regret_trace};
+use afg_learn::{FastPolicy, LearnError, RunDir, regret_trace};
 use serde::Serialize;
 
 use crate::EvalError;
@@ -64,10 +64,7 @@ pub fn summarise(
     }
     let run = RunDir::new(dir);
     let config = run.config()?;
-    let policy = LearnedPolicy::load(&run.weights()).map_err(|source| EvalError::Model {
-        path: dir.display().to_string(),
-        source,
-    })?;
+    let policy = crate::solve::load_learned(dir)?;
     let fast = FastPolicy::from_network(policy.config(), policy.network());
     let (mut by_decile, mut total_regret) = ([0.0f64; 10], 0.0);
     let (mut gaps, mut sq_error, mut wrong, mut steps) = (Vec::new(), 0.0, 0usize, 0usize);

@@ -7,7 +7,7 @@ use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
 use afg_baseline::Method;
-use afg_learn::{LogEvent, RunDir, ValidationLine};
+use afg_learn::{LogEvent, RunDir, TrainConfig, ValidationLine};
 
 use crate::EvalError;
 
@@ -21,42 +21,75 @@ pub struct Curve {
     pub baselines: Vec<(String, f64)>,
 }
 
+/// What a run's log says about its training: the configuration and classical
+/// baselines of its start event, its validations and the last elapsed time.
+struct RunLog {
+    config: Box<TrainConfig>,
+    baselines: BTreeMap<String, f64>,
+    validations: Vec<ValidationLine>,
+    elapsed_s: f64,
+}
+
+impl RunLog {
+    /// Reads `dir/log.jsonl`, cut after gradient step `at_step` if given.
+    fn read(dir: &Path, at_step: Option<u64>) -> Result<Self, EvalError> {
+        let mut events = RunDir::new(dir).log()?;
+        if let Some(last) = at_step {
+            events.retain(|e| e.step().is_none_or(|s| s <= last));
+        }
+        let elapsed_s = events
+            .iter()
+            .rev()
+            .find_map(LogEvent::elapsed_s)
+            .unwrap_or(0.0);
+        let mut start = None;
+        let mut validations = Vec::new();
+        for event in events {
+            match event {
+                LogEvent::Start {
+                    config, baselines, ..
+                } => start = Some((config, baselines)),
+                LogEvent::Validation(v) => validations.push(v),
+                _ => {}
+            }
+        }
+        let (config, baselines) = start.ok_or_else(|| EvalError::Log {
+            path: dir.display().to_string(),
+            what: "no start event",
+        })?;
+        Ok(Self {
+            config,
+            baselines,
+            validations,
+            elapsed_s,
+        })
+    }
+}
+
 /// Reads the validation curve from `dir/log.jsonl`.
 ///
 /// # Errors
-/// A missing or unreadable log.
+/// A missing or unreadable log, or one without a start event.
 pub fn read_curve(dir: &Path) -> Result<Curve, EvalError> {
-    let run = RunDir::new(dir);
-    let (mut label, mut points, mut baselines) =
-        (dir.display().to_string(), Vec::new(), Vec::new());
-    for event in run.log()? {
-        match event {
-            LogEvent::Start {
-                config,
-                baselines: logged,
-                ..
-            } => {
-                label = format!(
-                    "{} ({}_{}, N = {})",
-                    run.name(),
-                    config.network.name(),
-                    config.algo.name(),
-                    config.robots
-                );
-                for m in [Method::Opt, Method::Greedy, Method::Nearest, Method::Random] {
-                    if let Some(&w) = logged.get(m.name()) {
-                        baselines.push((m.name().to_owned(), w));
-                    }
-                }
-            }
-            LogEvent::Validation(v) => points.push((v.step as f64, v.welfare)),
-            _ => {}
-        }
-    }
+    let log = RunLog::read(dir, None)?;
+    let config = &log.config;
     Ok(Curve {
-        label,
-        points,
-        baselines,
+        label: format!(
+            "{} ({}_{}, N = {})",
+            RunDir::new(dir).name(),
+            config.network.name(),
+            config.algo.name(),
+            config.robots
+        ),
+        points: log
+            .validations
+            .iter()
+            .map(|v| (v.step as f64, v.welfare))
+            .collect(),
+        baselines: [Method::Opt, Method::Greedy, Method::Nearest, Method::Random]
+            .into_iter()
+            .filter_map(|m| Some((m.name().to_owned(), *log.baselines.get(m.name())?)))
+            .collect(),
     })
 }
 
@@ -76,40 +109,20 @@ pub fn report_markdown(dirs: &[PathBuf], at_step: Option<u64>) -> Result<String,
     let mut baseline_rows: Vec<(String, BTreeMap<String, f64>)> = Vec::new();
     for dir in dirs {
         let run = RunDir::new(dir);
-        let mut events = run.log()?;
-        if let Some(last) = at_step {
-            events.retain(|e| e.step().is_none_or(|s| s <= last));
-        }
-        let incomplete = |what| EvalError::Log {
+        let RunLog {
+            config,
+            baselines: logged,
+            validations: vals,
+            elapsed_s: wall,
+        } = RunLog::read(dir, at_step)?;
+        let last = vals.last().ok_or_else(|| EvalError::Log {
             path: dir.display().to_string(),
-            what,
-        };
-        let (config, logged) = events
-            .iter()
-            .find_map(|e| match e {
-                LogEvent::Start {
-                    config, baselines, ..
-                } => Some((config, baselines)),
-                _ => None,
-            })
-            .ok_or_else(|| incomplete("no start event"))?;
-        let vals: Vec<&ValidationLine> = events
-            .iter()
-            .filter_map(|e| match e {
-                LogEvent::Validation(v) => Some(v),
-                _ => None,
-            })
-            .collect();
-        let last = vals.last().ok_or_else(|| incomplete("no validation"))?;
+            what: "no validation",
+        })?;
         let best = vals
             .iter()
             .max_by(|a, b| a.welfare.total_cmp(&b.welfare))
             .expect("non-empty");
-        let wall = events
-            .iter()
-            .rev()
-            .find_map(LogEvent::elapsed_s)
-            .unwrap_or(0.0);
         let n = match config.network.tasks() {
             crate::dataset::TASKS => config.robots.to_string(),
             m => format!("{} (M = {m})", config.robots),
@@ -138,7 +151,7 @@ pub fn report_markdown(dirs: &[PathBuf], at_step: Option<u64>) -> Result<String,
             best.step
         );
         if !baseline_rows.iter().any(|(m, _)| *m == n) {
-            baseline_rows.push((n.clone(), logged.clone()));
+            baseline_rows.push((n.clone(), logged));
         }
     }
     out += "\nClassical methods on the same validation sets (mean welfare):\n\n";

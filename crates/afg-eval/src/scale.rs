@@ -13,28 +13,60 @@ use serde::{Deserialize, Serialize};
 use crate::EvalError;
 use crate::tables::duration;
 
-/// What to measure: every size and task count, and the learned models to run.
+/// What to measure: every size and task count, and the learned models to run. With
+/// the `cli` feature, the flags of a `clap` command (`cargo xtask bench-scale`), with
+/// its defaults.
 #[derive(Clone, Debug)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
 pub struct Plan {
     /// Robot counts N.
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, value_delimiter = ',', default_value = "100,1000,10000,100000")
+    )]
     pub sizes: Vec<usize>,
     /// Task counts M.
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, value_delimiter = ',', default_value = "5,50")
+    )]
     pub tasks: Vec<usize>,
-    /// Numbers of network passes per rollout (block B = ⌈N / passes⌉), besides the
-    /// exact rollout (B = 1).
+    /// Numbers of network passes to try per rollout (block B = ⌈N / passes⌉), besides
+    /// the exact rollout (B = 1).
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, value_delimiter = ',', default_value = "1000,100,10")
+    )]
     pub passes: Vec<usize>,
-    /// Skip learned runs with more than this many robot-passes (N × passes).
+    /// Skip learned runs with more than this many robot-passes (N × passes), e.g. the
+    /// exact rollout above N = 1000.
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = 20_000_000))]
     pub max_work: usize,
     /// Run the Burn reference path up to this N (M = 5 only).
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = 1000))]
     pub burn_up_to: usize,
-    /// Trained run directory of the learned policy at M = 5 (other M: untrained).
+    /// Trained run directory of the learned policy at M = 5; other M use untrained
+    /// weights (timing only).
+    #[cfg_attr(feature = "cli", arg(long, default_value = "models/afgnet_ddqn_n20"))]
     pub model: PathBuf,
-    /// Price model directory (skipped if it holds no price file).
+    /// Price model (ours), run at every M in both modes without repair; skipped if the
+    /// directory holds no price file.
+    #[cfg_attr(feature = "cli", arg(long, default_value = "models/price_n60"))]
     pub price_model: PathBuf,
-    /// Run directories of AFGNet with a price head, each run at its own M (skipped if
-    /// one holds no weights).
+    /// AFGNet with a price head (ours): run directories, each used at the M its network
+    /// was built for, without repair, with 10 network passes and in one pass
+    /// (one-shot); a directory that holds no model is skipped.
+    #[cfg_attr(
+        feature = "cli",
+        arg(
+            long,
+            value_delimiter = ',',
+            default_value = "models/afgnet_qstar_price_n60,models/afgnet_qstar_price_m50_n60"
+        )
+    )]
     pub price_headed: Vec<PathBuf>,
     /// Seed of the instances (one per N and M).
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = 0))]
     pub seed: u64,
 }
 
@@ -130,14 +162,7 @@ pub fn run_case(case: Case) -> Result<Outcome, EvalError> {
         }
         (None, None) => {
             let policy = match &case.model {
-                Some(dir) => {
-                    LearnedPolicy::load(&RunDir::new(dir).weights()).map_err(|source| {
-                        EvalError::Model {
-                            path: dir.display().to_string(),
-                            source,
-                        }
-                    })?
-                }
+                Some(dir) => crate::solve::load_learned(dir)?,
                 None => LearnedPolicy::new(NetworkConfig::afgnet(case.tasks, 0)),
             };
             let policy = if case.exact_burn {

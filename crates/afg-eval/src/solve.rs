@@ -67,9 +67,7 @@ pub fn load_model(dir: &Path, options: ModelOptions) -> Result<Box<dyn Allocator
     if options.one_shot {
         return bad("--one-shot applies to price models (a directory holding price.json)");
     }
-    let policy = LearnedPolicy::load(&RunDir::new(dir).weights())
-        .map_err(loading)?
-        .with_repair(options.repair);
+    let policy = load_learned(dir)?.with_repair(options.repair);
     let policy = match (options.exact_burn, options.block) {
         (true, Some(b)) if b != 1 => {
             return bad("--exact-burn rolls out one robot at a time (block 1); drop --block");
@@ -78,6 +76,17 @@ pub fn load_model(dir: &Path, options: ModelOptions) -> Result<Box<dyn Allocator
         (false, block) => policy.with_block(block.unwrap_or(1)).map_err(loading)?,
     };
     Ok(Box::new(policy))
+}
+
+/// The Q network of the training run in `dir` (its final weights).
+///
+/// # Errors
+/// [`EvalError::Model`], naming the directory, if the weights cannot be loaded.
+pub fn load_learned(dir: &Path) -> Result<LearnedPolicy, EvalError> {
+    LearnedPolicy::load(&RunDir::new(dir).weights()).map_err(|source| EvalError::Model {
+        path: dir.display().to_string(),
+        source,
+    })
 }
 
 /// One instance's result.
@@ -200,6 +209,45 @@ impl Report {
     }
 }
 
+/// The report as `cargo xtask solve` prints it: the means, one per line.
+impl std::fmt::Display for Report {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let (m, k) = (&self.mean, self.instances);
+        let plural = if k == 1 { "" } else { "s" };
+        writeln!(
+            f,
+            "{} on {} ({k} instance{plural})",
+            self.method, self.source
+        )?;
+        writeln!(
+            f,
+            "  welfare           {:>12.3}   (OPT {:.3})",
+            m.welfare, m.opt_welfare
+        )?;
+        writeln!(f, "  % of OPT          {:>12.2}", m.percent_of_opt)?;
+        writeln!(
+            f,
+            "  NS_rate balanced  {:>11.1} %",
+            100.0 * m.ns_rate_balanced
+        )?;
+        writeln!(
+            f,
+            "  NS_rate selfish   {:>11.1} %",
+            100.0 * m.ns_rate_selfish
+        )?;
+        writeln!(f, "  iterations        {:>12.1}", m.iterations)?;
+        writeln!(f, "  rounds            {:>12.1}", m.rounds)?;
+        if m.messages > 0.0 {
+            writeln!(f, "  messages          {:>12.0}", m.messages)?;
+        }
+        writeln!(f, "  time / instance   {:>10.3} ms", 1e3 * m.seconds)?;
+        if k > 1 {
+            writeln!(f, "  (means over instances; --json for each one)")?;
+        }
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use afg_baseline::{Greedy, Optimum};
@@ -220,6 +268,13 @@ mod tests {
         let report = Report::new("greedy".into(), "here".into(), rows).unwrap();
         assert_eq!(report.instances, 3);
         assert!((report.mean.welfare - by_hand).abs() < 1e-12);
+        let text = report.to_string();
+        assert!(text.starts_with("greedy on here (3 instances)\n"), "{text}");
+        let welfare = format!("welfare           {:>12.3}", by_hand);
+        assert!(
+            text.contains(&welfare) && !text.contains("messages"),
+            "{text}"
+        );
         assert!(report.mean.percent_of_opt <= 100.0 + 1e-9);
         let (opt, _) = Row::compute(&insts[0], &Optimum).unwrap();
         assert_eq!(opt.score.percent_of_opt, 100.0);

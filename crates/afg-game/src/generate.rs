@@ -56,6 +56,9 @@ pub struct GeneratorConfig {
 }
 
 impl GeneratorConfig {
+    /// The paper's number of tasks in every experiment, M = 5.
+    pub const PAPER_TASKS: usize = 5;
+
     /// The paper's setting: positions uniform in the unit square, rewards uniform in
     /// `[N/M, 2N/M]`, beta = 1; our defaults `eps = max(2, N/M)` and no capacities.
     pub fn paper(robots: usize, tasks: usize, seed: u64) -> Self {

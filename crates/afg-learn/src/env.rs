@@ -103,17 +103,32 @@ impl<'a> Env<'a> {
 /// while the values to learn become what an action gains over finishing by the rule.
 /// Not in the paper (ours).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum Shaping {
     /// The paper's reward, the welfare change (Φ = 0).
     #[default]
+    #[cfg_attr(
+        feature = "cli",
+        value(help = "the paper's reward, the welfare change")
+    )]
     None,
     /// Φ from one-pass greedy ([`afg_baseline::Greedy::complete`]), O(N M) per state.
+    #[cfg_attr(
+        feature = "cli",
+        value(help = "potential: the welfare a greedy completion would still add (the default)")
+    )]
     Greedy,
     /// Φ from the optimal completion ([`afg_baseline::Optimum::complete`]), one min-cost
     /// flow per state. Then Φ(s) = V*(s), so the shaped reward of one step is exactly
     /// the advantage `Q*(s, a) − V*(s)` ≤ 0 and the shaped optimal values are 0 along
     /// optimal play: the TD targets carry the oracle's values.
+    #[cfg_attr(
+        feature = "cli",
+        value(
+            help = "potential: the welfare the optimal completion would still add, one min-cost flow per state (ours)"
+        )
+    )]
     Optimal,
 }
 

@@ -29,7 +29,7 @@ pub use env::{Env, Shaping, n_step_reward};
 pub use error::LearnError;
 pub use fast::{FastPolicy, FastRollout, FastRolloutOutcome};
 pub use layers::{Activation, QHead, linear_of_concat};
-pub use network::{NetworkConfig, QNetwork};
+pub use network::{Net, NetworkConfig, QNetwork};
 pub use policy::{LearnedPolicy, LearnedRun};
 pub use price::{
     PRICE_INPUTS, PriceMlp, PriceMode, PriceModel, PriceNet, PriceNetConfig, PricePolicy,
@@ -42,8 +42,8 @@ pub use s2v::{S2v, S2vConfig};
 pub use targets::{double_dqn_target, dqn_target, masked_argmax};
 pub use tensors::{DENSE_MAX_NODES, DenseAdjacency, GraphTensors};
 pub use train::{
-    Algo, Demonstrations, Preset, Session, StepReport, TrainConfig, Trainer, Validation,
-    checkpoint_dir, training_instance_seed, validation_instances,
+    Algo, Demonstrations, Preset, Session, StepReport, TrainConfig, TrainSettings, Trainer,
+    Validation, checkpoint_dir, training_instance_seed, validation_instances,
 };
 pub use weights::{load_network, save_network};
 

@@ -10,6 +10,28 @@ use crate::afgnet::{AfgNet, AfgNetConfig};
 use crate::s2v::{S2v, S2vConfig};
 use crate::tensors::GraphTensors;
 
+/// The kind of a Q network.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum Net {
+    /// AFGNet (the paper's network).
+    #[cfg_attr(feature = "cli", value(name = "afgnet"))]
+    AfgNet,
+    /// Structure2Vec (the paper's comparison network).
+    S2v,
+}
+
+impl Net {
+    /// `afgnet` or `s2v`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Net::AfgNet => "afgnet",
+            Net::S2v => "s2v",
+        }
+    }
+}
+
 /// Which network, with its shape and seed. Serialised beside saved weights, so a
 /// weight file is never loaded into a network of another shape.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -69,12 +91,17 @@ impl NetworkConfig {
         unseeded(self) == unseeded(other)
     }
 
+    /// The kind of network.
+    pub fn net(&self) -> Net {
+        match self {
+            NetworkConfig::AfgNet(_) => Net::AfgNet,
+            NetworkConfig::S2v(_) => Net::S2v,
+        }
+    }
+
     /// Short name: `afgnet` or `s2v`.
     pub fn name(&self) -> &'static str {
-        match self {
-            NetworkConfig::AfgNet(_) => "afgnet",
-            NetworkConfig::S2v(_) => "s2v",
-        }
+        self.net().name()
     }
 
     /// Builds the network.

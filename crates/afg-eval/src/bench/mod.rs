@@ -7,9 +7,10 @@
 
 pub mod plain;
 
+use std::convert::Infallible;
 use std::time::{Duration, Instant};
 
-use afg_baseline::Allocator;
+use afg_baseline::{Allocator, Method, Optimum};
 use afg_game::{GeneratorConfig, Instance, TaskId};
 use afg_graph::{GraphBatch, GraphKind, RobotGraph};
 use afg_learn::{
@@ -21,6 +22,7 @@ use burn::tensor::Tensor;
 use rand::{Rng, SeedableRng};
 
 use crate::EvalError;
+use crate::tables::duration;
 use plain::PaddedGraph;
 
 /// Median wall time of `alloc` on `instance` over repeated runs (at least one, at most
@@ -91,13 +93,13 @@ fn step_time(
     let mut train = config.init::<TrainBackend>(&device);
     let mut optim = AdamConfig::new().init();
     let target = Tensor::<TrainBackend, 2>::zeros([rows, config.tasks()], &device);
-    let time = median(repeats, || {
+    let Ok(time) = median(repeats, || {
         let loss = (forward(&train) - target.clone()).powi_scalar(2).mean();
         let grads = GradientsParams::from_grads(loss.backward(), &train);
         train = optim.step(1e-4, train.clone(), grads);
-        Ok::<_, EvalError>(())
+        Ok::<_, Infallible>(())
     });
-    time.expect("the step cannot fail")
+    time
 }
 
 /// One network's forward pass and training step on one batch, with edge lists and with
@@ -140,9 +142,10 @@ pub fn network_timings(
                     }
                 };
                 let net = config.init::<InferBackend>(&device);
-                forward[k] = median(repeats, || {
-                    Ok::<_, EvalError>(net.forward(&upload(&states)).into_data())
-                })?;
+                let Ok(time) = median(repeats, || {
+                    Ok::<_, Infallible>(net.forward(&upload(&states)).into_data())
+                });
+                forward[k] = time;
                 step[k] = step_time(repeats, &config, batch, |net| {
                     net.forward(&if dense {
                         GraphTensors::<TrainBackend>::new(&states, &device)
@@ -209,4 +212,130 @@ pub fn rollout_timings(
         out.push((config.name(), burn, fast));
     }
     Ok(out)
+}
+
+/// The table of `cargo xtask bench-baselines`: for each N of `sizes`, every centralised
+/// allocator and the decentralised DA (up to N = `max_decentralised`) on one instance
+/// of the paper's distribution (seed 7, M = `tasks`): median wall time over a budget of
+/// `seconds` per allocator ([`allocator_time`]) and welfare as % of OPT.
+///
+/// # Errors
+/// An instance that cannot be generated, or an allocator failure.
+pub fn allocators_markdown(
+    sizes: &[usize],
+    tasks: usize,
+    max_decentralised: usize,
+    seconds: f64,
+) -> Result<String, EvalError> {
+    let mut methods = Method::CENTRALISED.to_vec();
+    methods.retain(|&m| m != Method::Random);
+    methods.push(Method::DaDecentralised);
+    let mut md = format!(
+        "M = {tasks}; instance seed 7, paper distribution; median wall time on one core, welfare as % of OPT.\n\n| N |"
+    );
+    for m in &methods {
+        md += &format!(" {m} |");
+    }
+    md += &format!("\n|---|{}\n", "---|".repeat(methods.len()));
+    for &n in sizes {
+        let inst = GeneratorConfig::paper(n, tasks, 7).generate()?;
+        let opt = inst.welfare(&Optimum.allocate(&inst)?.assignment);
+        md += &format!("| {n} |");
+        for &m in &methods {
+            if m == Method::DaDecentralised && n > max_decentralised {
+                md += " – |";
+                continue;
+            }
+            let (t, w) = allocator_time(m.allocator(0).as_ref(), &inst, seconds)?;
+            md += &format!(" {} ({:.2} %) |", duration(t), 100.0 * w / opt);
+        }
+        md.push('\n');
+    }
+    Ok(md)
+}
+
+/// The tables of `cargo xtask bench-models`: [`network_timings`] at each N of `sizes`
+/// (batches of `batch` states, median of `repeats`), [`plain_timings`] and
+/// [`rollout_timings`] at N = `rollout`; `allocator` names the global allocator of the
+/// build for the header.
+///
+/// # Errors
+/// As [`network_timings`], [`plain_timings`] and [`rollout_timings`].
+pub fn networks_markdown(
+    sizes: &[usize],
+    batch: usize,
+    rollout: usize,
+    repeats: usize,
+    allocator: &str,
+) -> Result<String, EvalError> {
+    let ratio = |a: Duration, b: Duration| a.as_secs_f64() / b.as_secs_f64();
+    let mut md = format!(
+        "Median of {repeats} runs; batch of {batch} states from random partial episodes (M = 5); CPU ndarray back end; {allocator} allocator.\n\n\
+         | network | N | forward, edge lists | forward, dense | train step, edge lists | train step, dense | speed-up of the step |\n|---|---|---|---|---|---|---|\n"
+    );
+    for t in network_timings(sizes, batch, repeats)? {
+        md += &format!(
+            "| {} | {} | {} | {} | {} | {} | {:.1}× |\n",
+            t.network,
+            t.robots,
+            duration(t.forward[0]),
+            duration(t.forward[1]),
+            duration(t.step[0]),
+            duration(t.step[1]),
+            ratio(t.step[0], t.step[1])
+        );
+    }
+    md += "\nAFGNet's training step against the plain model of the first Burn notes of this project \
+           (neighbours padded to the largest degree, gather + reshape + sum; same parameters, \
+           same Q values: tested in crates/afg-eval/src/bench/plain.rs), in the same run:\n\n\
+           | N | train step, plain (padded gather) | train step, ours (dense) | speed-up |\n|---|---|---|---|\n";
+    for (n, plain, ours) in plain_timings(sizes, batch, repeats)? {
+        let (p, o, x) = (duration(plain), duration(ours), ratio(plain, ours));
+        md += &format!("| {n} | {p} | {o} | {x:.1}× |\n");
+    }
+    md += &format!(
+        "\n| network | greedy rollout, N = {rollout}, Burn path | fast path (B = 1) | speed-up |\n|---|---|---|---|\n"
+    );
+    for (network, burn, fast) in rollout_timings(rollout)? {
+        let (b, f, x) = (duration(burn), duration(fast), ratio(burn, fast));
+        md += &format!("| {network} | {b} | {f} | {x:.1}× |\n");
+    }
+    Ok(md)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_benchmark_tables_have_a_row_per_case() {
+        let md = allocators_markdown(&[12, 30], 3, 12, 0.0).unwrap();
+        let rows: Vec<&str> = md
+            .lines()
+            .filter(|l| l.starts_with("| 12 |") || l.starts_with("| 30 |"))
+            .collect();
+        assert_eq!(rows.len(), 2, "{md}");
+        // OPT is the first column, at 100 % of itself; DA decentralised only up to 12.
+        assert!(rows.iter().all(|r| r.contains("(100.00 %)")), "{md}");
+        assert!(
+            rows[1].ends_with(" – |") && !rows[0].ends_with(" – |"),
+            "{md}"
+        );
+        let md = networks_markdown(&[8], 4, 20, 1, "system").unwrap();
+        assert_eq!(
+            md.lines().filter(|l| l.starts_with("| afgnet |")).count(),
+            2,
+            "{md}"
+        );
+        assert_eq!(
+            md.lines().filter(|l| l.starts_with("| s2v |")).count(),
+            2,
+            "{md}"
+        );
+        assert_eq!(
+            md.lines().filter(|l| l.starts_with("| 8 |")).count(),
+            1,
+            "{md}"
+        );
+    }
 }

@@ -8,11 +8,14 @@ use crate::{LearnError, NetworkConfig, Shaping};
 
 /// What the network's Q values are fitted to: a bootstrap rule, or the exact `Q*`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum Algo {
     /// `r + max_a Q_target(s', a)`.
+    #[cfg_attr(feature = "cli", value(help = "DQN (the paper's bootstrap rule)"))]
     Dqn,
     /// `r + Q_target(s', argmax_a Q_online(s', a))`.
+    #[cfg_attr(feature = "cli", value(help = "Double DQN (the paper's)"))]
     Ddqn,
     /// Every allowed action's value regressed on the exact `Q*(s, a)` of the sequential
     /// MDP ([`crate::q_star`]), on the states the ε-greedy policy of the network visits
@@ -20,6 +23,13 @@ pub enum Algo {
     /// `reward_scaling`, minus the shaping potential of `shaping` (the exact
     /// value that the TD targets estimate). Supervised, not reinforcement learning, and
     /// not in the paper (ours).
+    #[cfg_attr(
+        feature = "cli",
+        value(
+            name = "qstar",
+            help = "regression on the exact Q* of every action (ours; not reinforcement learning)"
+        )
+    )]
     QStar,
 }
 

@@ -20,6 +20,7 @@ mod checkpoint;
 mod config;
 mod replay;
 mod session;
+mod settings;
 
 use std::collections::VecDeque;
 
@@ -40,6 +41,7 @@ pub use config::{
 };
 use replay::{Episode, EpisodeRecord};
 pub use session::Session;
+pub use settings::TrainSettings;
 
 use crate::{
     GraphTensors, InferBackend, LearnError, QNetwork, TrainBackend, greedy_rollouts, masked_argmax,
