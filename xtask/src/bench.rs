@@ -10,7 +10,7 @@ pub struct BenchArgs {
     #[arg(long, value_delimiter = ',', default_values_t = [100, 1_000, 10_000, 100_000])]
     sizes: Vec<usize>,
     /// Number of tasks M.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = afg_eval::dataset::TASKS)]
     tasks: usize,
     /// Largest N for the decentralised DA (its simulation keeps N views).
     #[arg(long, default_value_t = 1_000)]

@@ -97,9 +97,10 @@ pub fn run_study(args: StudyArgs) -> Result<()> {
         rows.push(reallocate(&now, &previous, preference)?);
     }
     println!(
-        "N = {} robots, {} leave (spread over the indices), M = 5, {} instances; the previous assignment is {}'s.\n",
+        "N = {} robots, {} leave (spread over the indices), M = {}, {} instances; the previous assignment is {}'s.\n",
         args.robots,
         removed.max(1),
+        afg_eval::dataset::TASKS,
         rows.len(),
         args.previous
     );

@@ -23,6 +23,9 @@ use rand::{Rng, SeedableRng};
 
 use crate::EvalError;
 use crate::tables::duration;
+
+/// Tasks of every instance and network timed here: the paper's M.
+const M: usize = GeneratorConfig::PAPER_TASKS;
 use plain::PaddedGraph;
 
 /// Median wall time of `alloc` on `instance` over repeated runs (at least one, at most
@@ -55,14 +58,14 @@ pub fn allocator_time(
 /// `n` = 0, or an instance that cannot be generated.
 pub fn random_batch(n: usize, size: usize) -> Result<GraphBatch, EvalError> {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(n as u64);
-    let mut batch = GraphBatch::new(5);
+    let mut batch = GraphBatch::new(M);
     for s in 0..size {
-        let inst = GeneratorConfig::paper(n, 5, s as u64).generate()?;
+        let inst = GeneratorConfig::paper(n, M, s as u64).generate()?;
         let graph =
             RobotGraph::build(inst.robots(), GraphKind::default()).map_err(LearnError::from)?;
         let mut env = Env::reset(&inst);
         for _ in 0..rng.random_range(0..n) {
-            env.step(TaskId(rng.random_range(0..5)))?;
+            env.step(TaskId(rng.random_range(0..M as u32)))?;
         }
         batch.push(&graph, env.state(), env.actor().expect("a robot is left"));
     }
@@ -130,7 +133,7 @@ pub fn network_timings(
     let mut out = Vec::new();
     for &n in sizes {
         let states = random_batch(n, batch)?;
-        for config in [NetworkConfig::afgnet(5, 0), NetworkConfig::s2v(5, 0)] {
+        for config in [NetworkConfig::afgnet(M, 0), NetworkConfig::s2v(M, 0)] {
             let mut forward = [Duration::ZERO; 2];
             let mut step = [Duration::ZERO; 2];
             for (k, dense) in [false, true].into_iter().enumerate() {
@@ -176,7 +179,7 @@ pub fn plain_timings(
     repeats: usize,
 ) -> Result<Vec<(usize, Duration, Duration)>, EvalError> {
     let device = Default::default();
-    let config = NetworkConfig::afgnet(5, 0);
+    let config = NetworkConfig::afgnet(M, 0);
     let plain_q = |net: &QNetwork<TrainBackend>, b: &GraphBatch| match net {
         QNetwork::AfgNet(a) => plain::forward(a, Activation::Relu, &PaddedGraph::new(b, &device)),
         QNetwork::S2v(_) => unreachable!("an AFGNet configuration"),
@@ -202,9 +205,9 @@ pub fn plain_timings(
 pub fn rollout_timings(
     robots: usize,
 ) -> Result<Vec<(&'static str, Duration, Duration)>, EvalError> {
-    let inst = GeneratorConfig::paper(robots, 5, 7).generate()?;
+    let inst = GeneratorConfig::paper(robots, M, 7).generate()?;
     let mut out = Vec::new();
-    for config in [NetworkConfig::afgnet(5, 0), NetworkConfig::s2v(5, 0)] {
+    for config in [NetworkConfig::afgnet(M, 0), NetworkConfig::s2v(M, 0)] {
         let policy = LearnedPolicy::new(config.clone());
         let fast = median(3, || policy.allocate(&inst))?;
         let policy = policy.exact_burn();
@@ -270,7 +273,7 @@ pub fn networks_markdown(
 ) -> Result<String, EvalError> {
     let ratio = |a: Duration, b: Duration| a.as_secs_f64() / b.as_secs_f64();
     let mut md = format!(
-        "Median of {repeats} runs; batch of {batch} states from random partial episodes (M = 5); CPU ndarray back end; {allocator} allocator.\n\n\
+        "Median of {repeats} runs; batch of {batch} states from random partial episodes (M = {M}); CPU ndarray back end; {allocator} allocator.\n\n\
          | network | N | forward, edge lists | forward, dense | train step, edge lists | train step, dense | speed-up of the step |\n|---|---|---|---|---|---|---|\n"
     );
     for t in network_timings(sizes, batch, repeats)? {
