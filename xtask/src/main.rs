@@ -178,10 +178,8 @@ mod tests {
             "ablations/price_n60_expert",
             "ablations/price_n60_qstar",
         ] {
-            let path = crate::repo_root().join(format!("models/{run}/summary.json"));
-            let summary: serde_json::Value =
-                serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
-            let command = summary["command"].as_str().unwrap();
+            let dir = crate::repo_root().join("models").join(run);
+            let command = afg_learn::PriceRunSummary::load(&dir).unwrap().command;
             let Ok(super::Command::TrainPrice(args)) =
                 super::parse(command.strip_prefix("cargo xtask ").unwrap())
             else {
