@@ -139,6 +139,15 @@ pub fn command_args<A: clap::Args + serde::Serialize>(args: &A) -> Vec<String> {
     out
 }
 
+/// Parses a count that must be at least 1 (clap's `value_parser`).
+pub fn at_least_one(text: &str) -> Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(0) => Err("must be at least 1".into()),
+        Ok(k) => Ok(k),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
 /// A progress bar on stderr (hidden when stderr is not a terminal).
 pub fn progress(len: u64, message: &str) -> indicatif::ProgressBar {
     let bar = indicatif::ProgressBar::new(len);

@@ -55,8 +55,8 @@ pub struct SolveArgs {
     /// A committed dataset by robot count: 20, 60, 100, 500 or 1000.
     #[arg(long, group = "source")]
     pub(crate) dataset: Option<usize>,
-    /// Use only the first K instances of the dataset.
-    #[arg(long)]
+    /// Use only the first K instances (K ≥ 1).
+    #[arg(long, value_parser = crate::at_least_one)]
     pub(crate) limit: Option<usize>,
     /// Seed of the randomised methods (random, da-decentralised).
     #[arg(long, default_value_t = 0)]
@@ -82,8 +82,12 @@ fn read_instances(path: &std::path::Path) -> Result<Vec<Instance>> {
 }
 
 pub fn run(args: SolveArgs) -> Result<()> {
-    if args.model.is_none() && (args.block.is_some() || args.repair || args.exact_burn) {
-        anyhow::bail!("--block, --repair and --exact-burn apply to a learned policy (--model DIR)");
+    if args.model.is_none()
+        && (args.block.is_some() || args.repair || args.exact_burn || args.one_shot)
+    {
+        anyhow::bail!(
+            "--block, --repair, --one-shot and --exact-burn apply to a learned policy (--model DIR)"
+        );
     }
     let (source, mut instances) = match (&args.input, args.dataset) {
         (Some(p), _) => (p.display().to_string(), read_instances(p)?),
@@ -121,8 +125,9 @@ pub fn run(args: SolveArgs) -> Result<()> {
         .into_iter()
         .unzip();
     bar.finish_and_clear();
-    write_outputs(&args, &name, &instances, &rows, &assignments)?;
-    let report = Report::new(name, source, rows)?;
+    // Everything that can fail is done before any file is written.
+    let report = Report::new(name.clone(), source, rows)?;
+    write_outputs(&args, &name, &instances, &report.rows, &assignments)?;
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
         return Ok(());
@@ -236,6 +241,45 @@ mod tests {
         std::fs::write(format!("{dir}/mine.jsonl"), "").unwrap();
         let err = solve(&format!("--method opt --input {dir}/mine.jsonl")).unwrap_err();
         assert!(format!("{err:#}").contains("no instance"), "{err:#}");
+    }
+
+    #[test]
+    fn bad_options_fail_before_any_file_is_touched() {
+        let dir = temp("limit");
+        let out = format!("{dir}/keep.jsonl");
+        std::fs::write(&out, "precious\n").unwrap();
+        for flags in [
+            format!("--method greedy --dataset 20 --limit 0 --out {out}"),
+            format!("--method greedy --dataset 20 --limit 0 --svg {out}"),
+            format!("--method opt --one-shot --dataset 20 --out {out}"),
+        ] {
+            assert!(solve(&flags).is_err(), "{flags}");
+            assert_eq!(std::fs::read_to_string(&out).unwrap(), "precious\n");
+        }
+        let err = solve("--method greedy --dataset 20 --limit 0").unwrap_err();
+        assert!(format!("{err:#}").contains("at least 1"), "{err:#}");
+    }
+
+    #[test]
+    fn an_optimum_without_positive_welfare_has_no_percent() {
+        let dir = temp("zero");
+        let inst = instance(10, 3, 5);
+        let tasks = inst
+            .tasks()
+            .iter()
+            .map(|t| afg_game::Task { reward: 0.0, ..*t })
+            .collect();
+        let zero = afg_game::Instance::new(inst.robots().to_vec(), tasks, 1.0).unwrap();
+        zero.write(std::path::Path::new(&format!("{dir}/zero.json")))
+            .unwrap();
+        solve(&format!(
+            "--method greedy --input {dir}/zero.json --out {dir}/out.jsonl"
+        ))
+        .unwrap();
+        let text = std::fs::read_to_string(format!("{dir}/out.jsonl")).unwrap();
+        let v: serde_json::Value = serde_json::from_str(text.trim()).unwrap();
+        assert!(v["summary"]["percent_of_opt"].is_null(), "{v}");
+        assert!(v["summary"]["welfare"].as_f64().unwrap() < 0.0);
     }
 
     #[test]

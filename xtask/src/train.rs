@@ -31,11 +31,9 @@ impl TrainArgs {
 pub fn run(args: TrainArgs) -> Result<()> {
     let mut session = match &args.resume {
         Some(dir) => {
-            if !args.settings.is_empty() && args.config()? != RunDir::new(dir).config()? {
-                bail!(
-                    "{} holds a run with other settings; resume it without settings, or start a new run with --out",
-                    dir.display()
-                );
+            check_resume(&args, dir)?;
+            if let Some(line) = RunDir::new(dir).torn_log_line()? {
+                eprintln!("note: line {line} of the log was cut short by a crash; dropped");
             }
             let session =
                 Session::resume(dir).with_context(|| format!("resuming {}", dir.display()))?;
@@ -94,6 +92,33 @@ pub fn run(args: TrainArgs) -> Result<()> {
         v.percent_of_opt,
         session.run_dir().weights().display()
     );
+    Ok(())
+}
+
+/// Refuses what `--resume DIR` cannot do, saying what to do instead: extend a finished
+/// run (its ε and learning-rate schedules are fixed by its budget), or change the
+/// settings of an unfinished one.
+fn check_resume(args: &TrainArgs, dir: &std::path::Path) -> Result<()> {
+    let run = RunDir::new(dir);
+    let config = run.config()?;
+    if run.has_weights() {
+        bail!(
+            "{} is a finished run ({} steps): a run cannot be extended, because its ε and \
+             learning-rate schedules are fixed by its budget; start a new run from its \
+             weights instead: cargo xtask train --init-from {} --steps K --out NEW_DIR \
+             (with the run's other settings)",
+            dir.display(),
+            config.steps,
+            dir.display()
+        );
+    }
+    if !args.settings.is_empty() && args.settings.to_config().ok() != Some(config) {
+        bail!(
+            "{} holds a run with its own settings (config.json); resume it without \
+             settings, or start a new run with --out",
+            dir.display()
+        );
+    }
     Ok(())
 }
 
@@ -200,10 +225,18 @@ mod tests {
             message.contains("already holds a training run"),
             "{message}"
         );
-        // Resuming with other settings is refused too.
-        let err = xtask(&format!("train --resume {out} --scale 20 --steps 5")).unwrap_err();
-        assert!(err.to_string().contains("other settings"), "{err}");
+        // Extending the finished run is refused, saying how to start from its weights.
+        let err = xtask(&format!("train --resume {out} --steps 500")).unwrap_err();
+        let message = err.to_string();
+        assert!(
+            message.contains("finished run (120 steps)") && message.contains("--init-from"),
+            "{message}"
+        );
         assert_eq!(std::fs::read(run_dir.join("model.mpk")).unwrap(), before);
+        // An unfinished run resumed with other settings is refused too.
+        std::fs::remove_file(run_dir.join("model.mpk")).unwrap();
+        let err = xtask(&format!("train --resume {out} --scale 20 --steps 5")).unwrap_err();
+        assert!(err.to_string().contains("its own settings"), "{err}");
         // Unknown values are refused by the parser.
         assert!(xtask(&format!("train --scale 20 --net gcn --out {out}")).is_err());
         assert!(xtask(&format!("train --scale 20 --algo ppo --out {out}")).is_err());

@@ -52,6 +52,9 @@ pub enum EvalError {
     /// An instance could not be generated.
     #[error(transparent)]
     Game(#[from] GameError),
+    /// A mean % of OPT over instances of which one has an optimum of welfare ≤ 0.
+    #[error("% of OPT is undefined: an instance's optimal welfare is not positive")]
+    PercentUndefined,
     /// An allocation scored above the exact optimum: the optimum is wrong.
     #[error("{method} beats OPT ({welfare} > {opt}): the optimum is wrong")]
     BeatsOptimum {

@@ -24,4 +24,4 @@ pub mod tables;
 
 pub use error::EvalError;
 pub use model::{ModelSpec, PriceSpec, Variant};
-pub use score::{Score, Summary, evaluate, optima, optimum_welfare};
+pub use score::{Score, Summary, evaluate, optima, optimum_welfare, percent_of_opt};

@@ -20,8 +20,8 @@ pub struct Reallocation {
     pub welfare: f64,
     /// OPT of the new instance, solved from scratch.
     pub opt_welfare: f64,
-    /// `100 · welfare / opt_welfare`.
-    pub percent_of_opt: f64,
+    /// [`percent_of_opt`](crate::percent_of_opt).
+    pub percent_of_opt: Option<f64>,
     /// Robots carried over from the previous assignment.
     pub survivors: usize,
     /// Survivors that ended on another task.
@@ -34,7 +34,7 @@ pub struct Reallocation {
     /// would change.
     pub scratch_changes: usize,
     /// The same dynamics from scratch: % of OPT.
-    pub scratch_percent_of_opt: f64,
+    pub scratch_percent_of_opt: Option<f64>,
     /// Whether the result is stable under the balanced preference.
     pub stable_balanced: bool,
     /// Wall time of the warm start (carry over and dynamics), in seconds.
@@ -81,13 +81,13 @@ pub fn reallocate(
     Ok(Reallocation {
         welfare,
         opt_welfare,
-        percent_of_opt: 100.0 * welfare / opt_welfare,
+        percent_of_opt: crate::percent_of_opt(welfare, opt_welfare),
         survivors,
         moved: changed(&assignment),
         placed: carried.tasks().iter().filter(|t| t.is_none()).count(),
         opt_changes: changed(&opt),
         scratch_changes: changed(&scratch),
-        scratch_percent_of_opt: 100.0 * instance.welfare(&scratch) / opt_welfare,
+        scratch_percent_of_opt: crate::percent_of_opt(instance.welfare(&scratch), opt_welfare),
         stable_balanced: instance.is_stable(&assignment, Preference::Balanced),
         seconds,
         assignment,
@@ -102,7 +102,11 @@ impl std::fmt::Display for Reallocation {
             f,
             "  welfare           {welfare:>12.3}   (OPT from scratch {opt:.3})"
         )?;
-        writeln!(f, "  % of OPT          {:>12.2}", self.percent_of_opt)?;
+        writeln!(
+            f,
+            "  % of OPT          {:>12}",
+            crate::solve::percent_text(self.percent_of_opt)
+        )?;
         writeln!(
             f,
             "  survivors moved   {:>12}   of {} (from scratch: OPT would move {}, the same dynamics {})",
@@ -164,14 +168,16 @@ pub fn study_markdown(rows: &[Reallocation], dynamics: &str) -> String {
     let k = rows.len() as f64;
     let mean = |f: &dyn Fn(&Reallocation) -> f64| rows.iter().map(f).sum::<f64>() / k;
     let worst = |f: &dyn Fn(&Reallocation) -> f64| rows.iter().map(f).fold(f64::INFINITY, f64::min);
+    // An undefined % of OPT shows as NaN in the means it enters.
+    let pct = |p: Option<f64>| p.unwrap_or(f64::NAN);
     let mut md = String::from(
         "| method | survivors moved (mean) | % of OPT (mean / worst) | balanced-stable | time (ms, mean) |\n|---|---|---|---|---|\n",
     );
     md += &format!(
         "| warm start ({dynamics} from the old assignment) | {:.1} | {:.3} / {:.3} | {} of {} | {:.2} |\n",
         mean(&|r| r.moved as f64),
-        mean(&|r| r.percent_of_opt),
-        worst(&|r| r.percent_of_opt),
+        mean(&|r| pct(r.percent_of_opt)),
+        worst(&|r| pct(r.percent_of_opt)),
         rows.iter().filter(|r| r.stable_balanced).count(),
         rows.len(),
         1e3 * mean(&|r| r.seconds)
@@ -179,8 +185,8 @@ pub fn study_markdown(rows: &[Reallocation], dynamics: &str) -> String {
     md += &format!(
         "| {dynamics} from scratch | {:.1} | {:.3} / {:.3} | – | – |\n",
         mean(&|r| r.scratch_changes as f64),
-        mean(&|r| r.scratch_percent_of_opt),
-        worst(&|r| r.scratch_percent_of_opt)
+        mean(&|r| pct(r.scratch_percent_of_opt)),
+        worst(&|r| pct(r.scratch_percent_of_opt))
     );
     md + &format!(
         "| OPT from scratch | {:.1} | 100 / 100 | – | – |\n",
@@ -198,13 +204,14 @@ mod tests {
         let r = reallocate(&now, &previous, Preference::Balanced).unwrap();
         assert!(r.stable_balanced);
         assert_eq!((r.survivors, r.placed), (270, 0));
-        assert!(r.percent_of_opt > 99.0, "{}", r.percent_of_opt);
+        let percent = r.percent_of_opt.unwrap();
+        assert!(percent > 99.0, "{percent}");
         assert!(r.moved < r.survivors / 5, "moved {}", r.moved);
         now.check(&r.assignment).unwrap();
         // The study's table of two copies of it: means equal the row, worst too.
         let md = study_markdown(&[r.clone(), r.clone()], "balanced DA");
         let warm = md.lines().nth(2).unwrap();
-        let pct = format!("{:.3} / {:.3}", r.percent_of_opt, r.percent_of_opt);
+        let pct = format!("{percent:.3} / {percent:.3}");
         assert!(warm.contains(&pct) && warm.contains("| 2 of 2 |"), "{md}");
         assert!(
             md.lines()

@@ -76,7 +76,8 @@ pub fn summarise(
             RobotGraph::build(inst.robots(), GraphKind::default()).map_err(LearnError::from)?;
         let (trace, final_assignment) = regret_trace(&fast, inst, &graph)?;
         let opt = inst.welfare(&Optimum.allocate(inst)?.assignment);
-        pct += 100.0 * inst.welfare(&final_assignment) / opt;
+        pct += crate::percent_of_opt(inst.welfare(&final_assignment), opt)
+            .ok_or(EvalError::PercentUndefined)?;
         mean_reward += afg_graph::feature_scale(inst);
         share += *final_assignment.sizes().iter().max().unwrap_or(&0) as f64 / n as f64;
         let mut before = afg_game::Assignment::unassigned(n, inst.num_tasks());

@@ -189,8 +189,14 @@ pub fn run_case(case: Case) -> Result<Outcome, EvalError> {
 /// The cases of `plan`, in the order of the table.
 ///
 /// # Errors
-/// A price-headed run directory with weights but no readable config.
+/// [`EvalError::BadOptions`] for a size, task count or pass count of 0; a price-headed
+/// run directory with weights but no readable config.
 pub fn cases(plan: &Plan) -> Result<Vec<Case>, EvalError> {
+    if plan.sizes.contains(&0) || plan.tasks.contains(&0) || plan.passes.contains(&0) {
+        return Err(EvalError::BadOptions(
+            "sizes, task counts and passes must be at least 1",
+        ));
+    }
     // The committed price-headed models and the M each was built for.
     let mut price_headed = Vec::new();
     for dir in &plan.price_headed {

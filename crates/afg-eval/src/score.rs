@@ -16,8 +16,9 @@ pub struct Score {
     pub welfare: f64,
     /// Welfare of the exact optimum.
     pub opt_welfare: f64,
-    /// `100 · welfare / opt_welfare`.
-    pub percent_of_opt: f64,
+    /// `100 · welfare / opt_welfare` ([`percent_of_opt`]); `None` (JSON `null`) when
+    /// the optimum's welfare is not positive, where a ratio means nothing.
+    pub percent_of_opt: Option<f64>,
     /// Share of robots (0..=1) that would move under the balanced preference.
     pub ns_rate_balanced: f64,
     /// Share of robots (0..=1) that would move under the selfish preference.
@@ -59,11 +60,26 @@ impl Score {
         Ok(Score {
             welfare,
             opt_welfare,
-            percent_of_opt: 100.0 * welfare / opt_welfare,
+            percent_of_opt: percent_of_opt(welfare, opt_welfare),
             ns_rate_balanced: instance.ns_rate(assignment, Preference::Balanced),
             ns_rate_selfish: instance.ns_rate(assignment, Preference::Selfish),
         })
     }
+}
+
+/// `100 · welfare / opt_welfare`, the one "% of OPT" of every table and command; `None`
+/// when the optimum's welfare is not positive (all rewards zero, or tasks so far away
+/// that every robot loses): a ratio to it would flip sign or divide by zero.
+///
+/// # Examples
+/// ```
+/// use afg_eval::percent_of_opt;
+/// assert_eq!(percent_of_opt(49.0, 50.0), Some(98.0));
+/// assert_eq!(percent_of_opt(-2.0, -1.0), None);
+/// assert_eq!(percent_of_opt(0.0, 0.0), None);
+/// ```
+pub fn percent_of_opt(welfare: f64, opt_welfare: f64) -> Option<f64> {
+    (opt_welfare > 0.0).then(|| 100.0 * welfare / opt_welfare)
 }
 
 /// Welfare of the exact optimum of `instance`.
@@ -110,8 +126,9 @@ pub struct Summary {
 /// order, so the scores do not depend on the number of threads.
 ///
 /// # Errors
-/// The allocator's errors, and [`EvalError::BeatsOptimum`] (the first instance's
-/// in order, when several fail).
+/// The allocator's errors, [`EvalError::BeatsOptimum`] (the first instance's in
+/// order, when several fail), and [`EvalError::PercentUndefined`] if an instance's
+/// optimum has no positive welfare.
 ///
 /// # Examples
 /// ```
@@ -143,7 +160,7 @@ pub fn evaluate(
     let (mut welfare, mut pct, mut nsb, mut nss, mut secs) = (0.0, 0.0, 0.0, 0.0, 0.0);
     for (s, t) in &runs {
         welfare += s.welfare;
-        pct += s.percent_of_opt;
+        pct += s.percent_of_opt.ok_or(EvalError::PercentUndefined)?;
         nsb += s.ns_rate_balanced;
         nss += s.ns_rate_selfish;
         secs += t;

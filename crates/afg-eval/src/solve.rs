@@ -161,8 +161,8 @@ pub struct Mean {
     pub welfare: f64,
     /// OPT's welfare.
     pub opt_welfare: f64,
-    /// Per-instance % of OPT.
-    pub percent_of_opt: f64,
+    /// Mean of the per-instance % of OPT; `None` if one of them is undefined.
+    pub percent_of_opt: Option<f64>,
     /// Balanced NS rate.
     pub ns_rate_balanced: f64,
     /// Selfish NS rate.
@@ -191,7 +191,11 @@ impl Report {
         let mean = Mean {
             welfare: mean(&|r| r.score.welfare),
             opt_welfare: mean(&|r| r.score.opt_welfare),
-            percent_of_opt: mean(&|r| r.score.percent_of_opt),
+            percent_of_opt: rows
+                .iter()
+                .map(|r| r.score.percent_of_opt)
+                .sum::<Option<f64>>()
+                .map(|total| total / k),
             ns_rate_balanced: mean(&|r| r.score.ns_rate_balanced),
             ns_rate_selfish: mean(&|r| r.score.ns_rate_selfish),
             iterations: mean(&|r| r.stats.iterations as f64),
@@ -209,6 +213,14 @@ impl Report {
     }
 }
 
+/// A % of OPT as printed: two decimals, or why there is none.
+pub fn percent_text(percent: Option<f64>) -> String {
+    percent.map_or_else(
+        || "undefined (OPT's welfare <= 0)".to_owned(),
+        |p| format!("{p:.2}"),
+    )
+}
+
 /// The report as `cargo xtask solve` prints it: the means, one per line.
 impl std::fmt::Display for Report {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -224,7 +236,11 @@ impl std::fmt::Display for Report {
             "  welfare           {:>12.3}   (OPT {:.3})",
             m.welfare, m.opt_welfare
         )?;
-        writeln!(f, "  % of OPT          {:>12.2}", m.percent_of_opt)?;
+        writeln!(
+            f,
+            "  % of OPT          {:>12}",
+            percent_text(m.percent_of_opt)
+        )?;
         writeln!(
             f,
             "  NS_rate balanced  {:>11.1} %",
@@ -275,9 +291,9 @@ mod tests {
             text.contains(&welfare) && !text.contains("messages"),
             "{text}"
         );
-        assert!(report.mean.percent_of_opt <= 100.0 + 1e-9);
+        assert!(report.mean.percent_of_opt.unwrap() <= 100.0 + 1e-9);
         let (opt, _) = Row::compute(&insts[0], &Optimum).unwrap();
-        assert_eq!(opt.score.percent_of_opt, 100.0);
+        assert_eq!(opt.score.percent_of_opt, Some(100.0));
         assert!(matches!(
             Report::new("x".into(), "y".into(), Vec::new()),
             Err(EvalError::NoInstances)

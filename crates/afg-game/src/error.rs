@@ -38,7 +38,9 @@ pub enum GameError {
         eps: f64,
     },
     /// A task's initial reward is negative or not finite.
-    #[error("task {task} has reward {reward}: rewards must be finite and non-negative")]
+    #[error(
+        "task {task} has reward {reward}: rewards must be between 0 and 1e15 (afg_game::MAX_VALUE)"
+    )]
     InvalidReward {
         /// The task.
         task: usize,
@@ -48,6 +50,20 @@ pub enum GameError {
     /// The distance penalty beta is negative or not finite.
     #[error("beta = {0}: the distance penalty must be finite and non-negative")]
     InvalidBeta(f64),
+    /// Travel costs would be too large to compute with: β times the largest distance
+    /// between two of the instance's points exceeds the limit.
+    #[error(
+        "beta = {beta} times the instance's extent {extent} (the diagonal of the box around \
+         its robots and tasks) exceeds {limit:e}: travel costs must stay below that limit"
+    )]
+    CostTooLarge {
+        /// The distance penalty.
+        beta: f64,
+        /// The diagonal of the bounding box of all points.
+        extent: f64,
+        /// [`crate::MAX_VALUE`].
+        limit: f64,
+    },
     /// The capacities cannot hold every robot.
     #[error("task capacities sum to {total}, fewer than the {robots} robots to assign")]
     CapacityTooSmall {

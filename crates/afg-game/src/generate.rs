@@ -8,6 +8,7 @@ use crate::{GameError, Instance, Point, Task};
 
 /// Inclusive range from which each task's capacity is drawn uniformly.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct CapacityRange {
     /// Smallest capacity.
     pub min: usize,
@@ -35,6 +36,7 @@ pub struct CapacityRange {
 /// # Ok::<(), afg_game::GameError>(())
 /// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct GeneratorConfig {
     /// Number of robots N.
     pub robots: usize,

@@ -7,8 +7,15 @@ use crate::{GameError, GeneratorConfig, RobotId, TaskId};
 /// The golden ratio φ = (1 + √5) / 2: the smallest `eps` for which F_j is concave in n.
 pub const GOLDEN_RATIO: f64 = 1.618_033_988_749_895;
 
+/// The largest reward, and the largest travel cost β · d, that an instance may hold.
+///
+/// Far beyond any real mission, and small enough that a welfare summed over 2^32
+/// robots stays finite and that the optimum's exact comparisons keep their precision.
+pub const MAX_VALUE: f64 = 1e15;
+
 /// A point in the plane (the paper uses the unit square, but any finite point is allowed).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Point {
     /// x coordinate.
     pub x: f64,
@@ -39,8 +46,20 @@ impl Point {
     }
 }
 
+/// The diagonal of the bounding box of `points`: no two of them are further apart.
+fn extent<'a>(points: impl Iterator<Item = &'a Point>) -> f64 {
+    let mut lo = Point::new(f64::INFINITY, f64::INFINITY);
+    let mut hi = Point::new(f64::NEG_INFINITY, f64::NEG_INFINITY);
+    for p in points {
+        lo = Point::new(lo.x.min(p.x), lo.y.min(p.y));
+        hi = Point::new(hi.x.max(p.x), hi.y.max(p.y));
+    }
+    lo.distance(hi)
+}
+
 /// A task: where it is, what it pays, how its value grows with the coalition.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Task {
     /// Location.
     pub position: Point,
@@ -86,8 +105,9 @@ impl Instance {
     /// # Errors
     /// [`GameError::NoRobots`], [`GameError::NoTasks`],
     /// [`GameError::NonFiniteCoordinate`], [`GameError::InvalidReward`],
-    /// [`GameError::EpsBelowGoldenRatio`], [`GameError::InvalidBeta`] or
-    /// [`GameError::CapacityTooSmall`].
+    /// [`GameError::EpsBelowGoldenRatio`], [`GameError::InvalidBeta`],
+    /// [`GameError::CostTooLarge`] (β times the extent of the points above
+    /// [`MAX_VALUE`]) or [`GameError::CapacityTooSmall`].
     pub fn new(robots: Vec<Point>, tasks: Vec<Task>, beta: f64) -> Result<Self, GameError> {
         if robots.is_empty() {
             return Err(GameError::NoRobots);
@@ -120,7 +140,7 @@ impl Instance {
                     y: p.y,
                 });
             }
-            if !(t.reward.is_finite() && t.reward >= 0.0) {
+            if !(t.reward.is_finite() && (0.0..=MAX_VALUE).contains(&t.reward)) {
                 return Err(GameError::InvalidReward {
                     task: index,
                     reward: t.reward,
@@ -136,6 +156,14 @@ impl Instance {
         }
         if !(beta.is_finite() && beta >= 0.0) {
             return Err(GameError::InvalidBeta(beta));
+        }
+        let extent = extent(robots.iter().chain(tasks.iter().map(|t| &t.position)));
+        if !(beta * extent).is_finite() || beta * extent > MAX_VALUE {
+            return Err(GameError::CostTooLarge {
+                beta,
+                extent,
+                limit: MAX_VALUE,
+            });
         }
         if tasks.iter().all(|t| t.capacity.is_some()) {
             let total = tasks

@@ -97,7 +97,8 @@ struct AssignmentFile {
 
 impl AssignmentFile {
     fn parse(text: &str, line: Option<usize>) -> Result<Self, GameError> {
-        let file: AssignmentFile = serde_json::from_str(text).map_err(json_error(line))?;
+        let file: AssignmentFile =
+            serde_json::from_str(strip_bom(text)).map_err(json_error(line))?;
         check_header(&file.format, file.version, ASSIGNMENT_FORMAT)?;
         Ok(file)
     }
@@ -110,7 +111,7 @@ fn json_error(line: Option<usize>) -> impl FnOnce(serde_json::Error) -> GameErro
 /// Parses a JSON error, unwrapping a validation error raised inside serde.
 fn parse_instance(text: &str, line: Option<usize>) -> Result<Instance, GameError> {
     // Deserialise the raw shape first so that validation errors keep their type.
-    let file: InstanceFile = serde_json::from_str(text).map_err(json_error(line))?;
+    let file: InstanceFile = serde_json::from_str(strip_bom(text)).map_err(json_error(line))?;
     Instance::try_from(file)
 }
 
@@ -266,25 +267,31 @@ impl PreviousAssignment {
     /// The starting assignment on `instance` (see the type's docs).
     ///
     /// # Errors
-    /// [`GameError::Reallocation`] if a left robot or task is out of range or named
+    /// [`GameError::Reallocation`] if a task index is beyond the tasks the old
+    /// instance can have had, a left robot is out of range, a robot or task is named
     /// twice, or the instance has fewer robots or tasks than survived; the errors of
     /// [`Assignment::from_tasks`] if the survivors overfill a task.
     pub fn carry_over(&self, instance: &Instance) -> Result<Assignment, GameError> {
         let bad = |what: String| Err(GameError::Reallocation(what));
+        // The old instance had the surviving tasks (at most the new M) and the left ones.
+        let most_tasks = instance.num_tasks() + self.left_tasks.len();
         let old_tasks = self
             .tasks
             .iter()
             .flatten()
+            .chain(&self.left_tasks)
             .map(|j| j.index() + 1)
             .max()
-            .unwrap_or(0)
-            .max(
-                self.left_tasks
-                    .iter()
-                    .map(|j| j.index() + 1)
-                    .max()
-                    .unwrap_or(0),
-            );
+            .unwrap_or(0);
+        if old_tasks > most_tasks {
+            return bad(format!(
+                "task {} is out of range: the instance has {} tasks and {} left, so the \
+                 old one had at most {most_tasks}",
+                old_tasks - 1,
+                instance.num_tasks(),
+                self.left_tasks.len()
+            ));
+        }
         let mut robot_gone = vec![false; self.tasks.len()];
         for &r in &self.left_robots {
             match robot_gone.get_mut(r.index()) {
@@ -348,6 +355,7 @@ impl PreviousAssignment {
 /// # Ok::<(), afg_game::GameError>(())
 /// ```
 pub fn parse_instances(text: &str) -> Result<Vec<Instance>, GameError> {
+    let text = strip_bom(text);
     if serde_json::from_str::<serde::de::IgnoredAny>(text).is_ok() {
         return Ok(vec![Instance::from_json(text)?]);
     }
@@ -363,12 +371,14 @@ pub fn read_dataset(path: &Path) -> Result<Vec<Instance>, GameError> {
     parse_dataset(&read_to_string(path)?)
 }
 
-/// Parses the text of a JSON Lines dataset.
+/// Parses the text of a JSON Lines dataset; lines may end in CRLF, and a leading
+/// byte order mark is skipped.
 ///
 /// # Errors
 /// As [`read_dataset`].
 pub fn parse_dataset(text: &str) -> Result<Vec<Instance>, GameError> {
-    text.lines()
+    strip_bom(text)
+        .lines()
         .enumerate()
         .filter(|(_, l)| !l.trim().is_empty())
         .map(|(i, l)| {
@@ -393,12 +403,37 @@ pub fn dataset_to_jsonl(instances: &[Instance]) -> String {
     out
 }
 
-/// Writes `bytes` to `path` atomically: to a temporary file beside it, flushed, then
-/// renamed over the target, so a crash never leaves a half-written file.
+/// Writes `bytes` to `path` atomically and durably: to a new temporary file beside it
+/// (an unpredictable name, opened with `create_new`, so no existing file or symlink is
+/// followed), flushed and synced, renamed over the target, and the directory synced,
+/// so that neither a crash nor a full disk ever leaves a truncated file in its place.
 ///
 /// # Errors
 /// [`GameError::Io`] if any step fails; the target is then untouched.
+///
+/// # Examples
+/// ```
+/// let path = std::env::temp_dir().join(format!("afg-doc-atomic-{}", std::process::id()));
+/// afg_game::io::write_atomic(&path, b"one")?;
+/// afg_game::io::write_atomic(&path, b"two")?;
+/// assert_eq!(std::fs::read(&path)?, b"two");
+/// # std::fs::remove_file(&path)?;
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), GameError> {
+    write_atomic_with(path, |f| f.write_all(bytes))
+}
+
+/// [`write_atomic`] with the contents written by `write` into the temporary file (for
+/// writers that stream, such as a model recorder).
+///
+/// # Errors
+/// As [`write_atomic`], and `write`'s error.
+pub fn write_atomic_with(
+    path: &Path,
+    write: impl FnOnce(&mut fs::File) -> std::io::Result<()>,
+) -> Result<(), GameError> {
+    use std::hash::{BuildHasher, Hasher};
     let io_err = |source| GameError::Io {
         path: path.display().to_string(),
         source,
@@ -410,16 +445,29 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), GameError> {
     let name = path
         .file_name()
         .ok_or_else(|| io_err(std::io::Error::other("not a file path")))?;
-    let tmp = dir.join(format!(
-        ".{}.{}.tmp",
-        name.to_string_lossy(),
-        std::process::id()
-    ));
+    let (tmp, mut file) = loop {
+        // A fresh random key per try (std's hasher seeds are random per process).
+        let key = std::collections::hash_map::RandomState::new()
+            .build_hasher()
+            .finish();
+        let tmp = dir.join(format!(".{}.{key:016x}.tmp", name.to_string_lossy()));
+        match fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&tmp)
+        {
+            Ok(f) => break (tmp, f),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
+            Err(e) => return Err(io_err(e)),
+        }
+    };
     let result = (|| {
-        let mut f = fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        fs::rename(&tmp, path)
+        write(&mut file)?;
+        file.flush()?;
+        file.sync_all()?;
+        drop(file);
+        fs::rename(&tmp, path)?;
+        sync_dir(dir)
     })();
     if result.is_err() {
         let _ = fs::remove_file(&tmp);
@@ -427,9 +475,24 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), GameError> {
     result.map_err(io_err)
 }
 
+/// Syncs a directory, so that a rename in it survives a crash (a no-op where
+/// directories cannot be opened, as on Windows).
+pub fn sync_dir(dir: &Path) -> std::io::Result<()> {
+    #[cfg(unix)]
+    fs::File::open(dir)?.sync_all()?;
+    #[cfg(not(unix))]
+    let _ = dir;
+    Ok(())
+}
+
 fn read_to_string(path: &Path) -> Result<String, GameError> {
     fs::read_to_string(path).map_err(|source| GameError::Io {
         path: path.display().to_string(),
         source,
     })
+}
+
+/// `text` without a leading UTF-8 byte order mark (which some editors write).
+pub fn strip_bom(text: &str) -> &str {
+    text.strip_prefix('\u{feff}').unwrap_or(text)
 }

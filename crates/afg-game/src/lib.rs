@@ -37,5 +37,5 @@ pub use assignment::Assignment;
 pub use error::GameError;
 pub use generate::{CapacityRange, GeneratorConfig};
 pub use ids::{RobotId, TaskId};
-pub use instance::{GOLDEN_RATIO, Instance, Point, Task};
+pub use instance::{GOLDEN_RATIO, Instance, MAX_VALUE, Point, Task};
 pub use stability::{Preference, TOLERANCE, strictly_better};

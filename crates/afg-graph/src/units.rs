@@ -67,17 +67,31 @@ pub enum Units {
     Bounded,
 }
 
+/// The smallest β, relative to the mean reward, that the scale-free units take as their
+/// welfare unit ([`Units::welfare_unit`]).
+pub const MIN_BETA_UNIT: f64 = 1e-9;
+
 /// The cap of the value part of a task feature in [`Units::Bounded`], in units of the
 /// task's `r_j / eps_j`: the share of a task with fewer than about `eps_j / 4` members.
 pub const VALUE_CAP: f64 = 4.0;
 
 impl Units {
     /// The welfare unit: task features, rewards and gains are divided by it.
+    ///
+    /// In the scale-free units it is β, unless β is below [`MIN_BETA_UNIT`] times the
+    /// mean reward (β = 0 among them): distance then hardly matters, and the mean
+    /// reward is the unit, so that features stay well inside f32's range.
     pub fn welfare_unit(self, instance: &Instance) -> f64 {
         match self {
             Units::MeanReward => feature_scale(instance),
-            Units::ScaleFree | Units::Bounded if instance.beta() > 0.0 => instance.beta(),
-            Units::ScaleFree | Units::Bounded => 1.0,
+            Units::ScaleFree | Units::Bounded => {
+                let mean = feature_scale(instance);
+                if instance.beta() >= MIN_BETA_UNIT * mean {
+                    instance.beta()
+                } else {
+                    mean
+                }
+            }
         }
     }
 

@@ -29,7 +29,7 @@ pub use env::{Env, Shaping, n_step_reward};
 pub use error::LearnError;
 pub use fast::{FastPolicy, FastRollout, FastRolloutOutcome};
 pub use layers::{Activation, QHead, linear_of_concat};
-pub use network::{Net, NetworkConfig, QNetwork};
+pub use network::{NETWORK_LIMITS, Net, NetworkConfig, NetworkLimits, QNetwork};
 pub use policy::{LearnedPolicy, LearnedRun};
 pub use price::{
     PRICE_INPUTS, PriceMlp, PriceMode, PriceModel, PriceNet, PriceNetConfig, PricePolicy,

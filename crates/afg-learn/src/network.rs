@@ -32,15 +32,67 @@ impl Net {
     }
 }
 
+/// The largest network shape a file may ask for ([`NetworkConfig::check`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct NetworkLimits {
+    /// Tasks M (actions; training stores them in a byte, so it takes at most 255).
+    pub tasks: usize,
+    /// Embedding width d (AFGNet) or p (S2V).
+    pub hidden: usize,
+    /// Message-passing layers L (AFGNet) or embedding iterations T (S2V).
+    pub depth: usize,
+}
+
+/// The limits of [`NetworkConfig::check`]: 16 times the paper's d = 64 and L = 3 and
+/// far beyond its M = 5, a few hundred MiB of weights at most.
+pub const NETWORK_LIMITS: NetworkLimits = NetworkLimits {
+    tasks: 4096,
+    hidden: 1024,
+    depth: 64,
+};
+
 /// Which network, with its shape and seed. Serialised beside saved weights, so a
 /// weight file is never loaded into a network of another shape.
+///
+/// Read from JSON, a field that neither network has is an error (Burn's `Config`
+/// derive alone would ignore it).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "net", rename_all = "lowercase")]
+#[serde(try_from = "serde_json::Value")]
 pub enum NetworkConfig {
     /// [`AfgNet`].
     AfgNet(AfgNetConfig),
     /// [`S2v`].
     S2v(S2vConfig),
+}
+
+/// [`NetworkConfig`] as serde reads it, before the check for unknown fields.
+#[derive(Deserialize)]
+#[serde(tag = "net", rename_all = "lowercase")]
+enum TaggedConfig {
+    AfgNet(AfgNetConfig),
+    S2v(S2vConfig),
+}
+
+impl TryFrom<serde_json::Value> for NetworkConfig {
+    type Error = String;
+    fn try_from(value: serde_json::Value) -> Result<Self, String> {
+        let config = match serde_json::from_value(value.clone()).map_err(|e| e.to_string())? {
+            TaggedConfig::AfgNet(c) => NetworkConfig::AfgNet(c),
+            TaggedConfig::S2v(c) => NetworkConfig::S2v(c),
+        };
+        // Every field given must be one that the network writes back.
+        let known = serde_json::to_value(&config).expect("a network configuration serialises");
+        if let (Some(given), Some(known)) = (value.as_object(), known.as_object())
+            && let Some(field) = given.keys().find(|k| !known.contains_key(*k))
+        {
+            return Err(format!(
+                "unknown field `{field}` of a {} network",
+                config.name()
+            ));
+        }
+        Ok(config)
+    }
 }
 
 impl NetworkConfig {
@@ -102,6 +154,40 @@ impl NetworkConfig {
     /// Short name: `afgnet` or `s2v`.
     pub fn name(&self) -> &'static str {
         self.net().name()
+    }
+
+    /// Whether the shape is within [`NETWORK_LIMITS`], so that building it allocates a
+    /// bounded amount of memory and a forward pass ends in bounded time. Checked when
+    /// a weight file or a training configuration is read, before anything is built.
+    ///
+    /// # Errors
+    /// What is out of range, and the range.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_learn::{AfgNetConfig, NetworkConfig};
+    /// assert!(NetworkConfig::afgnet(5, 0).check().is_ok());
+    /// let wide = NetworkConfig::AfgNet(AfgNetConfig::new(5).with_hidden(0));
+    /// assert!(wide.check().unwrap_err().contains("hidden"));
+    /// ```
+    pub fn check(&self) -> Result<(), String> {
+        let limits = NETWORK_LIMITS;
+        let (tasks, hidden, depth, depth_name) = match self {
+            NetworkConfig::AfgNet(c) => (c.tasks, c.hidden, c.layers, "layers"),
+            NetworkConfig::S2v(c) => (c.tasks, c.hidden, c.iterations, "iterations"),
+        };
+        for (name, value, max) in [
+            ("tasks", tasks, limits.tasks),
+            ("hidden", hidden, limits.hidden),
+            (depth_name, depth, limits.depth),
+        ] {
+            if !(1..=max).contains(&value) {
+                return Err(format!(
+                    "the network's {name} is {value}; it must be between 1 and {max}"
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// Builds the network.

@@ -127,6 +127,9 @@ pub struct RunManifest {
     pub weights: Vec<String>,
 }
 
+/// The lines of a log as written with their events, and the number of a torn last line.
+type LogLines = (Vec<(String, LogEvent)>, Option<usize>);
+
 /// A training run's directory (see the module docs for its files).
 ///
 /// # Examples
@@ -136,8 +139,7 @@ pub struct RunManifest {
 /// let path = std::env::temp_dir().join(format!("afg-doc-run-{}", std::process::id()));
 /// # let _ = std::fs::remove_dir_all(&path);
 /// let config = TrainConfig::new(20, Algo::Ddqn, NetworkConfig::afgnet(5, 0), 100, 0);
-/// let run = RunDir::create(&path, &config)?;
-/// let _lock = run.lock()?; // a second trainer is now refused
+/// let (run, _lock) = RunDir::create(&path, &config)?; // a second trainer is now refused
 /// assert!(run.lock().is_err());
 /// run.append(&LogEvent::End { step: 100, elapsed_s: 1.5 })?;
 /// assert_eq!(run.config()?, config);
@@ -157,13 +159,12 @@ pub struct RunDir {
 #[derive(Debug)]
 pub struct RunLock {
     file: File,
-    path: PathBuf,
 }
 
 impl Drop for RunLock {
     fn drop(&mut self) {
-        // Best effort: the lock file is removed, then the lock released with the file.
-        let _ = std::fs::remove_file(&self.path);
+        // The lock file stays: deleting it would let a second process lock a new file
+        // of the same name while a third still holds the old one.
         let _ = self.file.unlock();
     }
 }
@@ -177,13 +178,22 @@ impl RunDir {
         RunDir { path: path.into() }
     }
 
-    /// A new run directory holding `config`.
+    /// A new run directory holding `config`, locked for the caller: the directory is
+    /// made, then locked, then checked to hold no run, then `config.json` written.
     ///
     /// # Errors
-    /// [`LearnError::RunFile`] if `path` already holds a run, [`LearnError::Io`] if it
-    /// cannot be written.
-    pub fn create(path: impl Into<PathBuf>, config: &TrainConfig) -> Result<Self, LearnError> {
+    /// [`LearnError::RunFile`] if `path` already holds a run, [`LearnError::RunInUse`]
+    /// if another process holds it, [`LearnError::Io`] if it cannot be written.
+    pub fn create(
+        path: impl Into<PathBuf>,
+        config: &TrainConfig,
+    ) -> Result<(Self, RunLock), LearnError> {
         let run = RunDir::new(path);
+        std::fs::create_dir_all(&run.path).map_err(|source| LearnError::Io {
+            path: run.path.display().to_string(),
+            source,
+        })?;
+        let lock = run.lock()?;
         let config_path = run.path.join("config.json");
         if config_path.exists() {
             return Err(LearnError::RunFile {
@@ -192,13 +202,9 @@ impl RunDir {
                     .into(),
             });
         }
-        std::fs::create_dir_all(&run.path).map_err(|source| LearnError::Io {
-            path: run.path.display().to_string(),
-            source,
-        })?;
         let json = serde_json::to_string_pretty(config).expect("a configuration serialises");
         afg_game::io::write_atomic(&config_path, json.as_bytes())?;
-        Ok(run)
+        Ok((run, lock))
     }
 
     /// The directory.
@@ -288,7 +294,7 @@ impl RunDir {
         }
         file.set_len(0).map_err(io)?;
         writeln!(file, "{}", std::process::id()).map_err(io)?;
-        Ok(RunLock { file, path })
+        Ok(RunLock { file })
     }
 
     /// The run's settings (`config.json`).
@@ -319,36 +325,63 @@ impl RunDir {
             .append(true)
             .open(&path)
             .map_err(io)?;
-        let line = serde_json::to_string(event).expect("an event serialises");
-        writeln!(f, "{line}").map_err(io)
+        let mut line = serde_json::to_string(event).expect("an event serialises");
+        line.push('\n');
+        // One write, so that a crash can only cut the last line short.
+        f.write_all(line.as_bytes()).map_err(io)
     }
 
-    /// Every event of `log.jsonl`, in order.
+    /// Every event of `log.jsonl`, in order. A last line cut short (a crash while it
+    /// was written: no line end, not an event) is left out; [`RunDir::torn_log_line`]
+    /// reports it.
     ///
     /// # Errors
     /// [`LearnError::RunFile`] naming the line that is not an event, or the missing log.
     pub fn log(&self) -> Result<Vec<LogEvent>, LearnError> {
-        Ok(self.log_lines()?.into_iter().map(|(_, e)| e).collect())
+        Ok(self.log_lines()?.0.into_iter().map(|(_, e)| e).collect())
     }
 
-    /// Every non-blank line of `log.jsonl` as written, with its event.
-    fn log_lines(&self) -> Result<Vec<(String, LogEvent)>, LearnError> {
+    /// The number of the log's last line if a crash cut it short (it is then ignored).
+    ///
+    /// # Errors
+    /// As [`RunDir::log`].
+    pub fn torn_log_line(&self) -> Result<Option<usize>, LearnError> {
+        Ok(self.log_lines()?.1)
+    }
+
+    /// Every non-blank line of `log.jsonl` as written, with its event, and the number of
+    /// a torn last line.
+    fn log_lines(&self) -> Result<LogLines, LearnError> {
         let path = self.file("log.jsonl");
         let text = std::fs::read_to_string(&path).map_err(|e| LearnError::RunFile {
             path: path.display().to_string(),
             reason: e.to_string(),
         })?;
-        text.lines()
+        let mut lines: Vec<(usize, &str)> = text
+            .lines()
             .enumerate()
             .filter(|(_, line)| !line.trim().is_empty())
-            .map(|(i, line)| {
+            .map(|(i, line)| (i + 1, line))
+            .collect();
+        let mut torn = None;
+        if !text.ends_with('\n')
+            && let Some(&(number, last)) = lines.last()
+            && serde_json::from_str::<LogEvent>(last).is_err()
+        {
+            torn = Some(number);
+            lines.pop();
+        }
+        let events = lines
+            .into_iter()
+            .map(|(number, line)| {
                 let event = serde_json::from_str(line).map_err(|e| LearnError::RunFile {
-                    path: format!("{}:{}", path.display(), i + 1),
+                    path: format!("{}:{number}", path.display()),
                     reason: format!("not a log event: {e}"),
                 })?;
                 Ok((line.to_owned(), event))
             })
-            .collect()
+            .collect::<Result<_, LearnError>>()?;
+        Ok((events, torn))
     }
 
     /// Keeps the log's lines up to gradient step `step`, as they were written (a resumed
@@ -362,7 +395,7 @@ impl RunDir {
             return Ok(0.0);
         }
         let (mut kept, mut elapsed) = (String::new(), 0.0f64);
-        for (line, event) in self.log_lines()? {
+        for (line, event) in self.log_lines()?.0 {
             if event.step().is_some_and(|s| s > step) {
                 continue;
             }

@@ -8,7 +8,9 @@
 use std::path::{Path, PathBuf};
 
 use burn::module::{Module, ModuleVisitor, Param};
-use burn::record::{FullPrecisionSettings, NamedMpkFileRecorder, Recorder};
+use burn::record::{
+    FullPrecisionSettings, NamedMpkBytesRecorder, NamedMpkFileRecorder, Record, Recorder,
+};
 use burn::tensor::Tensor;
 use burn::tensor::backend::Backend;
 use serde::{Deserialize, Serialize};
@@ -41,8 +43,27 @@ fn with_extension(stem: &Path, ext: &str) -> PathBuf {
     PathBuf::from(s)
 }
 
-/// Saves `network` (built from `config`) as `stem.json` + `stem.mpk`, each written to a
-/// temporary file first and renamed, so existing weights are never half-overwritten.
+/// Writes a Burn record to `path` as named MessagePack in full precision (the format
+/// of Burn's `NamedMpkFileRecorder`), atomically and durably
+/// ([`afg_game::io::write_atomic`]).
+///
+/// # Errors
+/// [`LearnError::Weights`] if the record cannot be encoded or the file written.
+pub(crate) fn write_record<B: Backend, R: Record<B>>(
+    record: R,
+    path: &Path,
+) -> Result<(), LearnError> {
+    let bytes = Recorder::<B>::record(
+        &NamedMpkBytesRecorder::<FullPrecisionSettings>::new(),
+        record,
+        (),
+    )
+    .map_err(|e| weights_error(path, e.to_string()))?;
+    afg_game::io::write_atomic(path, &bytes).map_err(|e| weights_error(path, e.to_string()))
+}
+
+/// Saves `network` (built from `config`) as `stem.mpk` + `stem.json`, each written
+/// atomically and durably, so existing weights are never half-overwritten.
 ///
 /// # Errors
 /// [`LearnError::Weights`] if a file cannot be written.
@@ -51,14 +72,7 @@ pub fn save_network<B: Backend>(
     config: &NetworkConfig,
     stem: &Path,
 ) -> Result<(), LearnError> {
-    // Burn replaces the extension of the path it is given, so give it one ending in .mpk.
-    let record = with_extension(stem, "mpk");
-    let tmp = with_extension(stem, &format!("{}-tmp.mpk", std::process::id()));
-    let recorder = NamedMpkFileRecorder::<FullPrecisionSettings>::new();
-    network
-        .save_file(tmp.clone(), &recorder)
-        .map_err(|e| weights_error(&record, e.to_string()))?;
-    std::fs::rename(&tmp, &record).map_err(|e| weights_error(&record, e.to_string()))?;
+    write_record::<B, _>(network.into_record(), &with_extension(stem, "mpk"))?;
     let header = WeightsHeader {
         format: WEIGHTS_FORMAT.into(),
         version: WEIGHTS_VERSION,
@@ -108,6 +122,10 @@ pub fn load_network<B: Backend>(
             ),
         ));
     }
+    header
+        .network
+        .check()
+        .map_err(|reason| weights_error(&header_path, reason))?;
     let fresh = header.network.init::<B>(device);
     let expected = shapes(&fresh);
     let recorder = NamedMpkFileRecorder::<FullPrecisionSettings>::new();

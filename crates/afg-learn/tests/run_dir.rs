@@ -21,7 +21,7 @@ fn config() -> TrainConfig {
 #[test]
 fn events_round_trip_and_old_validation_lines_still_read() {
     let dir = fresh("log");
-    let run = RunDir::create(&dir, &config()).unwrap();
+    let (run, _lock) = RunDir::create(&dir, &config()).unwrap();
     let validation = Validation {
         welfare: 12.5,
         percent_of_opt: 97.0,
@@ -79,9 +79,40 @@ fn events_round_trip_and_old_validation_lines_still_read() {
 }
 
 #[test]
+fn a_torn_last_line_is_reported_left_out_and_dropped_on_resume() {
+    let dir = fresh("torn");
+    let (run, _lock) = RunDir::create(&dir, &config()).unwrap();
+    let step = |s: u64| LogEvent::Step {
+        step: s,
+        loss: 0.5,
+        epsilon: 1.0,
+        elapsed_s: s as f64,
+    };
+    run.append(&step(10)).unwrap();
+    run.append(&step(20)).unwrap();
+    assert_eq!(run.torn_log_line().unwrap(), None);
+    // A crash in the middle of the third line.
+    let whole = serde_json::to_string(&step(30)).unwrap();
+    let mut f = std::fs::OpenOptions::new()
+        .append(true)
+        .open(dir.join("log.jsonl"))
+        .unwrap();
+    std::io::Write::write_all(&mut f, &whole.as_bytes()[..whole.len() / 2]).unwrap();
+    assert_eq!(run.torn_log_line().unwrap(), Some(3));
+    assert_eq!(run.log().unwrap(), vec![step(10), step(20)]);
+    assert_eq!(run.truncate_log(100).unwrap(), 20.0);
+    run.append(&step(30)).unwrap();
+    assert_eq!(run.log().unwrap(), vec![step(10), step(20), step(30)]);
+    // A bad line that does end in a line break is no torn line: an error.
+    std::fs::write(dir.join("log.jsonl"), "{\"event\":\"step\"}\n").unwrap();
+    assert!(run.log().is_err());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn truncating_a_log_keeps_earlier_steps_and_their_clock() {
     let dir = fresh("truncate");
-    let run = RunDir::create(&dir, &config()).unwrap();
+    let (run, _lock) = RunDir::create(&dir, &config()).unwrap();
     assert_eq!(run.truncate_log(0).unwrap(), 0.0); // no log yet
     let lines = [
         format!(
@@ -112,16 +143,19 @@ fn truncating_a_log_keeps_earlier_steps_and_their_clock() {
 #[test]
 fn a_directory_holds_one_run_and_one_trainer_at_a_time() {
     let dir = fresh("lock");
-    let run = RunDir::create(&dir, &config()).unwrap();
-    let err = RunDir::create(&dir, &config()).unwrap_err();
-    assert!(err.to_string().contains("already holds"), "{err}");
-    let lock = run.lock().unwrap();
+    let (run, lock) = RunDir::create(&dir, &config()).unwrap();
+    // While the first holds it, even a second create is refused as in use.
+    assert!(matches!(
+        RunDir::create(&dir, &config()),
+        Err(LearnError::RunInUse { .. })
+    ));
     assert!(matches!(
         RunDir::new(&dir).lock(),
         Err(LearnError::RunInUse { .. })
     ));
     drop(lock);
-    assert!(!dir.join(".lock").exists(), "the lock file is removed");
+    let err = RunDir::create(&dir, &config()).unwrap_err();
+    assert!(err.to_string().contains("already holds"), "{err}");
     let _again = RunDir::new(&dir).lock().unwrap();
     // Missing and foreign files are clear errors.
     let empty = RunDir::new(fresh("empty"));
@@ -145,7 +179,7 @@ fn a_directory_holds_one_run_and_one_trainer_at_a_time() {
 #[test]
 fn manifests_round_trip() {
     let dir = fresh("manifest");
-    let run = RunDir::create(&dir, &config()).unwrap();
+    let (run, _lock) = RunDir::create(&dir, &config()).unwrap();
     assert!(run.manifest().is_err());
     let manifest = RunManifest {
         command: "cargo xtask train --scale 20".into(),

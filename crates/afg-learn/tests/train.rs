@@ -231,12 +231,88 @@ fn truncated_or_missing_checkpoints_are_clear_errors() {
         Trainer::resume(&dir),
         Err(LearnError::Weights { .. })
     ));
+    std::fs::write(&optim, &bytes).unwrap();
+    // A state that parses but cannot be this run's: an action beyond M, an episode of
+    // the wrong length, an unknown field.
+    let value: serde_json::Value = serde_json::from_str(&text).unwrap();
+    type Edit = fn(&mut serde_json::Value);
+    let edits: [(&str, Edit); 3] = [
+        ("takes task 9", |v| v["running"][0]["actions"][0] = 9.into()),
+        ("has 11 actions", |v| {
+            let actions = v["running"][0]["actions"].as_array_mut().unwrap();
+            actions.resize(11, 0.into());
+        }),
+        ("unknown field", |v| v["extra"] = 1.into()),
+    ];
+    for (says, edit) in edits {
+        let mut v = value.clone();
+        edit(&mut v);
+        std::fs::write(&state, v.to_string()).unwrap();
+        let err = Trainer::resume(&dir).err().unwrap();
+        assert!(err.to_string().contains(says), "{says}: {err}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_broken_checkpoint_falls_back_to_the_previous_one() {
+    let config = tiny(Algo::Dqn, NetworkConfig::s2v(5, 0), 30);
+    let dir = temp_dir("fallback");
+    let mut t = Trainer::new(config.clone()).unwrap();
+    run_to(&mut t, 10);
+    t.save_checkpoint(&dir).unwrap();
+    run_to(&mut t, 20);
+    t.save_checkpoint(&dir).unwrap();
+    assert!(
+        dir.join("checkpoint.old").exists(),
+        "the previous one is kept"
+    );
+    assert_eq!(Trainer::resume(&dir).unwrap().steps_done(), 20);
+    // The newest truncated (as by a full disk), or gone (a crash between the renames).
+    let state = dir.join("checkpoint/state.json");
+    std::fs::write(&state, "{\"format\":").unwrap();
+    assert_eq!(Trainer::resume(&dir).unwrap().steps_done(), 10);
+    std::fs::remove_dir_all(dir.join("checkpoint")).unwrap();
+    let mut resumed = Trainer::resume(&dir).unwrap();
+    assert_eq!(resumed.steps_done(), 10);
+    // And the run from the older one ends where an uninterrupted run does.
+    run_to(&mut resumed, 30);
+    let mut straight = Trainer::new(config).unwrap();
+    run_to(&mut straight, 30);
+    assert_eq!(values(&resumed.network()), values(&straight.network()));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_run_stopped_before_its_first_checkpoint_starts_again_on_resume() {
+    let dir = temp_dir("early").join("run");
+    let config = tiny(Algo::Ddqn, NetworkConfig::s2v(5, 4), 20);
+    drop(Session::start(&dir, config.clone(), None).unwrap()); // killed at once
+    assert!(!dir.join("checkpoint").exists());
+    let mut session = Session::resume(&dir).unwrap();
+    assert_eq!(session.trainer().steps_done(), 0);
+    session
+        .run(std::time::Duration::from_secs(3600), |_| {})
+        .unwrap();
+    let mut straight = Trainer::new(config).unwrap();
+    run_to(&mut straight, 20);
+    assert_eq!(
+        values(&session.trainer().network()),
+        values(&straight.network())
+    );
+    std::fs::remove_dir_all(dir.parent().unwrap()).unwrap();
 }
 
 #[test]
 fn bad_settings_are_refused() {
     let base = tiny(Algo::Dqn, NetworkConfig::afgnet(5, 0), 20);
+    // Run seeds that would reach the demonstrations' or the validation set's seeds.
+    for seed in [1 << 29, 1 << 30] {
+        let mut c = base.clone();
+        c.seed = seed;
+        let err = Trainer::new(c).err().unwrap();
+        assert!(err.to_string().contains("validation set"), "{err}");
+    }
     let mut c = base.clone();
     c.robots = 1;
     assert!(matches!(Trainer::new(c), Err(LearnError::InvalidConfig(_))));

@@ -11,10 +11,12 @@ use serde::{Deserialize, Serialize};
 
 use super::replay::EpisodeRecord;
 use super::{TrainConfig, Trainer, optimizer};
+use crate::weights::write_record;
 use crate::{InferBackend, LearnError, TrainBackend, load_network, save_network};
 
 /// The mutable state of a run, as written to `state.json` in a checkpoint.
 #[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 struct TrainerState {
     format: String,
     version: u32,
@@ -24,6 +26,31 @@ struct TrainerState {
     rng: ChaCha8Rng,
     replay: Vec<EpisodeRecord>,
     running: Vec<EpisodeRecord>,
+}
+
+impl TrainerState {
+    /// Whether the episodes can be those of this run: every replayed episode complete,
+    /// every running one at most N long, every action a task of the instance.
+    fn check(&self) -> Result<(), String> {
+        let (n, m) = (self.config.robots, self.config.network.tasks());
+        let episodes = self.replay.iter().map(|e| (e, true));
+        for (e, complete) in episodes.chain(self.running.iter().map(|e| (e, false))) {
+            let len = e.actions.len();
+            if len > n || (complete && len != n) {
+                return Err(format!(
+                    "an episode of seed {} has {len} actions, but the run has {n} robots",
+                    e.seed
+                ));
+            }
+            if let Some(&a) = e.actions.iter().find(|&&a| usize::from(a) >= m) {
+                return Err(format!(
+                    "an episode of seed {} takes task {a}, but the run has {m} tasks",
+                    e.seed
+                ));
+            }
+        }
+        Ok(())
+    }
 }
 
 const STATE_FORMAT: &str = "afg-train-state";
@@ -55,13 +82,7 @@ impl Trainer {
             &self.config.network,
             &fresh.join("target"),
         )?;
-        let optim_path = fresh.join("optim.mpk");
-        NamedMpkFileRecorder::<FullPrecisionSettings>::new()
-            .record(self.optim.to_record(), optim_path.clone())
-            .map_err(|e| LearnError::Weights {
-                path: optim_path.display().to_string(),
-                reason: e.to_string(),
-            })?;
+        write_record::<TrainBackend, _>(self.optim.to_record(), &fresh.join("optim.mpk"))?;
         let state = TrainerState {
             format: STATE_FORMAT.into(),
             version: STATE_VERSION,
@@ -74,8 +95,10 @@ impl Trainer {
         };
         let json = serde_json::to_string(&state).expect("state serialises");
         afg_game::io::write_atomic(&fresh.join("state.json"), json.as_bytes())?;
-        let current = dir.join("checkpoint");
-        let old = dir.join("checkpoint.old");
+        // The previous checkpoint is kept as checkpoint.old until the next save, so
+        // that a crash at any moment leaves one complete checkpoint to resume from.
+        let current = checkpoint_dir(dir);
+        let old = previous_checkpoint_dir(dir);
         if current.exists() {
             if old.exists() {
                 std::fs::remove_dir_all(&old).map_err(io(&old))?;
@@ -83,19 +106,33 @@ impl Trainer {
             std::fs::rename(&current, &old).map_err(io(&current))?;
         }
         std::fs::rename(&fresh, &current).map_err(io(&fresh))?;
-        if old.exists() {
-            std::fs::remove_dir_all(&old).map_err(io(&old))?;
-        }
+        afg_game::io::sync_dir(dir).map_err(io(dir))?;
         Ok(())
     }
 
-    /// Restores a run from `dir/checkpoint`.
+    /// Whether `dir` holds a checkpoint (the current or the previous one).
+    pub fn has_checkpoint(dir: &Path) -> bool {
+        checkpoint_dir(dir).exists() || previous_checkpoint_dir(dir).exists()
+    }
+
+    /// Restores a run from `dir/checkpoint`, or, if that is missing or unusable (a
+    /// crash while it was replaced), from the previous one, `dir/checkpoint.old`.
     ///
     /// # Errors
-    /// [`LearnError::Checkpoint`] for a missing, truncated or foreign checkpoint, and
-    /// [`LearnError::Weights`] for unusable network or optimiser files.
+    /// As [`Trainer::resume_from`], for the current checkpoint when both fail.
     pub fn resume(dir: &Path) -> Result<Self, LearnError> {
-        let ckpt = checkpoint_dir(dir);
+        match Self::resume_from(&checkpoint_dir(dir)) {
+            Ok(trainer) => Ok(trainer),
+            Err(e) => Self::resume_from(&previous_checkpoint_dir(dir)).map_err(|_| e),
+        }
+    }
+
+    /// Restores a run from the checkpoint directory `ckpt`.
+    ///
+    /// # Errors
+    /// [`LearnError::Checkpoint`] for a missing, truncated, foreign or inconsistent
+    /// checkpoint, and [`LearnError::Weights`] for unusable network or optimiser files.
+    pub fn resume_from(ckpt: &Path) -> Result<Self, LearnError> {
         let state_path = ckpt.join("state.json");
         let bad = |reason: String| LearnError::Checkpoint {
             path: state_path.display().to_string(),
@@ -111,6 +148,7 @@ impl Trainer {
             )));
         }
         state.config.check()?;
+        state.check().map_err(bad)?;
         let device = Default::default();
         let (online_config, online) = load_network::<TrainBackend>(&ckpt.join("online"), &device)?;
         let (target_config, target) = load_network::<InferBackend>(&ckpt.join("target"), &device)?;
@@ -126,7 +164,14 @@ impl Trainer {
                 path: optim_path.display().to_string(),
                 reason: format!("corrupt or truncated: {e}"),
             })?;
-        let optim = optimizer(&state.config).load_record(record);
+        // Burn panics on a record of another optimiser shape; report that as an error.
+        let optim = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            optimizer(&state.config).load_record(record)
+        }))
+        .map_err(|_| LearnError::Weights {
+            path: optim_path.display().to_string(),
+            reason: "the optimiser state does not fit the run's networks".into(),
+        })?;
         Self::assemble(
             state.config,
             online,
@@ -144,4 +189,9 @@ impl Trainer {
 /// Where [`Trainer::save_checkpoint`] puts the checkpoint of a run directory.
 pub fn checkpoint_dir(dir: &Path) -> PathBuf {
     dir.join("checkpoint")
+}
+
+/// Where [`Trainer::save_checkpoint`] keeps the previous checkpoint.
+fn previous_checkpoint_dir(dir: &Path) -> PathBuf {
+    dir.join("checkpoint.old")
 }

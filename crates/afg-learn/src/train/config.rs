@@ -304,6 +304,17 @@ impl TrainConfig {
         if self.network.tasks() == 0 || self.network.tasks() > 255 {
             return bad("the network's task count must be 1..=255");
         }
+        self.network.check().map_err(LearnError::InvalidConfig)?;
+        if self.seed > MAX_RUN_SEED {
+            return Err(LearnError::InvalidConfig(format!(
+                "seed {} is above {MAX_RUN_SEED} (2^29 - 1): larger run seeds would draw \
+                 training instances from the seeds of the demonstrations or the validation set",
+                self.seed
+            )));
+        }
+        if self.steps > MAX_STEPS {
+            return bad("steps must be at most 2^31 (episode numbers must stay below 2^32)");
+        }
         if self.steps == 0 || self.batch == 0 || self.target_sync == 0 || self.validate_every == 0 {
             return bad("steps, batch, target_sync and validate_every must be positive");
         }
@@ -408,6 +419,14 @@ fn one() -> usize {
 fn is_zero(x: &f64) -> bool {
     *x == 0.0
 }
+
+/// The largest run seed: training instances (2^62 + seed · 2^32 + episode) stay below
+/// the demonstrations' seeds (2^62 + 2^61 + …) and those below the validation set's
+/// (2^63 + i).
+pub const MAX_RUN_SEED: u64 = (1 << 29) - 1;
+
+/// The largest step budget, so that episode numbers stay below 2^32.
+const MAX_STEPS: u64 = 1 << 31;
 
 /// Seed of training episode `episode` of a run seeded `run_seed`. Datasets use seeds
 /// below 2^40 and validation sets 2^63 + i, so the three never meet.

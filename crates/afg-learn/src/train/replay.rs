@@ -13,6 +13,7 @@ use crate::LearnError;
 
 /// One episode as stored: the instance seed and the actions taken.
 #[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub(super) struct EpisodeRecord {
     pub(super) seed: u64,
     pub(super) actions: Vec<u8>,

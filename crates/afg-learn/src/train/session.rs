@@ -35,8 +35,7 @@ impl Session {
         git_revision: Option<String>,
     ) -> Result<Session, LearnError> {
         config.check()?;
-        let run = RunDir::create(dir, &config)?;
-        let lock = run.lock()?;
+        let (run, lock) = RunDir::create(dir, &config)?;
         let trainer = Trainer::new(config.clone())?;
         run.append(&LogEvent::Start {
             baselines: baselines(&config)?,
@@ -51,15 +50,21 @@ impl Session {
         })
     }
 
-    /// Continues the run in `dir` from its last checkpoint; log lines written after it
-    /// are dropped.
+    /// Continues the run in `dir` from its last good checkpoint (see
+    /// [`Trainer::resume`]); log lines written after it are dropped. A run stopped
+    /// before its first checkpoint starts again from step 0 with its own settings
+    /// (the same seed gives the same run).
     ///
     /// # Errors
-    /// A directory in use, or a missing, truncated or foreign checkpoint.
+    /// A directory in use or holding no run, or checkpoints that are all unusable.
     pub fn resume(dir: &Path) -> Result<Session, LearnError> {
         let run = RunDir::new(dir);
         let lock = run.lock()?;
-        let trainer = Trainer::resume(dir)?;
+        let trainer = if Trainer::has_checkpoint(dir) {
+            Trainer::resume(dir)?
+        } else {
+            Trainer::new(run.config()?)?
+        };
         let elapsed_before = run.truncate_log(trainer.steps_done())?;
         Ok(Session {
             run,

@@ -1,0 +1,127 @@
+//! Inputs a user can hand the readers: misspelled fields, overflowing numbers, CRLF
+//! line ends and byte order marks, assignments that name tasks no instance has.
+
+use afg_game::io::{self, PreviousAssignment};
+use afg_game::{GameError, GeneratorConfig, Instance, MAX_VALUE, TaskId};
+
+fn instance() -> Instance {
+    GeneratorConfig::paper(6, 2, 1).generate().unwrap()
+}
+
+/// The instance's JSON with `from` replaced by `to` (which must occur).
+fn edited(from: &str, to: &str) -> String {
+    let text = instance().to_json();
+    assert!(text.contains(from), "{from} not in {text}");
+    text.replacen(from, to, 1)
+}
+
+#[test]
+fn a_misspelled_field_is_an_error_that_names_it() {
+    // A task, a robot, the generator and the document itself.
+    for (from, to, field) in [
+        ("\"eps\":", "\"capcity\":3,\"eps\":", "capcity"),
+        ("\"x\":", "\"z\":1,\"x\":", "z"),
+        ("\"seed\":", "\"sed\":1,\"seed\":", "sed"),
+        ("\"beta\":", "\"betta\":1,\"beta\":", "betta"),
+    ] {
+        let err = Instance::from_json(&edited(from, to)).unwrap_err();
+        assert!(
+            matches!(err, GameError::Json { .. }) && err.to_string().contains(field),
+            "{err}"
+        );
+    }
+    // In a dataset the line is named too.
+    let good = instance().to_json();
+    let text = format!("{good}\n{}\n", edited("\"eps\":", "\"capcity\":3,\"eps\":"));
+    let err = io::parse_dataset(&text).unwrap_err();
+    assert!(err.to_string().contains("line 2") && err.to_string().contains("capcity"));
+}
+
+#[test]
+fn costs_that_overflow_are_refused_with_the_limit() {
+    let err = Instance::from_json(&edited("\"beta\":1.0", "\"beta\":1e308")).unwrap_err();
+    assert!(matches!(err, GameError::CostTooLarge { .. }), "{err}");
+    assert!(err.to_string().contains("1e15"), "{err}");
+    let inst = instance();
+    let mut robots = inst.robots().to_vec();
+    robots[0].x = -1e308;
+    robots[1].x = 1e308;
+    let err = Instance::new(robots, inst.tasks().to_vec(), 1.0).unwrap_err();
+    assert!(matches!(err, GameError::CostTooLarge { .. }), "{err}");
+    // Just inside the limit is fine; rewards have the same limit.
+    let mut robots = inst.robots().to_vec();
+    robots[0].x = MAX_VALUE / 2.0;
+    assert!(Instance::new(robots, inst.tasks().to_vec(), 1.0).is_ok());
+    let mut tasks = inst.tasks().to_vec();
+    tasks[0].reward = 1e300;
+    let err = Instance::new(inst.robots().to_vec(), tasks, 1.0).unwrap_err();
+    assert!(matches!(err, GameError::InvalidReward { .. }), "{err}");
+}
+
+#[test]
+fn crlf_line_ends_and_a_byte_order_mark_are_read() {
+    let (a, b) = (
+        instance(),
+        GeneratorConfig::paper(7, 3, 2).generate().unwrap(),
+    );
+    let crlf = format!("\u{feff}{}\r\n{}\r\n", a.to_json(), b.to_json());
+    assert_eq!(io::parse_instances(&crlf).unwrap(), vec![a.clone(), b]);
+    let one = format!("\u{feff}{}\r\n", a.to_json());
+    assert_eq!(Instance::from_json(&one).unwrap(), a);
+    assert_eq!(io::parse_instances(&one).unwrap(), vec![a.clone()]);
+    let assignment =
+        "\u{feff}{\"format\":\"afg-assignment\",\"version\":1,\"tasks\":[0,1,0,1,0,1]}\r\n";
+    assert!(afg_game::Assignment::from_json(assignment, &a).is_ok());
+}
+
+#[test]
+fn a_previous_assignment_naming_a_huge_task_is_an_error_not_an_allocation() {
+    let now = instance();
+    let text = r#"{"format":"afg-assignment","version":1,"tasks":[4294967295,0,0,0,0,0]}"#;
+    let err = PreviousAssignment::from_json(text)
+        .unwrap()
+        .carry_over(&now)
+        .unwrap_err();
+    assert!(
+        err.to_string().contains("task 4294967295 is out of range"),
+        "{err}"
+    );
+    let text = r#"{"format":"afg-assignment","version":1,"tasks":[0,0,0,0,0,0],"left_tasks":[4294967295]}"#;
+    assert!(
+        PreviousAssignment::from_json(text)
+            .unwrap()
+            .carry_over(&now)
+            .is_err()
+    );
+    // A task that left may have an index above the new M.
+    let text = r#"{"format":"afg-assignment","version":1,"tasks":[0,2,1,1,0,0],"left_tasks":[2]}"#;
+    let a = PreviousAssignment::from_json(text)
+        .unwrap()
+        .carry_over(&now)
+        .unwrap();
+    assert_eq!(a.tasks()[1], None);
+    assert_eq!(a.tasks()[2], Some(TaskId(1)));
+}
+
+#[test]
+fn atomic_writes_replace_whole_files_and_leave_no_temporary_behind() {
+    let dir = std::env::temp_dir().join(format!("afg-atomic-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("out.json");
+    io::write_atomic(&path, b"first").unwrap();
+    io::write_atomic(&path, b"second").unwrap();
+    assert_eq!(std::fs::read(&path).unwrap(), b"second");
+    let names: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names, vec![std::ffi::OsString::from("out.json")]);
+    // A failed write leaves the old file as it was.
+    let err = io::write_atomic_with(&path, |_| Err(std::io::Error::other("disk full")));
+    assert!(err.unwrap_err().to_string().contains("disk full"));
+    assert_eq!(std::fs::read(&path).unwrap(), b"second");
+    let names: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
+    assert_eq!(names.len(), 1);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
