@@ -40,7 +40,7 @@ impl Score {
     /// let inst = GeneratorConfig::paper(20, 5, 1).generate()?;
     /// let greedy = Greedy.allocate(&inst)?.assignment;
     /// let s = Score::of("greedy", &inst, &greedy, optimum_welfare(&inst)?)?;
-    /// assert!(s.percent_of_opt <= 100.0 + 1e-9 && s.percent_of_opt > 80.0);
+    /// assert!(s.percent_of_opt.is_some_and(|p| p <= 100.0 + 1e-9 && p > 80.0));
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn of(

@@ -49,6 +49,56 @@ impl<'a> Env<'a> {
         }
     }
 
+    /// The episode after its first t steps: `assignment` gives robots `0..t` their
+    /// tasks and leaves the others unassigned (for a caller that keeps the assignment
+    /// between steps, such as the Python environment). O(N M) to rebuild the features.
+    ///
+    /// # Errors
+    /// [`LearnError::InvalidAction`] if the assigned robots are not a prefix `0..t`, and
+    /// the errors of [`Instance::check`] if the assignment does not fit the instance.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::{Assignment, GeneratorConfig, RobotId, TaskId};
+    /// use afg_graph::Units;
+    /// use afg_learn::Env;
+    /// let inst = GeneratorConfig::paper(4, 2, 1).generate()?;
+    /// let mut env = Env::reset_in(&inst, Units::Bounded);
+    /// env.step(TaskId(1))?;
+    /// let again = Env::resume_at(&inst, env.state().assignment().clone(), Units::Bounded)?;
+    /// assert_eq!((again.actor(), again.state()), (Some(RobotId(1)), env.state()));
+    /// let mut gap = Assignment::unassigned(4, 2);
+    /// gap.set(RobotId(2), Some(TaskId(0)));
+    /// assert!(Env::resume_at(&inst, gap, Units::Bounded).is_err());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn resume_at(
+        instance: &'a Instance,
+        assignment: Assignment,
+        units: Units,
+    ) -> Result<Self, LearnError> {
+        instance.check(&assignment)?;
+        let next = assignment
+            .tasks()
+            .iter()
+            .take_while(|t| t.is_some())
+            .count();
+        if assignment.tasks()[next..].iter().any(Option::is_some) {
+            return Err(LearnError::InvalidAction(format!(
+                "robots act in index order, but robot {next} is unassigned while a later one has a task"
+            )));
+        }
+        Ok(Env {
+            state: AllocationState::with_units(instance, assignment, units),
+            next,
+        })
+    }
+
+    /// The assignment so far.
+    pub fn into_assignment(self) -> Assignment {
+        self.state.into_assignment()
+    }
+
     /// The robot to act now, `None` once every robot has acted.
     pub fn actor(&self) -> Option<RobotId> {
         (self.next < self.state.instance().num_robots()).then_some(RobotId(self.next as u32))

@@ -1,0 +1,50 @@
+"""afg: multi-robot task assignment as an alliance formation game.
+
+A thin Python layer over the Rust crates of https://example.invalid/afg: instances and
+their generator, every allocator (the exact optimum, GRAPE DA, balanced DA, greedy,
+nearest, random, trained models), warm-start reallocation, the exact action values Q*,
+and (in ``afg.gym``) the paper's sequential MDP as a Gymnasium environment.
+
+>>> import afg
+>>> inst = afg.generate(robots=60, tasks=5, seed=1)
+>>> res = afg.solve(inst, method="opt")
+>>> res.percent_of_opt
+100.0
+"""
+
+from __future__ import annotations
+
+from ._afg import (
+    EnvCore,
+    Instance,
+    Model,
+    Result,
+    VecEnvCore,
+    generate,
+    load_model,
+    methods,
+    q_star,
+    read_jsonl,
+    reallocate,
+    score,
+    solve,
+    write_jsonl,
+)
+
+__all__ = [
+    "EnvCore",
+    "Instance",
+    "Model",
+    "Result",
+    "VecEnvCore",
+    "generate",
+    "load_model",
+    "methods",
+    "q_star",
+    "read_jsonl",
+    "reallocate",
+    "score",
+    "solve",
+    "write_jsonl",
+]
+

@@ -1,0 +1,211 @@
+"""The paper's sequential allocation MDP as Gymnasium environments.
+
+Importing this module registers ``afg/Allocation-v0``::
+
+    import gymnasium as gym
+    import afg.gym
+    env = gym.make("afg/Allocation-v0", robots=60, tasks=5)
+    obs, info = env.reset(seed=0)
+
+Robots act once each, in index order; the action is a task (``Discrete(M)``); the reward
+is the change in welfare (optionally shaped), so an episode's return is its final
+welfare. Observations are fixed-shape arrays in a ``Dict`` space, in the units the
+project's networks read:
+
+- ``robot_features`` (N, M) float32: one-hot of each robot's task (zeros before it acts);
+- ``task_features`` (N, M) float32: the utility robot i would get in task j given the
+  others' assignment, in units of beta, the value part capped (``units="bounded"``);
+  a task without room shows -2;
+- ``actor`` Discrete(N + 1): the robot to act (N once the episode is over);
+- ``action_mask`` MultiBinary(M): the tasks the actor may take.
+
+``info["action_mask"]`` is given at every step and ``action_masks()`` for maskable
+agents. On the last step ``info`` holds ``tasks``, ``welfare``, ``opt_welfare`` and
+``percent_of_opt``. ``reset(options={"instance": inst})`` plays a given instance;
+``options={"oracle": True}`` adds ``info["q_star"]``, the exact action values of every
+action (-inf where masked), from then on.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Dict, Optional, Tuple
+
+import gymnasium
+import numpy as np
+from gymnasium import spaces
+from gymnasium.vector import VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from . import EnvCore, Instance, VecEnvCore, generate, score
+
+__all__ = ["AllocationEnv", "AllocationVectorEnv"]
+
+_SEED_BOUND = 2**63
+
+
+def _observation_space(robots: int, tasks: int) -> spaces.Dict:
+    features = spaces.Box(-np.inf, np.inf, shape=(robots, tasks), dtype=np.float32)
+    return spaces.Dict(
+        {
+            "robot_features": spaces.Box(0.0, 1.0, shape=(robots, tasks), dtype=np.float32),
+            "task_features": features,
+            "actor": spaces.Discrete(robots + 1),
+            "action_mask": spaces.MultiBinary(tasks),
+        }
+    )
+
+
+def _final_info(instance: Instance, tasks: np.ndarray) -> Dict[str, Any]:
+    scored = score(instance, tasks)
+    return {
+        "tasks": tasks,
+        "welfare": scored.welfare,
+        "opt_welfare": scored.opt_welfare,
+        "percent_of_opt": scored.percent_of_opt,
+    }
+
+
+class AllocationEnv(gymnasium.Env):
+    """One episode per instance of N robots and M tasks (see the module docs)."""
+
+    metadata = {"render_modes": []}
+
+    def __init__(
+        self,
+        robots: int = 20,
+        tasks: int = 5,
+        capacity_slack: Optional[float] = None,
+        eps: Optional[float] = None,
+        beta: float = 1.0,
+        units: str = "bounded",
+        shaping: str = "none",
+    ) -> None:
+        self.robots, self.tasks = int(robots), int(tasks)
+        self._draw = dict(capacity_slack=capacity_slack, eps=eps, beta=beta)
+        self._units, self._shaping = units, shaping
+        self.observation_space = _observation_space(self.robots, self.tasks)
+        self.action_space = spaces.Discrete(self.tasks)
+        self._core = EnvCore(generate(self.robots, self.tasks, 0, **self._draw), units, shaping)
+        self._oracle = False
+
+    def _observe(self) -> Tuple[Dict[str, Any], Dict[str, Any]]:
+        nu, mu, actor, mask = self._core.observation()
+        obs = {"robot_features": nu, "task_features": mu, "actor": actor, "action_mask": mask}
+        info: Dict[str, Any] = {"action_mask": mask.astype(bool)}
+        if self._oracle and actor < self.robots:
+            info["q_star"] = self._core.q_star()
+        return obs, info
+
+    def reset(
+        self, *, seed: Optional[int] = None, options: Optional[Dict[str, Any]] = None
+    ) -> Tuple[Dict[str, Any], Dict[str, Any]]:
+        super().reset(seed=seed)
+        options = options or {}
+        self._oracle = bool(options.get("oracle", False))
+        instance = options.get("instance")
+        if instance is None:
+            draw = int(self.np_random.integers(_SEED_BOUND))
+            instance = generate(self.robots, self.tasks, draw, **self._draw)
+        elif (instance.num_robots, instance.num_tasks) != (self.robots, self.tasks):
+            raise ValueError(
+                f"the instance has {instance.num_robots} robots and {instance.num_tasks} "
+                f"tasks, the environment's spaces {self.robots} and {self.tasks}"
+            )
+        self._core.reset(instance)
+        return self._observe()
+
+    def step(self, action: Any) -> Tuple[Dict[str, Any], float, bool, bool, Dict[str, Any]]:
+        reward, terminated = self._core.step(int(action))
+        obs, info = self._observe()
+        if terminated:
+            info.update(_final_info(self._core.instance, self._core.tasks()))
+        return obs, float(reward), bool(terminated), False, info
+
+    def action_masks(self) -> np.ndarray:
+        """The acting robot's allowed tasks, as booleans (for maskable agents)."""
+        return self._core.observation()[3].astype(bool)
+
+
+class AllocationVectorEnv(VectorEnv):
+    """K episodes stepped together in Rust, with stacked observations.
+
+    Finished sub-environments reset on the following ``step`` (Gymnasium's next-step
+    autoreset): that step ignores their action and returns reward 0.
+    """
+
+    metadata = {"autoreset_mode": gymnasium.vector.AutoresetMode.NEXT_STEP}
+
+    def __init__(
+        self,
+        num_envs: int = 4,
+        robots: int = 20,
+        tasks: int = 5,
+        capacity_slack: Optional[float] = None,
+        eps: Optional[float] = None,
+        beta: float = 1.0,
+        units: str = "bounded",
+        shaping: str = "none",
+    ) -> None:
+        self.num_envs, self.robots, self.tasks = int(num_envs), int(robots), int(tasks)
+        self._core = VecEnvCore(
+            self.num_envs, self.robots, self.tasks, capacity_slack, eps, beta, units, shaping
+        )
+        self.single_observation_space = _observation_space(self.robots, self.tasks)
+        self.single_action_space = spaces.Discrete(self.tasks)
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self._autoreset = np.zeros(self.num_envs, dtype=bool)
+
+    def _draw(self, count: int) -> list:
+        return [int(s) for s in self.np_random.integers(_SEED_BOUND, size=count)]
+
+    def _observe(self) -> Tuple[Dict[str, Any], Dict[str, Any]]:
+        nu, mu, actors, masks = self._core.observations()
+        obs = {"robot_features": nu, "task_features": mu, "actor": actors, "action_mask": masks}
+        return obs, {"action_mask": masks.astype(bool)}
+
+    def reset(
+        self, *, seed: Optional[int] = None, options: Optional[Dict[str, Any]] = None
+    ) -> Tuple[Dict[str, Any], Dict[str, Any]]:
+        super().reset(seed=seed)
+        self._core.reset(list(range(self.num_envs)), self._draw(self.num_envs))
+        self._autoreset[:] = False
+        return self._observe()
+
+    def step(self, actions: Any):
+        actions = np.asarray(actions, dtype=np.int64).reshape(self.num_envs)
+        skip = self._autoreset.copy()
+        if skip.any():
+            indices = [int(i) for i in np.flatnonzero(skip)]
+            self._core.reset(indices, self._draw(len(indices)))
+        rewards, terminated = self._core.step(actions.tolist(), skip.tolist())
+        obs, info = self._observe()
+        if terminated.any():
+            finals = [
+                _final_info(self._core.instance(i), self._core.tasks(i)) if done else None
+                for i, done in enumerate(terminated)
+            ]
+            info["welfare"] = np.array([f["welfare"] if f else np.nan for f in finals])
+            info["percent_of_opt"] = np.array(
+                [f["percent_of_opt"] if f and f["percent_of_opt"] is not None else np.nan for f in finals]
+            )
+            info["_welfare"] = info["_percent_of_opt"] = terminated.copy()
+        self._autoreset = terminated.copy()
+        truncated = np.zeros(self.num_envs, dtype=bool)
+        return obs, rewards, terminated, truncated, info
+
+    def action_masks(self) -> np.ndarray:
+        """Each sub-environment's allowed tasks, shape (K, M), as booleans."""
+        return self._core.observations()[3].astype(bool)
+
+
+def _register() -> None:
+    if "afg/Allocation-v0" not in gymnasium.registry:
+        gymnasium.register(
+            id="afg/Allocation-v0",
+            entry_point="afg.gym:AllocationEnv",
+            vector_entry_point="afg.gym:AllocationVectorEnv",
+        )
+
+
+_register()

@@ -1,0 +1,383 @@
+//! The sequential allocation MDP for the Gymnasium environments: one episode
+//! ([`EnvCore`]) and K episodes stepped in one call ([`VecEnvCore`]). The MDP is
+//! afg-learn's [`Env`]; this module keeps its assignment between Python calls.
+
+use std::sync::Arc;
+
+use afg_game::{Assignment, Instance, TaskId};
+use afg_graph::Units;
+use afg_learn::{Env, Shaping};
+use numpy::ndarray::{Array1, Array2, Array3};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+
+use crate::{PyInstance, value_error};
+
+/// A name of a serde enum (`"bounded"`, `"greedy"`, …) as its value.
+fn parse_name<T: serde::de::DeserializeOwned>(name: &str, what: &str) -> PyResult<T> {
+    serde_json::from_value(serde_json::Value::String(name.to_owned()))
+        .map_err(|_| PyValueError::new_err(format!("unknown {what} {name:?}")))
+}
+
+/// One episode: the instance, the assignment so far, the feature units and shaping.
+#[derive(Clone)]
+struct Episode {
+    instance: Arc<Instance>,
+    assignment: Assignment,
+    units: Units,
+    shaping: Shaping,
+}
+
+/// One step's observation: ν (N×M), μ (N×M), the actor (N when done), the mask (M).
+struct Observation {
+    nu: Vec<f32>,
+    mu: Vec<f32>,
+    actor: usize,
+    mask: Vec<i8>,
+}
+
+impl Episode {
+    fn new(instance: Arc<Instance>, units: Units, shaping: Shaping) -> Self {
+        let assignment = Assignment::unassigned(instance.num_robots(), instance.num_tasks());
+        Episode {
+            instance,
+            assignment,
+            units,
+            shaping,
+        }
+    }
+
+    fn env(&self) -> Env<'_> {
+        Env::resume_at(&self.instance, self.assignment.clone(), self.units)
+            .expect("the episode's assignment is always a valid prefix")
+    }
+
+    /// The acting robot takes `action`: the (shaped) reward and whether it was the last.
+    fn step(&mut self, action: i64) -> Result<(f64, bool), String> {
+        let task = u32::try_from(action).map(TaskId).map_err(|_| {
+            format!(
+                "action {action} is not a task (0..{})",
+                self.instance.num_tasks()
+            )
+        })?;
+        let before = self.shaping.potential(&self.instance, &self.assignment);
+        let mut env = self.env();
+        let (reward, done) = env.step(task).map_err(|e| e.to_string())?;
+        self.assignment = env.into_assignment();
+        let after = self.shaping.potential(&self.instance, &self.assignment);
+        Ok((reward + after - before, done))
+    }
+
+    fn observation(&self) -> Observation {
+        let env = self.env();
+        let (n, m) = (self.instance.num_robots(), self.instance.num_tasks());
+        let mut nu = vec![0.0; n * m];
+        for (i, t) in self.assignment.tasks().iter().enumerate() {
+            if let Some(j) = t {
+                nu[i * m + j.index()] = 1.0;
+            }
+        }
+        Observation {
+            nu,
+            mu: env.state().mu_matrix().to_vec(),
+            actor: env.actor().map_or(n, |r| r.index()),
+            mask: env.action_mask().into_iter().map(i8::from).collect(),
+        }
+    }
+
+    fn tasks(&self) -> Vec<i64> {
+        self.assignment
+            .tasks()
+            .iter()
+            .map(|t| t.map_or(-1, |j| i64::from(j.0)))
+            .collect()
+    }
+}
+
+type ObservationArrays<'py> = (
+    Bound<'py, PyArray2<f32>>,
+    Bound<'py, PyArray2<f32>>,
+    usize,
+    Bound<'py, PyArray1<i8>>,
+);
+
+/// One episode of the sequential MDP, driven by `afg.gym.AllocationEnv`.
+#[pyclass(module = "afg")]
+pub struct EnvCore {
+    episode: Episode,
+}
+
+#[pymethods]
+impl EnvCore {
+    #[new]
+    #[pyo3(signature = (instance, units="bounded", shaping="none"))]
+    fn py_new(instance: &PyInstance, units: &str, shaping: &str) -> PyResult<Self> {
+        let episode = Episode::new(
+            instance.inner.clone(),
+            parse_name(units, "units")?,
+            parse_name(shaping, "shaping")?,
+        );
+        Ok(EnvCore { episode })
+    }
+
+    /// Starts a new episode on `instance` (same units and shaping).
+    fn reset(&mut self, instance: &PyInstance) {
+        let e = &self.episode;
+        self.episode = Episode::new(instance.inner.clone(), e.units, e.shaping);
+    }
+
+    /// The acting robot takes task `action`: `(reward, terminated)`.
+    fn step(&mut self, py: Python<'_>, action: i64) -> PyResult<(f64, bool)> {
+        let episode = &mut self.episode;
+        py.detach(|| episode.step(action))
+            .map_err(PyValueError::new_err)
+    }
+
+    /// `(robot_features (N, M), task_features (N, M), actor, action_mask (M,))`.
+    fn observation<'py>(&self, py: Python<'py>) -> ObservationArrays<'py> {
+        let o = self.episode.observation();
+        let (n, m) = (
+            self.episode.instance.num_robots(),
+            self.episode.instance.num_tasks(),
+        );
+        (
+            Array2::from_shape_vec((n, m), o.nu)
+                .expect("N×M")
+                .into_pyarray(py),
+            Array2::from_shape_vec((n, m), o.mu)
+                .expect("N×M")
+                .into_pyarray(py),
+            o.actor,
+            o.mask.into_pyarray(py),
+        )
+    }
+
+    /// Exact action values of the acting robot (-inf where a task has no room).
+    fn q_star<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let instance = PyInstance {
+            inner: self.episode.instance.clone(),
+        };
+        let values = crate::solve::q_star_of(py, &instance, self.episode.tasks())?;
+        Ok(values.into_pyarray(py))
+    }
+
+    /// The assignment so far (-1 for robots yet to act).
+    fn tasks<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+        self.episode.tasks().into_pyarray(py)
+    }
+
+    /// Welfare of the assignment so far.
+    fn welfare(&self) -> f64 {
+        self.episode.instance.welfare(&self.episode.assignment)
+    }
+
+    /// The episode's instance.
+    #[getter]
+    fn instance(&self) -> PyInstance {
+        PyInstance {
+            inner: self.episode.instance.clone(),
+        }
+    }
+}
+
+/// The generator of a vector environment's instances.
+#[derive(Clone)]
+struct Draw {
+    robots: usize,
+    tasks: usize,
+    capacity_slack: Option<f64>,
+    eps: Option<f64>,
+    beta: f64,
+}
+
+impl Draw {
+    fn instance(&self, seed: u64) -> Result<Instance, afg_game::GameError> {
+        crate::generator(
+            self.robots,
+            self.tasks,
+            seed,
+            self.capacity_slack,
+            self.eps,
+            self.beta,
+            None,
+        )
+        .generate()
+    }
+}
+
+type VecObservationArrays<'py> = (
+    Bound<'py, PyArray3<f32>>,
+    Bound<'py, PyArray3<f32>>,
+    Bound<'py, PyArray1<i64>>,
+    Bound<'py, PyArray2<i8>>,
+);
+
+/// K episodes of the sequential MDP stepped in one call, driven by
+/// `afg.gym.AllocationVectorEnv`.
+#[pyclass(module = "afg")]
+pub struct VecEnvCore {
+    episodes: Vec<Episode>,
+    draw: Draw,
+}
+
+#[pymethods]
+impl VecEnvCore {
+    #[new]
+    #[pyo3(signature = (num_envs, robots, tasks=5, capacity_slack=None, eps=None, beta=1.0, units="bounded", shaping="none"))]
+    #[allow(clippy::too_many_arguments)]
+    fn py_new(
+        num_envs: usize,
+        robots: usize,
+        tasks: usize,
+        capacity_slack: Option<f64>,
+        eps: Option<f64>,
+        beta: f64,
+        units: &str,
+        shaping: &str,
+    ) -> PyResult<Self> {
+        if num_envs == 0 {
+            return Err(PyValueError::new_err("num_envs must be at least 1"));
+        }
+        let draw = Draw {
+            robots,
+            tasks,
+            capacity_slack,
+            eps,
+            beta,
+        };
+        let first = Arc::new(draw.instance(0).map_err(crate::game_error)?);
+        let episode = Episode::new(
+            first,
+            parse_name(units, "units")?,
+            parse_name(shaping, "shaping")?,
+        );
+        Ok(VecEnvCore {
+            episodes: vec![episode; num_envs],
+            draw,
+        })
+    }
+
+    /// Starts new episodes: environment `indices[k]` on the instance drawn with
+    /// `seeds[k]`.
+    fn reset(&mut self, py: Python<'_>, indices: Vec<usize>, seeds: Vec<u64>) -> PyResult<()> {
+        if indices.len() != seeds.len() || indices.iter().any(|&i| i >= self.episodes.len()) {
+            return Err(PyValueError::new_err(
+                "one seed per index, each index below num_envs",
+            ));
+        }
+        let draw = self.draw.clone();
+        let fresh = py
+            .detach(|| {
+                seeds
+                    .iter()
+                    .map(|&s| draw.instance(s))
+                    .collect::<Result<Vec<_>, _>>()
+            })
+            .map_err(crate::game_error)?;
+        for (i, inst) in indices.into_iter().zip(fresh) {
+            let e = &self.episodes[i];
+            self.episodes[i] = Episode::new(Arc::new(inst), e.units, e.shaping);
+        }
+        Ok(())
+    }
+
+    /// Every environment whose `skip` is false takes its action: `(rewards, terminated)`.
+    fn step<'py>(
+        &mut self,
+        py: Python<'py>,
+        actions: Vec<i64>,
+        skip: Vec<bool>,
+    ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<bool>>)> {
+        let k = self.episodes.len();
+        if actions.len() != k || skip.len() != k {
+            return Err(PyValueError::new_err(format!(
+                "expected {k} actions and {k} skip flags, got {} and {}",
+                actions.len(),
+                skip.len()
+            )));
+        }
+        let episodes = &mut self.episodes;
+        let results = py
+            .detach(|| {
+                episodes
+                    .iter_mut()
+                    .zip(actions.iter().zip(&skip))
+                    .enumerate()
+                    .map(|(i, (e, (&a, &skip)))| {
+                        if skip {
+                            Ok((0.0, false))
+                        } else {
+                            e.step(a).map_err(|why| format!("environment {i}: {why}"))
+                        }
+                    })
+                    .collect::<Result<Vec<_>, String>>()
+            })
+            .map_err(PyValueError::new_err)?;
+        let (rewards, done): (Vec<f64>, Vec<bool>) = results.into_iter().unzip();
+        Ok((rewards.into_pyarray(py), done.into_pyarray(py)))
+    }
+
+    /// Stacked observations: `(robot_features (K, N, M), task_features (K, N, M),
+    /// actors (K,), action_masks (K, M))`.
+    fn observations<'py>(&self, py: Python<'py>) -> VecObservationArrays<'py> {
+        let (k, n, m) = (self.episodes.len(), self.draw.robots, self.draw.tasks);
+        let obs: Vec<Observation> =
+            py.detach(|| self.episodes.iter().map(Episode::observation).collect());
+        let mut nu = Vec::with_capacity(k * n * m);
+        let mut mu = Vec::with_capacity(k * n * m);
+        let mut actors = Vec::with_capacity(k);
+        let mut masks = Vec::with_capacity(k * m);
+        for o in obs {
+            nu.extend(o.nu);
+            mu.extend(o.mu);
+            actors.push(o.actor as i64);
+            masks.extend(o.mask);
+        }
+        (
+            Array3::from_shape_vec((k, n, m), nu)
+                .expect("K×N×M")
+                .into_pyarray(py),
+            Array3::from_shape_vec((k, n, m), mu)
+                .expect("K×N×M")
+                .into_pyarray(py),
+            Array1::from(actors).into_pyarray(py),
+            Array2::from_shape_vec((k, m), masks)
+                .expect("K×M")
+                .into_pyarray(py),
+        )
+    }
+
+    /// Environment `index`'s assignment so far.
+    fn tasks<'py>(&self, py: Python<'py>, index: usize) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        Ok(self.episode(index)?.tasks().into_pyarray(py))
+    }
+
+    /// Environment `index`'s welfare so far.
+    fn welfare(&self, index: usize) -> PyResult<f64> {
+        let e = self.episode(index)?;
+        Ok(e.instance.welfare(&e.assignment))
+    }
+
+    /// Environment `index`'s instance.
+    fn instance(&self, index: usize) -> PyResult<PyInstance> {
+        Ok(PyInstance {
+            inner: self.episode(index)?.instance.clone(),
+        })
+    }
+}
+
+impl VecEnvCore {
+    fn episode(&self, index: usize) -> PyResult<&Episode> {
+        self.episodes
+            .get(index)
+            .ok_or_else(|| value_error(format!("no environment {index}")))
+    }
+}
+
+/// Adds the environment cores.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<EnvCore>()?;
+    m.add_class::<VecEnvCore>()?;
+    Ok(())
+}

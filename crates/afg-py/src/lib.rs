@@ -1,0 +1,372 @@
+//! afg for Python: a thin layer over the crates. Every number comes from them; this
+//! crate only converts types at the border (numpy arrays in and out, the crates' errors
+//! to Python exceptions) and releases the GIL around long calls.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use afg_game::{Assignment, GameError, GeneratorConfig, Instance, Point, Preference, Task, TaskId};
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::exceptions::{PyFileNotFoundError, PyValueError};
+use pyo3::prelude::*;
+
+mod env;
+mod solve;
+
+/// A Rust error as a `ValueError` carrying the same message.
+pub(crate) fn value_error(e: impl std::fmt::Display) -> PyErr {
+    PyValueError::new_err(e.to_string())
+}
+
+/// A game error: `FileNotFoundError` for a missing file, `ValueError` otherwise.
+pub(crate) fn game_error(e: GameError) -> PyErr {
+    match &e {
+        GameError::Io { source, .. } if source.kind() == std::io::ErrorKind::NotFound => {
+            PyFileNotFoundError::new_err(e.to_string())
+        }
+        _ => value_error(e),
+    }
+}
+
+/// An integer vector from Python: a numpy int64 array (read in place) or any sequence.
+#[derive(FromPyObject)]
+pub(crate) enum IntVector<'py> {
+    Array(PyReadonlyArray1<'py, i64>),
+    List(Vec<i64>),
+}
+
+impl IntVector<'_> {
+    pub(crate) fn to_vec(&self) -> Vec<i64> {
+        match self {
+            IntVector::Array(a) => a.as_array().to_vec(),
+            IntVector::List(v) => v.clone(),
+        }
+    }
+}
+
+/// The preference named `name` ("balanced" or "selfish").
+pub(crate) fn preference(name: &str) -> PyResult<Preference> {
+    match name {
+        "balanced" => Ok(Preference::Balanced),
+        "selfish" => Ok(Preference::Selfish),
+        other => Err(PyValueError::new_err(format!(
+            "unknown preference {other:?}: expected \"balanced\" or \"selfish\""
+        ))),
+    }
+}
+
+/// One game: N robots, M tasks, the distance penalty beta (validated on construction).
+#[pyclass(name = "Instance", module = "afg", frozen)]
+#[derive(Clone)]
+pub struct PyInstance {
+    pub(crate) inner: Arc<Instance>,
+}
+
+impl PyInstance {
+    pub(crate) fn new_from(inner: Instance) -> Self {
+        PyInstance {
+            inner: Arc::new(inner),
+        }
+    }
+
+    /// `tasks` (robot i's task, -1 for none) as an assignment of this instance.
+    pub(crate) fn assignment(&self, tasks: &IntVector<'_>) -> PyResult<Assignment> {
+        let tasks = tasks.to_vec();
+        let tasks = tasks
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| match t {
+                -1 => Ok(None),
+                t => u32::try_from(t).map(|t| Some(TaskId(t))).map_err(|_| {
+                    PyValueError::new_err(format!(
+                        "robot {i} has task {t}: a task is 0..M-1, or -1 for none"
+                    ))
+                }),
+            })
+            .collect::<PyResult<Vec<_>>>()?;
+        Assignment::from_tasks(&self.inner, tasks).map_err(game_error)
+    }
+}
+
+fn points(array: &PyReadonlyArray2<'_, f64>, what: &str) -> PyResult<Vec<Point>> {
+    let a = array.as_array();
+    if a.ncols() != 2 {
+        return Err(PyValueError::new_err(format!(
+            "{what} must have shape (K, 2), got {:?}",
+            a.shape()
+        )));
+    }
+    Ok(a.rows()
+        .into_iter()
+        .map(|r| Point::new(r[0], r[1]))
+        .collect())
+}
+
+fn point_array<'py>(
+    py: Python<'py>,
+    points: impl Iterator<Item = Point>,
+) -> Bound<'py, PyArray2<f64>> {
+    let flat: Vec<f64> = points.flat_map(|p| [p.x, p.y]).collect();
+    Array2::from_shape_vec((flat.len() / 2, 2), flat)
+        .expect("two coordinates per point")
+        .into_pyarray(py)
+}
+
+#[pymethods]
+impl PyInstance {
+    /// Builds and validates an instance from arrays: robot positions (N, 2), task
+    /// positions (M, 2), rewards (M,), eps (M,), optional capacities (M,; -1 = none).
+    #[new]
+    #[pyo3(signature = (robots, tasks, rewards, eps, capacities=None, beta=1.0))]
+    fn py_new(
+        robots: PyReadonlyArray2<'_, f64>,
+        tasks: PyReadonlyArray2<'_, f64>,
+        rewards: Vec<f64>,
+        eps: Vec<f64>,
+        capacities: Option<IntVector<'_>>,
+        beta: f64,
+    ) -> PyResult<Self> {
+        let positions = points(&tasks, "tasks")?;
+        let m = positions.len();
+        let capacities = capacities
+            .map(|c| c.to_vec())
+            .unwrap_or_else(|| vec![-1; m]);
+        if rewards.len() != m || eps.len() != m || capacities.len() != m {
+            return Err(PyValueError::new_err(format!(
+                "{m} task positions but {} rewards, {} eps and {} capacities",
+                rewards.len(),
+                eps.len(),
+                capacities.len()
+            )));
+        }
+        let tasks = (0..m)
+            .map(|j| {
+                let capacity = match capacities[j] {
+                    -1 => Ok(None),
+                    c => usize::try_from(c).map(Some).map_err(|_| {
+                        PyValueError::new_err(format!("task {j} has capacity {c}; -1 for none"))
+                    }),
+                }?;
+                Ok(Task {
+                    position: positions[j],
+                    reward: rewards[j],
+                    eps: eps[j],
+                    capacity,
+                })
+            })
+            .collect::<PyResult<Vec<_>>>()?;
+        let inst = Instance::new(points(&robots, "robots")?, tasks, beta).map_err(game_error)?;
+        Ok(Self::new_from(inst))
+    }
+
+    /// Reads an instance file (format "afg-instance").
+    #[staticmethod]
+    fn from_json(path: PathBuf) -> PyResult<Self> {
+        Instance::read(&path)
+            .map(Self::new_from)
+            .map_err(game_error)
+    }
+
+    /// Parses an instance document from a string.
+    #[staticmethod]
+    fn parse(text: &str) -> PyResult<Self> {
+        Instance::from_json(text)
+            .map(Self::new_from)
+            .map_err(game_error)
+    }
+
+    /// An instance from the dict of an "afg-instance" document (as `json.load` gives).
+    #[staticmethod]
+    fn from_dict(py: Python<'_>, document: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let text: String = py
+            .import("json")?
+            .call_method1("dumps", (document,))?
+            .extract()?;
+        Self::parse(&text)
+    }
+
+    /// The "afg-instance" document as a dict.
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        py.import("json")?
+            .call_method1("loads", (self.inner.to_json(),))
+    }
+
+    /// The instance as one line of JSON (format "afg-instance").
+    fn to_json(&self) -> String {
+        self.inner.to_json()
+    }
+
+    /// Writes the instance to `path` (atomically).
+    fn write(&self, path: PathBuf) -> PyResult<()> {
+        self.inner.write(&path).map_err(game_error)
+    }
+
+    /// Number of robots N.
+    #[getter]
+    fn num_robots(&self) -> usize {
+        self.inner.num_robots()
+    }
+
+    /// Number of tasks M.
+    #[getter]
+    fn num_tasks(&self) -> usize {
+        self.inner.num_tasks()
+    }
+
+    /// Robot positions, shape (N, 2).
+    #[getter]
+    fn robots<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        point_array(py, self.inner.robots().iter().copied())
+    }
+
+    /// Task positions, shape (M, 2).
+    #[getter]
+    fn tasks<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        point_array(py, self.inner.tasks().iter().map(|t| t.position))
+    }
+
+    /// Initial rewards r_j, shape (M,).
+    #[getter]
+    fn rewards<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let v: Vec<f64> = self.inner.tasks().iter().map(|t| t.reward).collect();
+        v.into_pyarray(py)
+    }
+
+    /// Bases eps_j, shape (M,).
+    #[getter]
+    fn eps<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let v: Vec<f64> = self.inner.tasks().iter().map(|t| t.eps).collect();
+        v.into_pyarray(py)
+    }
+
+    /// Capacities, shape (M,), -1 where a task is unbounded.
+    #[getter]
+    fn capacities<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+        let v: Vec<i64> = self
+            .inner
+            .tasks()
+            .iter()
+            .map(|t| {
+                t.capacity
+                    .map_or(-1, |c| i64::try_from(c).unwrap_or(i64::MAX))
+            })
+            .collect();
+        v.into_pyarray(py)
+    }
+
+    /// The distance penalty beta.
+    #[getter]
+    fn beta(&self) -> f64 {
+        self.inner.beta()
+    }
+
+    /// Welfare of an assignment (`tasks[i]` = robot i's task, -1 for none).
+    fn welfare(&self, tasks: IntVector<'_>) -> PyResult<f64> {
+        Ok(self.inner.welfare(&self.assignment(&tasks)?))
+    }
+
+    /// Whether no robot strictly prefers another task ("balanced" or "selfish").
+    #[pyo3(signature = (tasks, preference="balanced"))]
+    fn is_stable(&self, tasks: IntVector<'_>, preference: &str) -> PyResult<bool> {
+        let pref = crate::preference(preference)?;
+        Ok(self.inner.is_stable(&self.assignment(&tasks)?, pref))
+    }
+
+    /// Share of robots (0..=1) that prefer no other task.
+    #[pyo3(signature = (tasks, preference="balanced"))]
+    fn ns_rate(&self, tasks: IntVector<'_>, preference: &str) -> PyResult<f64> {
+        let pref = crate::preference(preference)?;
+        Ok(self.inner.ns_rate(&self.assignment(&tasks)?, pref))
+    }
+
+    fn __eq__(&self, other: &Self) -> bool {
+        self.inner == other.inner
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Instance(robots={}, tasks={}, beta={})",
+            self.inner.num_robots(),
+            self.inner.num_tasks(),
+            self.inner.beta()
+        )
+    }
+}
+
+/// Reads a JSON Lines dataset (or one instance document): a list of instances.
+#[pyfunction]
+fn read_jsonl(path: PathBuf) -> PyResult<Vec<PyInstance>> {
+    let text = std::fs::read_to_string(&path).map_err(|source| {
+        game_error(GameError::Io {
+            path: path.display().to_string(),
+            source,
+        })
+    })?;
+    let instances = afg_game::io::parse_instances(&text)
+        .map_err(|e| value_error(format!("{}: {e}", path.display())))?;
+    Ok(instances.into_iter().map(PyInstance::new_from).collect())
+}
+
+/// Writes instances as a JSON Lines dataset (atomically).
+#[pyfunction]
+fn write_jsonl(path: PathBuf, instances: Vec<PyRef<'_, PyInstance>>) -> PyResult<()> {
+    let insts: Vec<Instance> = instances.iter().map(|i| (*i.inner).clone()).collect();
+    afg_game::io::write_atomic(&path, afg_game::io::dataset_to_jsonl(&insts).as_bytes())
+        .map_err(game_error)
+}
+
+/// Draws an instance from the paper's distribution (uniform positions, rewards in
+/// [N/M, 2N/M], eps = max(2, N/M), beta = 1), with the generator's knobs.
+#[pyfunction]
+#[pyo3(signature = (robots, tasks=5, seed=0, capacity_slack=None, eps=None, beta=1.0, rewards=None))]
+pub(crate) fn generate(
+    robots: usize,
+    tasks: usize,
+    seed: u64,
+    capacity_slack: Option<f64>,
+    eps: Option<f64>,
+    beta: f64,
+    rewards: Option<(f64, f64)>,
+) -> PyResult<PyInstance> {
+    generator(robots, tasks, seed, capacity_slack, eps, beta, rewards)
+        .generate()
+        .map(PyInstance::new_from)
+        .map_err(game_error)
+}
+
+/// The generator configuration of [`generate`]'s arguments.
+pub(crate) fn generator(
+    robots: usize,
+    tasks: usize,
+    seed: u64,
+    capacity_slack: Option<f64>,
+    eps: Option<f64>,
+    beta: f64,
+    rewards: Option<(f64, f64)>,
+) -> GeneratorConfig {
+    let mut cfg = GeneratorConfig::paper(robots, tasks, seed);
+    if let Some(slack) = capacity_slack {
+        cfg = cfg.with_capacity_slack(slack);
+    }
+    if let Some(eps) = eps {
+        cfg.eps = eps;
+    }
+    if let Some((lo, hi)) = rewards {
+        (cfg.reward_min, cfg.reward_max) = (lo, hi);
+    }
+    cfg.beta = beta;
+    cfg
+}
+
+/// The compiled core of the `afg` package.
+#[pymodule]
+fn _afg(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyInstance>()?;
+    m.add_function(wrap_pyfunction!(read_jsonl, m)?)?;
+    m.add_function(wrap_pyfunction!(write_jsonl, m)?)?;
+    m.add_function(wrap_pyfunction!(generate, m)?)?;
+    solve::register(m)?;
+    env::register(m)?;
+    Ok(())
+}

@@ -1,0 +1,321 @@
+//! Allocators from Python: `solve`, `load_model`, `reallocate` and `q_star`.
+
+use std::path::PathBuf;
+use std::str::FromStr;
+
+use afg_baseline::{AllocStats, Allocator, Method};
+use afg_eval::Score;
+use afg_eval::solve::{ModelOptions, Row, load_model as load_dir};
+use afg_game::io::PreviousAssignment;
+use afg_game::{Assignment, RobotId, TaskId};
+use numpy::{IntoPyArray, PyArray1};
+use pyo3::exceptions::{PyFileNotFoundError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::{IntVector, PyInstance, value_error};
+
+/// An allocation of one instance, scored against the exact optimum.
+#[pyclass(name = "Result", module = "afg", frozen)]
+pub struct SolveResult {
+    tasks: Vec<i64>,
+    score: Score,
+    /// Extra figures, by name (the allocator's statistics, or a reallocation's).
+    stats: Vec<(&'static str, f64)>,
+}
+
+fn task_indices(a: &Assignment) -> Vec<i64> {
+    a.tasks()
+        .iter()
+        .map(|t| t.map_or(-1, |j| i64::from(j.0)))
+        .collect()
+}
+
+fn alloc_stats(s: &AllocStats) -> Vec<(&'static str, f64)> {
+    vec![
+        ("iterations", s.iterations as f64),
+        ("rounds", s.rounds as f64),
+        ("messages", s.messages as f64),
+        ("wall_time_s", s.wall_time.as_secs_f64()),
+    ]
+}
+
+#[pymethods]
+impl SolveResult {
+    /// Robot i's task, shape (N,), int64 (-1 for none).
+    #[getter]
+    fn tasks<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+        self.tasks.clone().into_pyarray(py)
+    }
+    /// Welfare of the allocation.
+    #[getter]
+    fn welfare(&self) -> f64 {
+        self.score.welfare
+    }
+    /// Welfare of the exact optimum.
+    #[getter]
+    fn opt_welfare(&self) -> f64 {
+        self.score.opt_welfare
+    }
+    /// 100 · welfare / opt_welfare; None when the optimum's welfare is not positive.
+    #[getter]
+    fn percent_of_opt(&self) -> Option<f64> {
+        self.score.percent_of_opt
+    }
+    /// Share of robots (0..=1) with no strictly preferred move, balanced preference.
+    #[getter]
+    fn ns_rate_balanced(&self) -> f64 {
+        self.score.ns_rate_balanced
+    }
+    /// The same under the selfish (GRAPE) preference.
+    #[getter]
+    fn ns_rate_selfish(&self) -> f64 {
+        self.score.ns_rate_selfish
+    }
+    /// What the allocator reported (iterations, rounds, messages, wall_time_s), or a
+    /// reallocation's figures (survivors, moved, placed, …).
+    #[getter]
+    fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        for (k, v) in &self.stats {
+            d.set_item(k, v)?;
+        }
+        Ok(d)
+    }
+    fn __repr__(&self) -> String {
+        let pct = self
+            .score
+            .percent_of_opt
+            .map_or("None".to_owned(), |p| format!("{p:.2}"));
+        format!(
+            "Result(welfare={:.4}, opt_welfare={:.4}, percent_of_opt={pct})",
+            self.score.welfare, self.score.opt_welfare
+        )
+    }
+}
+
+/// A trained model of a run directory, as an allocator.
+#[pyclass(name = "Model", module = "afg", frozen)]
+pub struct PyModel {
+    allocator: Box<dyn Allocator>,
+    path: String,
+}
+
+#[pymethods]
+impl PyModel {
+    /// Allocates one instance (the GIL is released while it runs).
+    fn allocate(&self, py: Python<'_>, instance: &PyInstance) -> PyResult<SolveResult> {
+        run(py, instance, self.allocator.as_ref())
+    }
+    fn __repr__(&self) -> String {
+        format!("Model({:?})", self.path)
+    }
+}
+
+/// Loads the trained model of a run directory: a Q network or a price model.
+#[pyfunction]
+#[pyo3(signature = (path, block=None, repair=false, one_shot=false))]
+fn load_model(
+    path: PathBuf,
+    block: Option<usize>,
+    repair: bool,
+    one_shot: bool,
+) -> PyResult<PyModel> {
+    if !path.is_dir() {
+        return Err(PyFileNotFoundError::new_err(format!(
+            "{}: no such model directory",
+            path.display()
+        )));
+    }
+    let options = ModelOptions {
+        block,
+        repair,
+        one_shot,
+        exact_burn: false,
+    };
+    Ok(PyModel {
+        allocator: load_dir(&path, options).map_err(value_error)?,
+        path: path.display().to_string(),
+    })
+}
+
+fn run(py: Python<'_>, instance: &PyInstance, allocator: &dyn Allocator) -> PyResult<SolveResult> {
+    let inst = instance.inner.clone();
+    let (row, assignment) = py
+        .detach(|| Row::compute(&inst, allocator))
+        .map_err(value_error)?;
+    Ok(SolveResult {
+        tasks: task_indices(&assignment),
+        stats: alloc_stats(&row.stats),
+        score: row.score,
+    })
+}
+
+fn method(name: &str) -> PyResult<Method> {
+    Method::from_str(name).map_err(PyValueError::new_err)
+}
+
+/// Solves one instance by a built-in method (`opt`, `da`, `da-decentralised`,
+/// `da-balanced`, `greedy`, `nearest`, `random`, `blind`) or a trained model (a run
+/// directory or a loaded `Model`), scored against the exact optimum.
+#[pyfunction]
+#[pyo3(signature = (instance, method=None, model=None, seed=0))]
+fn solve(
+    py: Python<'_>,
+    instance: &PyInstance,
+    method: Option<&str>,
+    model: Option<&Bound<'_, PyAny>>,
+    seed: u64,
+) -> PyResult<SolveResult> {
+    match (method, model) {
+        (Some(name), None) => run(py, instance, self::method(name)?.allocator(seed).as_ref()),
+        (None, Some(model)) => match model.cast::<PyModel>() {
+            Ok(m) => run(py, instance, m.get().allocator.as_ref()),
+            Err(_) => {
+                let path: PathBuf = model.extract()?;
+                run(
+                    py,
+                    instance,
+                    load_model(path, None, false, false)?.allocator.as_ref(),
+                )
+            }
+        },
+        _ => Err(PyValueError::new_err(
+            "pass exactly one of method=NAME or model=PATH_OR_MODEL",
+        )),
+    }
+}
+
+/// Scores a given assignment (`tasks[i]` = robot i's task) against the exact optimum.
+#[pyfunction]
+fn score(py: Python<'_>, instance: &PyInstance, tasks: IntVector<'_>) -> PyResult<SolveResult> {
+    let assignment = instance.assignment(&tasks)?;
+    let inst = instance.inner.clone();
+    let score = py
+        .detach(|| {
+            let opt = afg_eval::optimum_welfare(&inst)?;
+            Score::of("the assignment", &inst, &assignment, opt)
+        })
+        .map_err(value_error)?;
+    Ok(SolveResult {
+        tasks: task_indices(&assignment),
+        score,
+        stats: Vec::new(),
+    })
+}
+
+/// The names of the built-in methods.
+#[pyfunction]
+fn methods() -> Vec<&'static str> {
+    Method::ALL.iter().map(|m| m.name()).collect()
+}
+
+/// Warm start after robots or tasks changed: `previous_tasks` is the old assignment
+/// (old robot indices), `left_robots` / `left_tasks` name what left; the instance keeps
+/// the survivors in their old order, then newcomers. Survivors keep their task, the
+/// others join by best response, then the dynamics of `method` (`da-balanced` or
+/// `da`) settle.
+#[pyfunction]
+#[pyo3(signature = (instance, previous_tasks, left_robots=Vec::new(), left_tasks=Vec::new(), method="da-balanced"))]
+fn reallocate(
+    py: Python<'_>,
+    instance: &PyInstance,
+    previous_tasks: IntVector<'_>,
+    left_robots: Vec<u32>,
+    left_tasks: Vec<u32>,
+    method: &str,
+) -> PyResult<SolveResult> {
+    let m = self::method(method)?;
+    let preference = afg_eval::realloc::dynamics_after(m).ok_or_else(|| {
+        PyValueError::new_err(format!(
+            "reallocation runs best-response dynamics: method \"da-balanced\" or \"da\", not {method:?}"
+        ))
+    })?;
+    let tasks = previous_tasks
+        .to_vec()
+        .into_iter()
+        .map(|t| match t {
+            -1 => Ok(None),
+            t => u32::try_from(t)
+                .map(|t| Some(TaskId(t)))
+                .map_err(|_| PyValueError::new_err(format!("previous task {t}: 0.., or -1"))),
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    let previous = PreviousAssignment {
+        tasks,
+        left_robots: left_robots.into_iter().map(RobotId).collect(),
+        left_tasks: left_tasks.into_iter().map(TaskId).collect(),
+    };
+    let inst = instance.inner.clone();
+    let r = py
+        .detach(|| afg_eval::realloc::reallocate(&inst, &previous, preference))
+        .map_err(value_error)?;
+    let score =
+        Score::of("the reallocation", &inst, &r.assignment, r.opt_welfare).map_err(value_error)?;
+    Ok(SolveResult {
+        tasks: task_indices(&r.assignment),
+        score,
+        stats: vec![
+            ("survivors", r.survivors as f64),
+            ("moved", r.moved as f64),
+            ("placed", r.placed as f64),
+            ("opt_changes", r.opt_changes as f64),
+            ("scratch_changes", r.scratch_changes as f64),
+            ("wall_time_s", r.seconds),
+        ],
+    })
+}
+
+/// Exact action values of the next robot: `tasks_so_far[i]` is the task of robot i
+/// for the robots that have acted (robots act in index order); entry j of the result
+/// is the welfare that taking task j and then completing optimally adds from now on,
+/// -inf where task j has no room.
+#[pyfunction]
+fn q_star<'py>(
+    py: Python<'py>,
+    instance: &PyInstance,
+    tasks_so_far: IntVector<'_>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let values = q_star_of(py, instance, tasks_so_far.to_vec())?;
+    Ok(values.into_pyarray(py))
+}
+
+/// [`q_star`] as a vector; the prefix is padded with -1 to N.
+pub(crate) fn q_star_of(
+    py: Python<'_>,
+    instance: &PyInstance,
+    mut tasks: Vec<i64>,
+) -> PyResult<Vec<f64>> {
+    let n = instance.inner.num_robots();
+    if tasks.len() >= n && tasks.iter().all(|&t| t != -1) {
+        return Err(PyValueError::new_err(
+            "every robot has acted: there is no next robot",
+        ));
+    }
+    tasks.resize(n.max(tasks.len()), -1);
+    let assignment = instance.assignment(&IntVector::List(tasks))?;
+    let inst = instance.inner.clone();
+    let env = afg_learn::Env::resume_at(&inst, assignment, afg_graph::Units::Bounded)
+        .map_err(value_error)?;
+    let actor = env.actor().expect("checked: a robot is left to act");
+    let values = py
+        .detach(|| afg_learn::q_star(&inst, env.state().assignment(), actor))
+        .map_err(value_error)?;
+    Ok(values
+        .into_iter()
+        .map(|v| v.unwrap_or(f64::NEG_INFINITY))
+        .collect())
+}
+
+/// Adds this module's classes and functions.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<SolveResult>()?;
+    m.add_class::<PyModel>()?;
+    m.add_function(wrap_pyfunction!(solve, m)?)?;
+    m.add_function(wrap_pyfunction!(load_model, m)?)?;
+    m.add_function(wrap_pyfunction!(methods, m)?)?;
+    m.add_function(wrap_pyfunction!(score, m)?)?;
+    m.add_function(wrap_pyfunction!(reallocate, m)?)?;
+    m.add_function(wrap_pyfunction!(q_star, m)?)?;
+    Ok(())
+}
