@@ -97,6 +97,26 @@ pub fn join_gain(
     }
 }
 
+/// What an [`AllocationState`] holds besides its instance ([`AllocationState::into_parts`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct StateParts {
+    assignment: Assignment,
+    mu: Vec<f32>,
+    units: Units,
+}
+
+impl StateParts {
+    /// The assignment.
+    pub fn assignment(&self) -> &Assignment {
+        &self.assignment
+    }
+
+    /// The units of the features.
+    pub fn units(&self) -> Units {
+        self.units
+    }
+}
+
 /// An assignment in progress with its μ features kept up to date.
 ///
 /// # Examples
@@ -149,6 +169,54 @@ impl<'a> AllocationState<'a> {
             s.refresh_column(j);
         }
         s
+    }
+
+    /// The assignment and its features, to keep between calls by a caller that cannot
+    /// keep the borrow of the instance (the Python environment); they come back with
+    /// [`AllocationState::from_parts`] without a rebuild.
+    pub fn into_parts(self) -> StateParts {
+        StateParts {
+            assignment: self.assignment,
+            mu: self.mu,
+            units: self.units,
+        }
+    }
+
+    /// The state of [`AllocationState::into_parts`] again, on the same instance.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::{GeneratorConfig, RobotId, TaskId};
+    /// use afg_graph::{AllocationState, Units};
+    /// let inst = GeneratorConfig::paper(6, 2, 1).generate()?;
+    /// let mut s = AllocationState::with_units(&inst, afg_game::Assignment::unassigned(6, 2), Units::Bounded);
+    /// s.assign(RobotId(0), TaskId(1));
+    /// let again = AllocationState::from_parts(&inst, s.clone().into_parts());
+    /// assert_eq!(again, s);
+    /// # Ok::<(), afg_game::GameError>(())
+    /// ```
+    ///
+    /// # Panics
+    /// If the parts do not fit the instance (another N or M); with debug assertions,
+    /// if the features are not those of the assignment.
+    pub fn from_parts(instance: &'a Instance, parts: StateParts) -> Self {
+        assert_eq!(
+            parts.mu.len(),
+            instance.num_robots() * instance.num_tasks(),
+            "the parts belong to another instance"
+        );
+        let state = AllocationState {
+            instance,
+            assignment: parts.assignment,
+            mu: parts.mu,
+            units: parts.units,
+            scale: parts.units.welfare_unit(instance),
+        };
+        debug_assert_eq!(
+            state.mu,
+            AllocationState::with_units(instance, state.assignment.clone(), state.units).mu
+        );
+        state
     }
 
     /// The instance.

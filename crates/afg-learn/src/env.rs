@@ -3,7 +3,7 @@
 
 use afg_baseline::{Greedy, Optimum};
 use afg_game::{Assignment, Instance, Preference, RobotId, TaskId};
-use afg_graph::{AllocationState, Units};
+use afg_graph::{AllocationState, StateParts, Units};
 use serde::{Deserialize, Serialize};
 
 use crate::LearnError;
@@ -77,26 +77,45 @@ impl<'a> Env<'a> {
         assignment: Assignment,
         units: Units,
     ) -> Result<Self, LearnError> {
-        instance.check(&assignment)?;
-        let next = assignment
-            .tasks()
-            .iter()
-            .take_while(|t| t.is_some())
-            .count();
-        if assignment.tasks()[next..].iter().any(Option::is_some) {
-            return Err(LearnError::InvalidAction(format!(
-                "robots act in index order, but robot {next} is unassigned while a later one has a task"
-            )));
-        }
+        let next = acted(instance, &assignment)?;
         Ok(Env {
             state: AllocationState::with_units(instance, assignment, units),
             next,
         })
     }
 
-    /// The assignment so far.
-    pub fn into_assignment(self) -> Assignment {
-        self.state.into_assignment()
+    /// The episode of [`Env::into_parts`] again, without rebuilding its features: O(N).
+    ///
+    /// # Errors
+    /// As [`Env::resume_at`].
+    ///
+    /// # Panics
+    /// As [`AllocationState::from_parts`].
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::{GeneratorConfig, TaskId};
+    /// use afg_graph::Units;
+    /// use afg_learn::Env;
+    /// let inst = GeneratorConfig::paper(4, 2, 1).generate()?;
+    /// let mut env = Env::reset_in(&inst, Units::Bounded);
+    /// env.step(TaskId(1))?;
+    /// let again = Env::from_parts(&inst, env.clone().into_parts())?;
+    /// assert_eq!((again.actor(), again.state()), (env.actor(), env.state()));
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn from_parts(instance: &'a Instance, parts: StateParts) -> Result<Self, LearnError> {
+        let next = acted(instance, parts.assignment())?;
+        Ok(Env {
+            state: AllocationState::from_parts(instance, parts),
+            next,
+        })
+    }
+
+    /// The assignment and features so far, to keep between calls
+    /// ([`Env::from_parts`]).
+    pub fn into_parts(self) -> StateParts {
+        self.state.into_parts()
     }
 
     /// The robot to act now, `None` once every robot has acted.
@@ -144,6 +163,23 @@ impl<'a> Env<'a> {
         self.next += 1;
         Ok((reward, self.actor().is_none()))
     }
+}
+
+/// The number t of robots that have acted in `assignment`, a state of the MDP: robots
+/// `0..t` assigned, the others not.
+fn acted(instance: &Instance, assignment: &Assignment) -> Result<usize, LearnError> {
+    instance.check(assignment)?;
+    let next = assignment
+        .tasks()
+        .iter()
+        .take_while(|t| t.is_some())
+        .count();
+    if assignment.tasks()[next..].iter().any(Option::is_some) {
+        return Err(LearnError::InvalidAction(format!(
+            "robots act in index order, but robot {next} is unassigned while a later one has a task"
+        )));
+    }
+    Ok(next)
 }
 
 /// The potential of potential-based reward shaping (Ng, Harada and Russell, 1999):

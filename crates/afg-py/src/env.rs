@@ -5,7 +5,7 @@
 use std::sync::Arc;
 
 use afg_game::{Assignment, Instance, TaskId};
-use afg_graph::Units;
+use afg_graph::{StateParts, Units};
 use afg_learn::{Env, Shaping};
 use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3};
@@ -20,12 +20,13 @@ fn parse_name<T: serde::de::DeserializeOwned>(name: &str, what: &str) -> PyResul
         .map_err(|_| PyValueError::new_err(format!("unknown {what} {name:?}")))
 }
 
-/// One episode: the instance, the assignment so far, the feature units and shaping.
+/// One episode: the instance, and the MDP's state between calls (the assignment so far
+/// and its features), the reward shaping.
 #[derive(Clone)]
 struct Episode {
     instance: Arc<Instance>,
-    assignment: Assignment,
-    units: Units,
+    /// Always `Some` between calls.
+    parts: Option<StateParts>,
     shaping: Shaping,
 }
 
@@ -39,18 +40,36 @@ struct Observation {
 
 impl Episode {
     fn new(instance: Arc<Instance>, units: Units, shaping: Shaping) -> Self {
-        let assignment = Assignment::unassigned(instance.num_robots(), instance.num_tasks());
+        let parts = Env::reset_in(&instance, units).into_parts();
         Episode {
             instance,
-            assignment,
-            units,
+            parts: Some(parts),
             shaping,
         }
     }
 
+    /// The same units and shaping on another instance.
+    fn renew(&self, instance: Arc<Instance>) -> Self {
+        Episode::new(instance, self.units(), self.shaping)
+    }
+
+    fn parts(&self) -> &StateParts {
+        self.parts
+            .as_ref()
+            .expect("an episode holds its state between calls")
+    }
+
+    fn assignment(&self) -> &Assignment {
+        self.parts().assignment()
+    }
+
+    fn units(&self) -> Units {
+        self.parts().units()
+    }
+
+    /// The MDP on this episode's state (O(N) to check it; no feature is rebuilt).
     fn env(&self) -> Env<'_> {
-        Env::resume_at(&self.instance, self.assignment.clone(), self.units)
-            .expect("the episode's assignment is always a valid prefix")
+        Env::from_parts(&self.instance, self.parts().clone()).expect("the episode's state is valid")
     }
 
     /// The acting robot takes `action`: the (shaped) reward and whether it was the last.
@@ -61,11 +80,16 @@ impl Episode {
                 self.instance.num_tasks()
             )
         })?;
-        let before = self.shaping.potential(&self.instance, &self.assignment);
-        let mut env = self.env();
-        let (reward, done) = env.step(task).map_err(|e| e.to_string())?;
-        self.assignment = env.into_assignment();
-        let after = self.shaping.potential(&self.instance, &self.assignment);
+        let before = self.shaping.potential(&self.instance, self.assignment());
+        let parts = self
+            .parts
+            .take()
+            .expect("an episode holds its state between calls");
+        let mut env = Env::from_parts(&self.instance, parts).expect("the episode's state is valid");
+        let result = env.step(task).map_err(|e| e.to_string());
+        self.parts = Some(env.into_parts());
+        let (reward, done) = result?;
+        let after = self.shaping.potential(&self.instance, self.assignment());
         Ok((reward + after - before, done))
     }
 
@@ -73,7 +97,7 @@ impl Episode {
         let env = self.env();
         let (n, m) = (self.instance.num_robots(), self.instance.num_tasks());
         let mut nu = vec![0.0; n * m];
-        for (i, t) in self.assignment.tasks().iter().enumerate() {
+        for (i, t) in self.assignment().tasks().iter().enumerate() {
             if let Some(j) = t {
                 nu[i * m + j.index()] = 1.0;
             }
@@ -87,7 +111,7 @@ impl Episode {
     }
 
     fn tasks(&self) -> Vec<i64> {
-        self.assignment
+        self.assignment()
             .tasks()
             .iter()
             .map(|t| t.map_or(-1, |j| i64::from(j.0)))
@@ -123,8 +147,7 @@ impl EnvCore {
 
     /// Starts a new episode on `instance` (same units and shaping).
     fn reset(&mut self, instance: &PyInstance) {
-        let e = &self.episode;
-        self.episode = Episode::new(instance.inner.clone(), e.units, e.shaping);
+        self.episode = self.episode.renew(instance.inner.clone());
     }
 
     /// The acting robot takes task `action`: `(reward, terminated)`.
@@ -169,7 +192,7 @@ impl EnvCore {
 
     /// Welfare of the assignment so far.
     fn welfare(&self) -> f64 {
-        self.episode.instance.welfare(&self.episode.assignment)
+        self.episode.instance.welfare(self.episode.assignment())
     }
 
     /// The episode's instance.
@@ -212,6 +235,9 @@ type VecObservationArrays<'py> = (
     Bound<'py, PyArray1<i64>>,
     Bound<'py, PyArray2<i8>>,
 );
+
+/// A vector step's rewards and terminations.
+type StepArrays<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<bool>>);
 
 /// K episodes of the sequential MDP stepped in one call, driven by
 /// `afg.gym.AllocationVectorEnv`.
@@ -276,8 +302,7 @@ impl VecEnvCore {
             })
             .map_err(crate::game_error)?;
         for (i, inst) in indices.into_iter().zip(fresh) {
-            let e = &self.episodes[i];
-            self.episodes[i] = Episode::new(Arc::new(inst), e.units, e.shaping);
+            self.episodes[i] = self.episodes[i].renew(Arc::new(inst));
         }
         Ok(())
     }
@@ -288,7 +313,7 @@ impl VecEnvCore {
         py: Python<'py>,
         actions: Vec<i64>,
         skip: Vec<bool>,
-    ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<bool>>)> {
+    ) -> PyResult<StepArrays<'py>> {
         let k = self.episodes.len();
         if actions.len() != k || skip.len() != k {
             return Err(PyValueError::new_err(format!(
@@ -356,7 +381,7 @@ impl VecEnvCore {
     /// Environment `index`'s welfare so far.
     fn welfare(&self, index: usize) -> PyResult<f64> {
         let e = self.episode(index)?;
-        Ok(e.instance.welfare(&e.assignment))
+        Ok(e.instance.welfare(e.assignment()))
     }
 
     /// Environment `index`'s instance.
