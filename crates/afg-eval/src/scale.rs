@@ -344,3 +344,41 @@ pub fn markdown(outcomes: &[Outcome]) -> String {
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_size_task_count_or_pass_count_of_zero_is_refused() {
+        let plan = Plan {
+            sizes: vec![100],
+            tasks: vec![5],
+            passes: vec![10],
+            max_work: 1000,
+            burn_up_to: 0,
+            model: PathBuf::from("none"),
+            price_model: PathBuf::from("none"),
+            price_headed: Vec::new(),
+            seed: 0,
+        };
+        assert!(!cases(&plan).unwrap().is_empty());
+        for bad in [
+            Plan {
+                sizes: vec![100, 0],
+                ..plan.clone()
+            },
+            Plan {
+                tasks: vec![0],
+                ..plan.clone()
+            },
+            Plan {
+                passes: vec![0],
+                ..plan.clone()
+            },
+        ] {
+            let err = cases(&bad).unwrap_err();
+            assert!(err.to_string().contains("at least 1"), "{err}");
+        }
+    }
+}

@@ -30,14 +30,6 @@ struct Episode {
     shaping: Shaping,
 }
 
-/// One step's observation: ν (N×M), μ (N×M), the actor (N when done), the mask (M).
-struct Observation {
-    nu: Vec<f32>,
-    mu: Vec<f32>,
-    actor: usize,
-    mask: Vec<i8>,
-}
-
 impl Episode {
     fn new(instance: Arc<Instance>, units: Units, shaping: Shaping) -> Self {
         let parts = Env::reset_in(&instance, units).into_parts();
@@ -67,9 +59,17 @@ impl Episode {
         self.parts().units()
     }
 
-    /// The MDP on this episode's state (O(N) to check it; no feature is rebuilt).
-    fn env(&self) -> Env<'_> {
-        Env::from_parts(&self.instance, self.parts().clone()).expect("the episode's state is valid")
+    /// `f` on the MDP at this episode's state (O(N) to check it; nothing is rebuilt
+    /// or copied).
+    fn with_env<T>(&mut self, f: impl FnOnce(&mut Env<'_>) -> T) -> T {
+        let parts = self
+            .parts
+            .take()
+            .expect("an episode holds its state between calls");
+        let mut env = Env::from_parts(&self.instance, parts).expect("the episode's state is valid");
+        let out = f(&mut env);
+        self.parts = Some(env.into_parts());
+        out
     }
 
     /// The acting robot takes `action`: the (shaped) reward and whether it was the last.
@@ -93,21 +93,22 @@ impl Episode {
         Ok((reward + after - before, done))
     }
 
-    fn observation(&self) -> Observation {
-        let env = self.env();
+    /// Writes the observation into `nu` and `mu` (N×M each, zeroed) and `mask` (M):
+    /// returns the actor (N once the episode is over).
+    fn observe_into(&mut self, nu: &mut [f32], mu: &mut [f32], mask: &mut [i8]) -> usize {
         let (n, m) = (self.instance.num_robots(), self.instance.num_tasks());
-        let mut nu = vec![0.0; n * m];
-        for (i, t) in self.assignment().tasks().iter().enumerate() {
-            if let Some(j) = t {
-                nu[i * m + j.index()] = 1.0;
+        self.with_env(|env| {
+            for (i, t) in env.state().assignment().tasks().iter().enumerate() {
+                if let Some(j) = t {
+                    nu[i * m + j.index()] = 1.0;
+                }
             }
-        }
-        Observation {
-            nu,
-            mu: env.state().mu_matrix().to_vec(),
-            actor: env.actor().map_or(n, |r| r.index()),
-            mask: env.action_mask().into_iter().map(i8::from).collect(),
-        }
+            mu.copy_from_slice(env.state().mu_matrix());
+            for (out, allowed) in mask.iter_mut().zip(env.action_mask()) {
+                *out = i8::from(allowed);
+            }
+            env.actor().map_or(n, |r| r.index())
+        })
     }
 
     fn tasks(&self) -> Vec<i64> {
@@ -158,21 +159,26 @@ impl EnvCore {
     }
 
     /// `(robot_features (N, M), task_features (N, M), actor, action_mask (M,))`.
-    fn observation<'py>(&self, py: Python<'py>) -> ObservationArrays<'py> {
-        let o = self.episode.observation();
+    fn observation<'py>(&mut self, py: Python<'py>) -> ObservationArrays<'py> {
         let (n, m) = (
             self.episode.instance.num_robots(),
             self.episode.instance.num_tasks(),
         );
+        let (mut nu, mut mu, mut mask) = (
+            Array2::zeros((n, m)),
+            Array2::zeros((n, m)),
+            Array1::zeros(m),
+        );
+        let actor = self.episode.observe_into(
+            nu.as_slice_mut().expect("contiguous"),
+            mu.as_slice_mut().expect("contiguous"),
+            mask.as_slice_mut().expect("contiguous"),
+        );
         (
-            Array2::from_shape_vec((n, m), o.nu)
-                .expect("N×M")
-                .into_pyarray(py),
-            Array2::from_shape_vec((n, m), o.mu)
-                .expect("N×M")
-                .into_pyarray(py),
-            o.actor,
-            o.mask.into_pyarray(py),
+            nu.into_pyarray(py),
+            mu.into_pyarray(py),
+            actor,
+            mask.into_pyarray(py),
         )
     }
 
@@ -345,31 +351,32 @@ impl VecEnvCore {
 
     /// Stacked observations: `(robot_features (K, N, M), task_features (K, N, M),
     /// actors (K,), action_masks (K, M))`.
-    fn observations<'py>(&self, py: Python<'py>) -> VecObservationArrays<'py> {
+    fn observations<'py>(&mut self, py: Python<'py>) -> VecObservationArrays<'py> {
         let (k, n, m) = (self.episodes.len(), self.draw.robots, self.draw.tasks);
-        let obs: Vec<Observation> =
-            py.detach(|| self.episodes.iter().map(Episode::observation).collect());
-        let mut nu = Vec::with_capacity(k * n * m);
-        let mut mu = Vec::with_capacity(k * n * m);
-        let mut actors = Vec::with_capacity(k);
-        let mut masks = Vec::with_capacity(k * m);
-        for o in obs {
-            nu.extend(o.nu);
-            mu.extend(o.mu);
-            actors.push(o.actor as i64);
-            masks.extend(o.mask);
-        }
+        let mut nu = Array3::zeros((k, n, m));
+        let mut mu = Array3::zeros((k, n, m));
+        let mut masks = Array2::zeros((k, m));
+        let mut actors = Array1::zeros(k);
+        let episodes = &mut self.episodes;
+        py.detach(|| {
+            let nus = nu.as_slice_mut().expect("contiguous").chunks_mut(n * m);
+            let mus = mu.as_slice_mut().expect("contiguous").chunks_mut(n * m);
+            let rows = masks.as_slice_mut().expect("contiguous").chunks_mut(m);
+            for ((((e, nu), mu), mask), actor) in episodes
+                .iter_mut()
+                .zip(nus)
+                .zip(mus)
+                .zip(rows)
+                .zip(actors.iter_mut())
+            {
+                *actor = e.observe_into(nu, mu, mask) as i64;
+            }
+        });
         (
-            Array3::from_shape_vec((k, n, m), nu)
-                .expect("K×N×M")
-                .into_pyarray(py),
-            Array3::from_shape_vec((k, n, m), mu)
-                .expect("K×N×M")
-                .into_pyarray(py),
-            Array1::from(actors).into_pyarray(py),
-            Array2::from_shape_vec((k, m), masks)
-                .expect("K×M")
-                .into_pyarray(py),
+            nu.into_pyarray(py),
+            mu.into_pyarray(py),
+            actors.into_pyarray(py),
+            masks.into_pyarray(py),
         )
     }
 
