@@ -11,6 +11,7 @@ use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use rayon::prelude::*;
 
 use crate::{PyInstance, value_error};
 
@@ -245,8 +246,8 @@ type VecObservationArrays<'py> = (
 /// A vector step's rewards and terminations.
 type StepArrays<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<bool>>);
 
-/// K episodes of the sequential MDP stepped in one call, driven by
-/// `afg.gym.AllocationVectorEnv`.
+/// K episodes of the sequential MDP stepped in one call (spread over the cores with
+/// rayon), driven by `afg.gym.AllocationVectorEnv`.
 #[pyclass(module = "afg")]
 pub struct VecEnvCore {
     episodes: Vec<Episode>,
@@ -328,13 +329,15 @@ impl VecEnvCore {
                 skip.len()
             )));
         }
+        let min_len = self.min_len();
         let episodes = &mut self.episodes;
         let results = py
             .detach(|| {
                 episodes
-                    .iter_mut()
-                    .zip(actions.iter().zip(&skip))
+                    .par_iter_mut()
+                    .zip(actions.par_iter().zip(&skip))
                     .enumerate()
+                    .with_min_len(min_len)
                     .map(|(i, (e, (&a, &skip)))| {
                         if skip {
                             Ok((0.0, false))
@@ -357,20 +360,23 @@ impl VecEnvCore {
         let mut mu = Array3::zeros((k, n, m));
         let mut masks = Array2::zeros((k, m));
         let mut actors = Array1::zeros(k);
+        let min_len = self.min_len();
         let episodes = &mut self.episodes;
         py.detach(|| {
-            let nus = nu.as_slice_mut().expect("contiguous").chunks_mut(n * m);
-            let mus = mu.as_slice_mut().expect("contiguous").chunks_mut(n * m);
-            let rows = masks.as_slice_mut().expect("contiguous").chunks_mut(m);
-            for ((((e, nu), mu), mask), actor) in episodes
-                .iter_mut()
+            let nus = nu.as_slice_mut().expect("contiguous").par_chunks_mut(n * m);
+            let mus = mu.as_slice_mut().expect("contiguous").par_chunks_mut(n * m);
+            let rows = masks.as_slice_mut().expect("contiguous").par_chunks_mut(m);
+            let actors = actors.as_slice_mut().expect("contiguous").par_iter_mut();
+            episodes
+                .par_iter_mut()
                 .zip(nus)
                 .zip(mus)
                 .zip(rows)
-                .zip(actors.iter_mut())
-            {
-                *actor = e.observe_into(nu, mu, mask) as i64;
-            }
+                .zip(actors)
+                .with_min_len(min_len)
+                .for_each(|((((e, nu), mu), mask), actor)| {
+                    *actor = e.observe_into(nu, mu, mask) as i64;
+                });
         });
         (
             nu.into_pyarray(py),
@@ -400,6 +406,13 @@ impl VecEnvCore {
 }
 
 impl VecEnvCore {
+    /// Sub-environments per rayon task: enough that a task does about 4 096 robots'
+    /// work (a small N then stays on one thread, where splitting costs more than it
+    /// saves).
+    fn min_len(&self) -> usize {
+        4096usize.div_ceil(self.draw.robots.max(1))
+    }
+
     fn episode(&self, index: usize) -> PyResult<&Episode> {
         self.episodes
             .get(index)
