@@ -4,7 +4,8 @@
 //! error or a valid value, never a panic.
 //!
 //! A short run is part of `cargo test`; the long run is
-//! `PROPTEST_CASES=100000 cargo test --release -p afg-learn --test readers`.
+//! `PROPTEST_CASES=100000 cargo test --release -p afg-learn --test readers`. The cases
+//! are drawn from a fixed seed, so every run of a given size tries the same inputs.
 
 use std::path::{Path, PathBuf};
 
@@ -166,7 +167,11 @@ fn cases(default: u32) -> ProptestConfig {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(default);
-    ProptestConfig::with_cases(cases)
+    ProptestConfig {
+        rng_seed: proptest::test_runner::RngSeed::Fixed(0),
+        failure_persistence: None,
+        ..ProptestConfig::with_cases(cases)
+    }
 }
 
 proptest! {

@@ -306,6 +306,16 @@ fn a_run_stopped_before_its_first_checkpoint_starts_again_on_resume() {
 #[test]
 fn bad_settings_are_refused() {
     let base = tiny(Algo::Dqn, NetworkConfig::afgnet(5, 0), 20);
+    // Sizes that would allocate without bound.
+    for edit in [
+        |c: &mut TrainConfig| (c.robots, c.replay_capacity) = (200_000, 1_000_000),
+        |c: &mut TrainConfig| c.validation_instances = 1 << 40,
+    ] {
+        let mut c = base.clone();
+        edit(&mut c);
+        let err = Trainer::new(c).err().unwrap();
+        assert!(err.to_string().contains("at most"), "{err}");
+    }
     // Run seeds that would reach the demonstrations' or the validation set's seeds.
     for seed in [1 << 29, 1 << 30] {
         let mut c = base.clone();

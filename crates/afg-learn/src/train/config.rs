@@ -331,6 +331,26 @@ impl TrainConfig {
         if self.replay_capacity < self.robots || self.warmup > self.replay_capacity {
             return bad("replay_capacity must hold an episode and the warmup");
         }
+        // Bounds on what a run may allocate, checked before anything is built.
+        for (name, value, max) in [
+            ("robots", self.robots, 100_000),
+            ("batch", self.batch, 65_536),
+            ("parallel_envs", self.parallel_envs, 4_096),
+            ("replay_capacity", self.replay_capacity, 100_000_000),
+            ("validation_instances", self.validation_instances, 10_000),
+            ("n_step", self.n_step, self.robots),
+            (
+                "demonstration episodes",
+                self.demonstrations.as_ref().map_or(0, |d| d.episodes),
+                100_000,
+            ),
+        ] {
+            if value > max {
+                return Err(LearnError::InvalidConfig(format!(
+                    "{name} is {value}; at most {max}"
+                )));
+            }
+        }
         if matches!(&self.network, NetworkConfig::AfgNet(c) if c.gain_residual == Some(true))
             && (!self.reward_scaling || self.shaping != Shaping::None)
         {
