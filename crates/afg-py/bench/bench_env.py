@@ -1,5 +1,6 @@
 """Steps per second of the Gymnasium environments against a plain-numpy implementation
-of the same MDP (what a user would otherwise write), in one run.
+of the same MDP (what a user would otherwise write), and the binding's overhead on
+``afg.solve(method="opt")`` against the same work timed inside Rust, in one run.
 
     python crates/afg-py/bench/bench_env.py [--seconds 2] [--json]
 
@@ -93,6 +94,21 @@ def vector(venv, k: int, n: int, m: int, rng):
     return episode
 
 
+def solve_overhead(n: int, repeats: int) -> dict:
+    """Median wall time of ``afg.solve(inst, method="opt")`` from Python against the
+    crates' own time for the same call (``stats["core_s"]``: the method, then the
+    optimum it is scored against)."""
+    inst = afg.generate(robots=n, tasks=5, seed=1)
+    python, core = [], []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        res = afg.solve(inst, method="opt")
+        python.append(time.perf_counter() - start)
+        core.append(res.stats["core_s"])
+    p, c = float(np.median(python)), float(np.median(core))
+    return {"robots": n, "python_s": p, "rust_s": c, "overhead": (p - c) / c}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--seconds", type=float, default=2.0)
@@ -115,13 +131,19 @@ def main() -> None:
             "afg_vector": rate(vector(venv, args.envs, n, m, rng), args.seconds),
         }
         rows.append(row)
+    solves = [solve_overhead(n, 50) for n in (1000, 10000)]
     if args.json:
-        print(json.dumps(rows, indent=2))
+        print(json.dumps({"environments": rows, "solve": solves}, indent=2))
         return
     print(f"| N | numpy env (steps/s) | afg env | afg vector env (K = {args.envs}) | vector / numpy |")
     print("|---|---|---|---|---|")
     for r in rows:
         print(f"| {r['robots']} | {r['numpy']:,.0f} | {r['afg']:,.0f} | {r['afg_vector']:,.0f} | {r['afg_vector'] / r['numpy']:.1f}x |")
+    print()
+    print("| N (M = 5) | afg.solve(method=\"opt\") from Python | the same inside Rust | overhead |")
+    print("|---|---|---|---|")
+    for r in solves:
+        print(f"| {r['robots']} | {1e3 * r['python_s']:.3f} ms | {1e3 * r['rust_s']:.3f} ms | {100 * r['overhead']:.1f} % |")
 
 
 if __name__ == "__main__":

@@ -113,11 +113,7 @@ impl Episode {
     }
 
     fn tasks(&self) -> Vec<i64> {
-        self.assignment()
-            .tasks()
-            .iter()
-            .map(|t| t.map_or(-1, |j| i64::from(j.0)))
-            .collect()
+        crate::task_indices(self.assignment())
     }
 }
 

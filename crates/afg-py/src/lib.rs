@@ -72,21 +72,34 @@ impl PyInstance {
 
     /// `tasks` (robot i's task, -1 for none) as an assignment of this instance.
     pub(crate) fn assignment(&self, tasks: &IntVector<'_>) -> PyResult<Assignment> {
-        let tasks = tasks.to_vec();
-        let tasks = tasks
-            .iter()
-            .enumerate()
-            .map(|(i, &t)| match t {
-                -1 => Ok(None),
-                t => u32::try_from(t).map(|t| Some(TaskId(t))).map_err(|_| {
-                    PyValueError::new_err(format!(
-                        "robot {i} has task {t}: a task is 0..M-1, or -1 for none"
-                    ))
-                }),
-            })
-            .collect::<PyResult<Vec<_>>>()?;
-        Assignment::from_tasks(&self.inner, tasks).map_err(game_error)
+        Assignment::from_tasks(&self.inner, task_ids(tasks)?).map_err(game_error)
     }
+}
+
+/// Robot i's task of each entry (-1 for none), as task ids.
+pub(crate) fn task_ids(tasks: &IntVector<'_>) -> PyResult<Vec<Option<TaskId>>> {
+    tasks
+        .to_vec()
+        .into_iter()
+        .enumerate()
+        .map(|(i, t)| match t {
+            -1 => Ok(None),
+            t => u32::try_from(t).map(|t| Some(TaskId(t))).map_err(|_| {
+                PyValueError::new_err(format!(
+                    "robot {i} has task {t}: a task is 0..M-1, or -1 for none"
+                ))
+            }),
+        })
+        .collect()
+}
+
+/// Robot i's task of `assignment` at entry i, -1 for none.
+pub(crate) fn task_indices(assignment: &Assignment) -> Vec<i64> {
+    assignment
+        .tasks()
+        .iter()
+        .map(|t| t.map_or(-1, |j| i64::from(j.0)))
+        .collect()
 }
 
 fn points(array: &PyReadonlyArray2<'_, f64>, what: &str) -> PyResult<Vec<Point>> {
