@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use afg_baseline::{Allocator, Blind, CentralisedDa, DecentralisedDa, Method, Optimum};
 use afg_game::io::read_dataset;
-use afg_game::{Assignment, GeneratorConfig, Instance, Preference, RobotId, TaskId};
+use afg_game::{Assignment, GOLDEN_RATIO, GeneratorConfig, Instance, Preference, RobotId, TaskId};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -53,13 +53,22 @@ fn brute_force_completion(inst: &Instance, partial: &Assignment) -> f64 {
 
 /// A random instance small enough for brute force (N ≤ 7, M ≤ 4), any eps ≥ φ and
 /// beta; every second case with tight capacities (total just above N, so many tasks
-/// are full).
+/// are full). One case in four has eps = φ exactly, where F_j(2) = 2 F_j(1): the first
+/// two members of a task are worth the same, so the balanced scores of joining an
+/// empty task and a task of one tie (and so do the selfish utilities), and one in eight
+/// has β = 0 as well, where every task ties on cost.
 fn small_instance(rng: &mut ChaCha8Rng, case: usize) -> Instance {
     let n = rng.random_range(1..=7);
     let m = rng.random_range(1..=4);
     let mut cfg = GeneratorConfig::paper(n, m, rng.random());
     cfg.eps = rng.random_range(1.62..6.0);
     cfg.beta = rng.random_range(0.0..3.0);
+    if case % 4 >= 2 {
+        cfg.eps = GOLDEN_RATIO;
+    }
+    if case % 8 == 3 {
+        cfg.beta = 0.0;
+    }
     if case % 2 == 1 {
         cfg = cfg.with_capacity_slack(rng.random_range(1.0..1.5));
     }
@@ -367,6 +376,32 @@ fn dynamics_end_stable_within_the_grape_bound_and_twins_agree() {
                 assert_eq!(&twin.assignment, a, "N={n} #{idx} {pref:?}");
                 assert_eq!(twin.stats.iterations, run.allocation.stats.iterations);
             }
+        }
+    }
+}
+
+/// Exact ties (eps = φ, β = 0, full tasks) neither stop the dynamics early nor keep
+/// them going: both twins end stable, and OPT is stable under the balanced rule
+/// (a strictly better move would raise the welfare).
+#[test]
+fn dynamics_end_stable_at_exact_ties() {
+    let mut rng = ChaCha8Rng::seed_from_u64(2028);
+    for case in 0..800 {
+        let inst = small_instance(&mut rng, case);
+        let opt = Optimum.allocate(&inst).unwrap().assignment;
+        assert!(inst.is_stable(&opt, Preference::Balanced), "case {case}");
+        for pref in [Preference::Selfish, Preference::Balanced] {
+            let central = CentralisedDa::new(pref).allocate(&inst).unwrap();
+            assert!(
+                inst.is_stable(&central.assignment, pref),
+                "case {case} {pref:?}"
+            );
+            let run = DecentralisedDa::new(pref, case as u64).run(&inst).unwrap();
+            let a = &run.allocation.assignment;
+            assert!(
+                inst.is_stable(a, pref),
+                "case {case} {pref:?} decentralised"
+            );
         }
     }
 }

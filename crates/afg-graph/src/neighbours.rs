@@ -78,7 +78,7 @@ impl RobotGraph {
                 let grid = Grid::new(points, 2.0);
                 let mut pairs = Vec::with_capacity(points.len() * k * 2);
                 for i in 0..points.len() {
-                    for j in grid.nearest(points, i, k) {
+                    for j in grid.nearest(points, i, k).0 {
                         pairs.push((i as u32, j));
                         pairs.push((j, i as u32));
                     }
@@ -232,27 +232,31 @@ impl RobotGraph {
     }
 }
 
-/// A uniform bucket grid over the bounding box of the points.
+/// A uniform bucket grid over the box that holds the central 98 % of the points along
+/// each axis: one far outlier does not stretch the cells until every other point shares
+/// one. Points outside the box are clamped into its border cells, which keeps the ring
+/// bound of [`Grid::nearest`] (clamping never brings a cell nearer than its points).
+/// Within a cell, points at the same position form one *site* (a run of `order`, by
+/// index), so that many robots at one spot cost one distance, not one each.
 struct Grid {
     min: Point,
     cell: f64,
     side: usize,
-    /// Robot indices sorted by cell, with `starts[c]..starts[c + 1]` the robots of cell c.
+    /// Robot indices sorted by cell, then by position, then by index, with
+    /// `starts[c]..starts[c + 1]` the robots of cell c.
     order: Vec<u32>,
     starts: Vec<usize>,
+    /// For each place t of `order`, the end of the run of robots at its position.
+    site_end: Vec<usize>,
 }
+
+/// The share of points left out of the grid's box at each end of each axis.
+const OUTLIER_SHARE: f64 = 0.01;
 
 impl Grid {
     /// A grid with about `per_cell` points per cell.
     fn new(points: &[Point], per_cell: f64) -> Self {
-        let (mut min, mut max) = (
-            Point::new(f64::INFINITY, f64::INFINITY),
-            Point::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
-        );
-        for p in points {
-            min = Point::new(min.x.min(p.x), min.y.min(p.y));
-            max = Point::new(max.x.max(p.x), max.y.max(p.y));
-        }
+        let (min, max) = Self::central_box(points);
         let extent = (max.x - min.x).max(max.y - min.y).max(f64::MIN_POSITIVE);
         let side = ((points.len() as f64 / per_cell).sqrt().floor() as usize).clamp(1, 1 << 12);
         let cell = extent / side as f64 * (1.0 + 1e-12);
@@ -262,6 +266,7 @@ impl Grid {
             side,
             order: Vec::new(),
             starts: vec![0; side * side + 1],
+            site_end: Vec::new(),
         };
         let cells: Vec<usize> = points.iter().map(|&p| grid.cell_of(p)).collect();
         for &c in &cells {
@@ -276,9 +281,44 @@ impl Grid {
             grid.order[fill[c]] = i as u32;
             fill[c] += 1;
         }
+        let at = |i: u32| points[i as usize];
+        let same = |a: Point, b: Point| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y));
+        grid.site_end = vec![0; points.len()];
+        for c in 0..side * side {
+            let robots = &mut grid.order[grid.starts[c]..grid.starts[c + 1]];
+            // Counting sort kept the index order; a stable sort by position keeps it per site.
+            robots.sort_by(|&a, &b| same(at(a), at(b)));
+            let mut end = grid.starts[c + 1];
+            for t in (grid.starts[c]..grid.starts[c + 1]).rev() {
+                if t + 1 < end && same(at(grid.order[t]), at(grid.order[t + 1])).is_ne() {
+                    end = t + 1;
+                }
+                grid.site_end[t] = end;
+            }
+        }
         grid
     }
 
+    /// The lower and upper corners of the box holding all but [`OUTLIER_SHARE`] of the
+    /// points at each end of each axis (the whole bounding box below 100 points).
+    fn central_box(points: &[Point]) -> (Point, Point) {
+        let n = points.len();
+        if n == 0 {
+            return (Point::new(0.0, 0.0), Point::new(0.0, 0.0));
+        }
+        let skip = (n as f64 * OUTLIER_SHARE) as usize;
+        let range = |mut v: Vec<f64>| {
+            let lo = *v.select_nth_unstable_by(skip, f64::total_cmp).1;
+            let hi = *v.select_nth_unstable_by(n - 1 - skip, f64::total_cmp).1;
+            (lo, hi)
+        };
+        let (x0, x1) = range(points.iter().map(|p| p.x).collect());
+        let (y0, y1) = range(points.iter().map(|p| p.y).collect());
+        (Point::new(x0, y0), Point::new(x1, y1))
+    }
+
+    /// The cell of a point, clamped into the grid (a float-to-integer cast saturates,
+    /// so points below the box land in column or row 0).
     fn coords(&self, p: Point) -> (usize, usize) {
         let cx = (((p.x - self.min.x) / self.cell) as usize).min(self.side - 1);
         let cy = (((p.y - self.min.y) / self.cell) as usize).min(self.side - 1);
@@ -290,13 +330,16 @@ impl Grid {
         cy * self.side + cx
     }
 
-    /// Calls `f` with every robot in the cells at Chebyshev ring distance `r` from (cx, cy).
-    fn ring(&self, (cx, cy): (usize, usize), r: usize, mut f: impl FnMut(u32)) {
+    /// Calls `f` with every site (its robots, by index) in the cells at Chebyshev ring
+    /// distance `r` from (cx, cy).
+    fn ring(&self, (cx, cy): (usize, usize), r: usize, mut f: impl FnMut(&[u32])) {
         let (cx, cy, r, side) = (cx as isize, cy as isize, r as isize, self.side as isize);
         let mut visit = |x: isize, y: isize| {
             let c = (y * side + x) as usize;
-            for &i in &self.order[self.starts[c]..self.starts[c + 1]] {
-                f(i);
+            let mut t = self.starts[c];
+            while t < self.starts[c + 1] {
+                f(&self.order[t..self.site_end[t]]);
+                t = self.site_end[t];
             }
         };
         for y in (cy - r).max(0)..=(cy + r).min(side - 1) {
@@ -316,30 +359,35 @@ impl Grid {
         }
     }
 
-    /// The k nearest robots to robot i (fewer if N - 1 < k), ties by index.
-    fn nearest(&self, points: &[Point], i: usize, k: usize) -> Vec<u32> {
+    /// The k nearest robots to robot i (fewer if N - 1 < k), ties by index, and the
+    /// number of sites looked at (a measure of the work, for tests).
+    fn nearest(&self, points: &[Point], i: usize, k: usize) -> (Vec<u32>, usize) {
         let p = points[i];
         let home = self.coords(p);
         let mut best: Vec<(f64, u32)> = Vec::with_capacity(k + 1);
+        let mut sites = 0;
         for r in 0..self.side {
-            self.ring(home, r, |j| {
-                if j as usize == i {
-                    return;
+            self.ring(home, r, |site| {
+                sites += 1;
+                let d = p.distance(points[site[0] as usize]);
+                // A site's robots are in index order: once one is not among the best,
+                // none after it is.
+                for &j in site.iter().filter(|&&j| j as usize != i) {
+                    let cand = (d, j);
+                    if best.len() == k && cmp(&cand, &best[k - 1]).is_ge() {
+                        break;
+                    }
+                    let at = best.partition_point(|b| cmp(b, &cand).is_lt());
+                    best.insert(at, cand);
+                    best.truncate(k);
                 }
-                let cand = (p.distance(points[j as usize]), j);
-                if best.len() == k && cmp(&cand, &best[k - 1]).is_ge() {
-                    return;
-                }
-                let at = best.partition_point(|b| cmp(b, &cand).is_lt());
-                best.insert(at, cand);
-                best.truncate(k);
             });
             // Every robot beyond ring r is at least r cells away.
             if best.len() == k && best[k - 1].0 <= r as f64 * self.cell {
                 break;
             }
         }
-        best.into_iter().map(|(_, j)| j).collect()
+        (best.into_iter().map(|(_, j)| j).collect(), sites)
     }
 
     /// All robots within `radius` of robot i, excluding i.
@@ -350,9 +398,9 @@ impl Grid {
             .min(self.side);
         let mut out = Vec::new();
         for r in 0..rings {
-            self.ring(self.coords(p), r, |j| {
-                if j as usize != i && p.distance(points[j as usize]) <= radius {
-                    out.push(j);
+            self.ring(self.coords(p), r, |site| {
+                if p.distance(points[site[0] as usize]) <= radius {
+                    out.extend(site.iter().filter(|&&j| j as usize != i));
                 }
             });
         }
@@ -362,4 +410,48 @@ impl Grid {
 
 fn cmp(a: &(f64, u32), b: &(f64, u32)) -> std::cmp::Ordering {
     a.0.total_cmp(&b.0).then(a.1.cmp(&b.1))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Mean number of sites a kNN query looks at over all robots.
+    fn mean_sites(points: &[Point], k: usize) -> f64 {
+        let grid = Grid::new(points, 2.0);
+        let total: usize = (0..points.len())
+            .map(|i| grid.nearest(points, i, k).1)
+            .sum();
+        total as f64 / points.len() as f64
+    }
+
+    fn spread(n: usize) -> Vec<Point> {
+        let side = (n as f64).sqrt().ceil() as usize;
+        (0..n)
+            .map(|i| Point::new((i % side) as f64, (i / side) as f64))
+            .collect()
+    }
+
+    /// Many robots at one spot, or one robot far away, no longer put every robot in
+    /// one cell: a query looks at a bounded number of sites, as for spread points.
+    #[test]
+    fn duplicates_and_a_far_outlier_keep_queries_local() {
+        let n = 20_000;
+        let usual = mean_sites(&spread(n), 10);
+        assert!(usual < 60.0, "{usual}");
+
+        let same_spot = vec![Point::new(0.5, 0.5); n];
+        assert!(mean_sites(&same_spot, 10) <= 1.0);
+        let mut half = spread(n);
+        half.iter_mut()
+            .step_by(2)
+            .for_each(|p| *p = Point::new(3.0, 3.0));
+        assert!(mean_sites(&half, 10) < usual, "{}", mean_sites(&half, 10));
+
+        let mut outlier = spread(n);
+        outlier[7] = Point::new(1e12, -1e12);
+        // The outlier's own query scans every site once; the others stay local.
+        let with_outlier = mean_sites(&outlier, 10);
+        assert!(with_outlier < usual + 2.0, "{with_outlier} vs {usual}");
+    }
 }

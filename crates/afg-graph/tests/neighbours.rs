@@ -51,6 +51,35 @@ proptest! {
         }
     }
 
+    /// Robots drawn from a few spots (many at exactly the same position), with far
+    /// outliers: kNN and radius graphs still equal brute force, ties by index.
+    #[test]
+    fn duplicates_and_outliers_match_brute_force(
+        n in 1..250usize,
+        spots in 1..12usize,
+        outliers in 0..4usize,
+        k in 1..14usize,
+        radius in 0.01..0.5f64,
+        seed in any::<u64>(),
+    ) {
+        let pool = points(spots, seed);
+        let mut pts: Vec<Point> = (0..n).map(|i| pool[(i * 7 + i / 3) % spots]).collect();
+        for (o, p) in pts.iter_mut().step_by(5).take(outliers).enumerate() {
+            *p = Point::new(1e9 * (o as f64 + 1.0), -3e8 * o as f64);
+        }
+        let g = RobotGraph::build(&pts, GraphKind::Knn { k }).unwrap();
+        let brute = brute_knn(&pts, k);
+        let disk = RobotGraph::build(&pts, GraphKind::Radius { radius }).unwrap();
+        for i in 0..n {
+            prop_assert_eq!(g.neighbours(RobotId(i as u32)), brute[i].as_slice(), "robot {}", i);
+            let near: Vec<u32> = (0..n)
+                .filter(|&j| j != i && pts[i].distance(pts[j]) <= radius)
+                .map(|j| j as u32)
+                .collect();
+            prop_assert_eq!(disk.neighbours(RobotId(i as u32)), near.as_slice());
+        }
+    }
+
     #[test]
     fn radius_matches_brute_force(n in 1..200usize, radius in 0.01..0.5f64, seed in any::<u64>()) {
         let pts = points(n, seed);

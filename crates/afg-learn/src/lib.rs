@@ -12,6 +12,7 @@ mod env;
 mod error;
 mod fast;
 mod layers;
+mod log_float;
 mod network;
 mod policy;
 mod price;

@@ -38,10 +38,13 @@ pub enum LogEvent {
         /// Gradient steps done.
         step: u64,
         /// Mean loss of the steps since the previous line.
+        #[serde(with = "crate::log_float")]
         loss: f32,
         /// ε used for acting.
+        #[serde(with = "crate::log_float")]
         epsilon: f64,
         /// Seconds of training so far, across resumes.
+        #[serde(with = "crate::log_float")]
         elapsed_s: f64,
     },
     /// The greedy policy on the validation set.
@@ -51,6 +54,7 @@ pub enum LogEvent {
         /// Gradient steps done.
         step: u64,
         /// Seconds of training in all.
+        #[serde(with = "crate::log_float")]
         elapsed_s: f64,
     },
 }
@@ -61,16 +65,23 @@ pub struct ValidationLine {
     /// Gradient steps done.
     pub step: u64,
     /// Mean welfare.
+    #[serde(with = "crate::log_float")]
     pub welfare: f64,
     /// Mean of welfare / OPT, in percent.
+    #[serde(with = "crate::log_float")]
     pub percent_of_opt: f64,
     /// See [`Validation::largest_task_share`] (absent in logs written before it existed).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        with = "crate::log_float::option"
+    )]
     pub largest_task_share: Option<f64>,
     /// See [`Validation::collapsed`] (absent in older logs).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub collapsed: Option<bool>,
     /// Seconds of training so far, across resumes.
+    #[serde(with = "crate::log_float")]
     pub elapsed_s: f64,
 }
 

@@ -78,6 +78,49 @@ fn events_round_trip_and_old_validation_lines_still_read() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// NaN and the infinities are written as "NaN", "inf" and "-inf" (serde_json alone
+/// writes `null`, which no number field reads) and read back.
+#[test]
+fn non_finite_numbers_in_the_log_read_back() {
+    let dir = fresh("nonfinite");
+    let (run, _lock) = RunDir::create(&dir, &config()).unwrap();
+    let diverged = Validation {
+        welfare: f64::NEG_INFINITY,
+        percent_of_opt: f64::NAN,
+        largest_task_share: f64::INFINITY,
+    };
+    run.append(&LogEvent::Step {
+        step: 10,
+        loss: f32::INFINITY,
+        epsilon: 0.5,
+        elapsed_s: 1.0,
+    })
+    .unwrap();
+    run.append(&LogEvent::Validation(ValidationLine::new(
+        10, &diverged, 2.0,
+    )))
+    .unwrap();
+    let text = std::fs::read_to_string(dir.join("log.jsonl")).unwrap();
+    assert!(
+        text.contains(r#""loss":"inf""#) && text.contains(r#""percent_of_opt":"NaN""#),
+        "{text}"
+    );
+    let log = run.log().unwrap();
+    let LogEvent::Step { loss, .. } = log[0] else {
+        panic!("{:?}", log[0])
+    };
+    assert_eq!(loss, f32::INFINITY);
+    let LogEvent::Validation(v) = &log[1] else {
+        panic!("{:?}", log[1])
+    };
+    assert!(v.percent_of_opt.is_nan());
+    assert_eq!(
+        (v.welfare, v.largest_task_share),
+        (f64::NEG_INFINITY, Some(f64::INFINITY))
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn a_torn_last_line_is_reported_left_out_and_dropped_on_resume() {
     let dir = fresh("torn");

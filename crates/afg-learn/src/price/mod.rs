@@ -184,13 +184,17 @@ impl PriceRunSummary {
 }
 
 impl PriceTrainer {
-    /// Trains to the end with run directory `dir` (created if needed): after each round
-    /// the log ([`PriceRunSummary::LOG_FILE_NAME`], one [`PriceRound`] per line) is
-    /// rewritten atomically and `on_round` called; at the end the model
-    /// ([`PriceModel::FILE_NAME`]) and the summary with `command` are written.
+    /// Trains to the end with run directory `dir` (created if needed, then locked as a
+    /// [`RunDir`](crate::RunDir) is, so that a second trainer is refused): after each
+    /// round the log ([`PriceRunSummary::LOG_FILE_NAME`], one [`PriceRound`] per line)
+    /// is rewritten atomically and `on_round` called; at the end the model
+    /// ([`PriceModel::FILE_NAME`]) and the summary with `command` are written. A run
+    /// killed before its end leaves no model; the same call starts it again from round
+    /// 0 and, being seeded, ends with the same weights.
     ///
     /// # Errors
-    /// A failed round, or a file that cannot be written.
+    /// [`LearnError::RunInUse`] while another trainer holds the directory, a failed
+    /// round, or a file that cannot be written.
     pub fn run_in(
         mut self,
         dir: &Path,
@@ -202,6 +206,7 @@ impl PriceTrainer {
             path: dir.display().to_string(),
             source,
         })?;
+        let _lock = crate::RunDir::new(dir).lock()?;
         let mut log = String::new();
         let mut last = None;
         while !self.is_finished() {
@@ -435,13 +440,23 @@ mod tests {
         ) = (2, 2, 5);
         config.validation_instances = 2;
         let mut rounds = Vec::new();
+        let run = dir.join("run");
+        // While another trainer holds the directory, a run into it is refused.
+        std::fs::create_dir_all(&run).unwrap();
+        let held = crate::RunDir::new(&run).lock().unwrap();
+        let refused =
+            PriceTrainer::new(config.clone())
+                .unwrap()
+                .run_in(&run, "train it".into(), |_| ());
+        assert!(
+            matches!(refused, Err(LearnError::RunInUse { .. })),
+            "{refused:?}"
+        );
+        drop(held);
         let summary = PriceTrainer::new(config.clone())
             .unwrap()
-            .run_in(&dir.join("run"), "train it".into(), |r| {
-                rounds.push(r.clone())
-            })
+            .run_in(&run, "train it".into(), |r| rounds.push(r.clone()))
             .unwrap();
-        let run = dir.join("run");
         assert_eq!(PriceRunSummary::load(&run).unwrap(), summary);
         assert_eq!(
             (summary.command.as_str(), &summary.last),

@@ -117,10 +117,13 @@ pub struct PriceRound {
     /// Probability that the expert acted in this round's rollouts.
     pub expert_share: f64,
     /// Mean training loss of the round's steps (β units squared).
+    #[serde(with = "crate::log_float")]
     pub loss: f64,
     /// Validation welfare of the sequential policy, % of OPT (sum over instances).
+    #[serde(with = "crate::log_float")]
     pub sequential: f64,
     /// The same for the one-shot policy.
+    #[serde(with = "crate::log_float")]
     pub one_shot: f64,
 }
 
