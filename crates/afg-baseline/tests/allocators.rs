@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use afg_baseline::{Allocator, Blind, CentralisedDa, DecentralisedDa, Method, Optimum};
 use afg_game::io::read_dataset;
 use afg_game::{Assignment, GOLDEN_RATIO, GeneratorConfig, Instance, Preference, RobotId, TaskId};
+use afg_graph::{GraphKind, RobotGraph};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -376,6 +377,101 @@ fn dynamics_end_stable_within_the_grape_bound_and_twins_agree() {
                 assert_eq!(&twin.assignment, a, "N={n} #{idx} {pref:?}");
                 assert_eq!(twin.stats.iterations, run.allocation.stats.iterations);
             }
+        }
+    }
+}
+
+/// GRAPE's rounds as plainly as they can be written (every view a full copy, every
+/// robot sends and compares every round): the reference the event-driven simulation
+/// must equal. Returns the final partition, the chain of changes, rounds and messages.
+fn plain_grape(
+    inst: &Instance,
+    pref: Preference,
+    seed: u64,
+) -> (Assignment, Vec<RobotId>, u64, u64) {
+    #[derive(Clone)]
+    struct View {
+        assignment: Assignment,
+        key: (u64, u64),
+        chain: Vec<RobotId>,
+    }
+    let n = inst.num_robots();
+    let mut graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
+    graph.connect_components(inst.robots());
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let empty = View {
+        assignment: Assignment::unassigned(n, inst.num_tasks()),
+        key: (0, 0),
+        chain: Vec::new(),
+    };
+    let mut views = vec![empty; n];
+    let mut satisfied = vec![false; n];
+    let (mut rounds, mut messages) = (0u64, 0u64);
+    loop {
+        rounds += 1;
+        let mut active = false;
+        for i in inst.robot_ids() {
+            let a = i.index();
+            if std::mem::replace(&mut satisfied[a], true) {
+                continue;
+            }
+            if let Some(j) = inst.best_response(&views[a].assignment, i, pref) {
+                let v = &mut views[a];
+                v.assignment.set(i, Some(j));
+                v.key = (v.key.0 + 1, rng.random());
+                v.chain.push(i);
+                active = true;
+            }
+        }
+        let sent = views.clone();
+        for i in inst.robot_ids() {
+            let a = i.index();
+            messages += graph.degree(i) as u64;
+            let best = graph
+                .neighbours(i)
+                .iter()
+                .map(|&b| &sent[b as usize])
+                .max_by_key(|v| v.key)
+                .filter(|v| v.key > sent[a].key);
+            if let Some(v) = best {
+                views[a] = v.clone();
+                satisfied[a] = false;
+                active = true;
+            }
+        }
+        if !active {
+            let v = views.swap_remove(0);
+            return (v.assignment, v.chain, rounds, messages);
+        }
+    }
+}
+
+#[test]
+fn decentralised_grape_equals_its_plain_simulation() {
+    let mut rng = ChaCha8Rng::seed_from_u64(2029);
+    let mut instances: Vec<Instance> = dataset(60).into_iter().take(10).collect();
+    for case in 0..60 {
+        let n = rng.random_range(1..=150);
+        let mut cfg = GeneratorConfig::paper(n, rng.random_range(1..=8), rng.random());
+        if case % 3 == 0 {
+            cfg = cfg.with_capacity_slack(rng.random_range(1.0..1.5));
+        }
+        instances.push(cfg.generate().unwrap());
+    }
+    for (idx, inst) in instances.iter().enumerate() {
+        for pref in [Preference::Selfish, Preference::Balanced] {
+            let seed = idx as u64 * 7 + 1;
+            let run = DecentralisedDa::new(pref, seed).run(inst).unwrap();
+            let (assignment, chain, rounds, messages) = plain_grape(inst, pref, seed);
+            let stats = &run.allocation.stats;
+            assert_eq!(run.allocation.assignment, assignment, "#{idx} {pref:?}");
+            assert_eq!(run.chain, chain, "#{idx} {pref:?}");
+            assert_eq!(
+                (stats.rounds, stats.messages),
+                (rounds, messages),
+                "#{idx} {pref:?}"
+            );
+            assert_eq!(stats.iterations, chain.len() as u64);
         }
     }
 }

@@ -45,6 +45,10 @@ pub struct Plan {
     /// Run the Burn reference path up to this N (M = 5 only).
     #[cfg_attr(feature = "cli", arg(long, default_value_t = 1000))]
     pub burn_up_to: usize,
+    /// Run GRAPE's decentralised simulation (da-decentralised) up to this N: its
+    /// synchronous rounds take time about quadratic in N (every change floods the graph).
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = 1000))]
+    pub decentralised_up_to: usize,
     /// Trained run directory of the learned policy at M = 5; other M use untrained
     /// weights (timing only).
     #[cfg_attr(feature = "cli", arg(long, default_value = "models/afgnet_ddqn_n20"))]
@@ -245,7 +249,10 @@ pub fn cases(plan: &Plan) -> Result<Vec<Case>, EvalError> {
                     });
                 }
             }
-            for method in [Method::Opt, Method::Da, Method::DaBalanced, Method::Greedy] {
+            let decentralised =
+                (robots <= plan.decentralised_up_to).then_some(Method::DaDecentralised);
+            let methods = [Method::Opt, Method::Da, Method::DaBalanced, Method::Greedy];
+            for method in methods.into_iter().chain(decentralised) {
                 cases.push(Case {
                     method: Some(method),
                     ..base.clone()
@@ -357,6 +364,7 @@ mod tests {
             passes: vec![10],
             max_work: 1000,
             burn_up_to: 0,
+            decentralised_up_to: 0,
             model: PathBuf::from("none"),
             price_model: PathBuf::from("none"),
             price_headed: Vec::new(),

@@ -58,10 +58,15 @@ impl Instance {
         task: TaskId,
         pref: Preference,
     ) -> f64 {
-        let m = assignment.others_in(robot, task);
+        self.score_among(robot, task, assignment.others_in(robot, task), pref)
+    }
+
+    /// Score of `robot` in `task` with `others` other robots there.
+    #[inline]
+    fn score_among(&self, robot: RobotId, task: TaskId, others: usize, pref: Preference) -> f64 {
         let value = match pref {
-            Preference::Balanced => self.marginal_value(task, m + 1),
-            Preference::Selfish => self.coalition_value(task, m + 1) / (m + 1) as f64,
+            Preference::Balanced => self.marginal_value(task, others + 1),
+            Preference::Selfish => self.coalition_value(task, others + 1) / (others + 1) as f64,
         };
         value - self.cost(robot, task)
     }
@@ -95,19 +100,52 @@ impl Instance {
         robot: RobotId,
         pref: Preference,
     ) -> Option<TaskId> {
-        let current = assignment.task_of(robot);
+        self.best_response_given(robot, assignment.task_of(robot), assignment.sizes(), pref)
+    }
+
+    /// [`Instance::best_response`] from all that it reads of an assignment: the task
+    /// `robot` is in (`current`) and the coalition sizes (one per task, `robot`
+    /// counted in its own), for a caller that keeps the partition in another form.
+    ///
+    /// # Panics
+    /// If `sizes` has fewer than M entries.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::{Instance, Point, Preference, RobotId, Task, TaskId};
+    /// let at = |x| Task { position: Point::new(x, 0.0), reward: 1.0, eps: 2.0, capacity: None };
+    /// let robots = vec![Point::new(0.9, 0.0), Point::new(1.0, 0.0)];
+    /// let inst = Instance::new(robots, vec![at(0.0), at(1.0)], 1.0)?;
+    /// // Alone at task 1 it stays (0.9 there against 0.1 at task 0); unassigned it goes there.
+    /// let stay = inst.best_response_given(RobotId(0), Some(TaskId(1)), &[0, 1], Preference::Selfish);
+    /// assert_eq!(stay, None);
+    /// let go = inst.best_response_given(RobotId(0), None, &[0, 1], Preference::Selfish);
+    /// assert_eq!(go, Some(TaskId(1)));
+    /// # Ok::<(), afg_game::GameError>(())
+    /// ```
+    pub fn best_response_given(
+        &self,
+        robot: RobotId,
+        current: Option<TaskId>,
+        sizes: &[usize],
+        pref: Preference,
+    ) -> Option<TaskId> {
+        let others = |task: TaskId| sizes[task.index()] - usize::from(current == Some(task));
         let mut best: Option<(TaskId, f64)> = None;
         for task in self.task_ids() {
-            if Some(task) == current || !assignment.has_room(self, robot, task) {
+            if Some(task) == current || others(task) >= self.capacity(task) {
                 continue;
             }
-            let s = self.score(assignment, robot, task, pref);
+            let s = self.score_among(robot, task, others(task), pref);
             if best.is_none_or(|(_, b)| s > b) {
                 best = Some((task, s));
             }
         }
         let (task, s) = best?;
-        strictly_better(s, self.current_score(assignment, robot, pref)).then_some(task)
+        let here = current.map_or(f64::NEG_INFINITY, |c| {
+            self.score_among(robot, c, others(c), pref)
+        });
+        strictly_better(s, here).then_some(task)
     }
 
     /// Whether `robot` has no strictly preferred move (Def. 3 for one robot).
