@@ -1,6 +1,7 @@
 //! `cargo xtask <command>`: the project's jobs — datasets, solving, benchmarks.
 
 mod bench;
+mod crash;
 mod curves;
 mod datasets;
 mod manifest;
@@ -68,6 +69,9 @@ enum Command {
     Regret(regret::RegretArgs),
     /// (Re)write manifest.json of finished training runs from their config and log.
     Manifest(manifest::ManifestArgs),
+    /// SIGKILL train and train-price at random moments, resume each time, and compare
+    /// the final weights with an uninterrupted run's.
+    CrashTest(crash::CrashArgs),
 }
 
 fn main() -> Result<()> {
@@ -92,6 +96,7 @@ impl Command {
             Command::Manifest(args) => manifest::run_manifest(args),
             Command::Regret(args) => regret::run(args),
             Command::ReallocStudy(args) => realloc::run_study(args),
+            Command::CrashTest(args) => crash::run(args),
         }
     }
 }

@@ -46,7 +46,7 @@ pub use train::{
     Algo, Demonstrations, Preset, Session, StepReport, TrainConfig, TrainSettings, Trainer,
     Validation, checkpoint_dir, training_instance_seed, validation_instances,
 };
-pub use weights::{load_network, save_network};
+pub use weights::{load_network, parameter_values, save_network};
 
 /// The CPU inference back end.
 pub type InferBackend = burn::backend::NdArray<f32>;

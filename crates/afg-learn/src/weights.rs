@@ -98,6 +98,35 @@ fn shapes<B: Backend>(network: &QNetwork<B>) -> Vec<Vec<usize>> {
     v.0
 }
 
+/// Collects parameter values in visiting order.
+struct Values(Vec<f32>);
+
+impl<B: Backend> ModuleVisitor<B> for Values {
+    fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<B, D>>) {
+        let data = param.val().into_data().convert::<f32>();
+        self.0
+            .extend(data.to_vec::<f32>().expect("converted to f32"));
+    }
+}
+
+/// Every parameter value of `network`, in visiting order: what two networks of one
+/// configuration must share to compute the same thing. (Their weight files differ
+/// even then, in the random parameter ids that Burn records.)
+///
+/// # Examples
+/// ```
+/// use afg_learn::{InferBackend, NetworkConfig, parameter_values};
+/// let config = NetworkConfig::afgnet(5, 7);
+/// let a = config.init::<InferBackend>(&Default::default());
+/// let b = config.init::<InferBackend>(&Default::default());
+/// assert_eq!(parameter_values(&a), parameter_values(&b)); // one seed, one network
+/// ```
+pub fn parameter_values<B: Backend>(network: &QNetwork<B>) -> Vec<f32> {
+    let mut v = Values(Vec::new());
+    network.visit(&mut v);
+    v.0
+}
+
 /// Loads weights saved by [`save_network`].
 ///
 /// # Errors

@@ -8,11 +8,8 @@ use afg_graph::{AllocationState, GraphKind, RobotGraph, Units};
 use afg_learn::{
     AfgNetConfig, Algo, GraphTensors, InferBackend, LearnError, LearnedPolicy, LogEvent,
     NetworkConfig, QNetwork, RunDir, Session, Shaping, TrainConfig, Trainer, double_dqn_target,
-    dqn_target, n_step_reward,
+    dqn_target, n_step_reward, parameter_values,
 };
-use burn::module::{Module, ModuleVisitor, Param};
-use burn::tensor::Tensor;
-use burn::tensor::backend::Backend;
 use proptest::prelude::*;
 
 #[test]
@@ -110,18 +107,11 @@ fn a_diverging_run_stops_with_a_clear_error_and_unchanged_weights() {
     assert!(err.to_string().contains("lower --lr"), "{err}");
 }
 
-/// Every parameter value, in visiting order.
-struct Values(Vec<f32>);
-impl<B: Backend> ModuleVisitor<B> for Values {
-    fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<B, D>>) {
-        self.0
-            .extend(param.val().into_data().to_vec::<f32>().unwrap());
-    }
-}
 fn values(net: &QNetwork<InferBackend>) -> Vec<u32> {
-    let mut v = Values(Vec::new());
-    net.visit(&mut v);
-    v.0.into_iter().map(f32::to_bits).collect()
+    parameter_values(net)
+        .into_iter()
+        .map(f32::to_bits)
+        .collect()
 }
 
 #[test]

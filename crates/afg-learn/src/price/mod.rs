@@ -187,8 +187,8 @@ impl PriceTrainer {
     /// Trains to the end with run directory `dir` (created if needed, then locked as a
     /// [`RunDir`](crate::RunDir) is, so that a second trainer is refused): after each
     /// round the log ([`PriceRunSummary::LOG_FILE_NAME`], one [`PriceRound`] per line)
-    /// is rewritten atomically and `on_round` called; at the end the model
-    /// ([`PriceModel::FILE_NAME`]) and the summary with `command` are written. A run
+    /// is rewritten atomically and `on_round` called; at the end the summary with
+    /// `command` and then the model ([`PriceModel::FILE_NAME`]) are written. A run
     /// killed before its end leaves no model; the same call starts it again from round
     /// 0 and, being seeded, ends with the same weights.
     ///
@@ -217,13 +217,14 @@ impl PriceTrainer {
             on_round(&round);
             last = Some(round);
         }
-        self.model().save(&dir.join(PriceModel::FILE_NAME))?;
         let summary = PriceRunSummary {
             command,
             wall_s: start.elapsed().as_secs_f64(),
             last: last.expect("a checked configuration has at least one round"),
         };
         summary.save(dir)?;
+        // The model last: a directory that holds one holds a whole run.
+        self.model().save(&dir.join(PriceModel::FILE_NAME))?;
         Ok(summary)
     }
 }
