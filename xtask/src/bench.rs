@@ -12,7 +12,7 @@ pub struct BenchArgs {
     /// Number of tasks M.
     #[arg(long, default_value_t = afg_eval::dataset::TASKS)]
     tasks: usize,
-    /// Largest N for the decentralised DA (its simulation keeps N views).
+    /// Largest N for the decentralised DA (its synchronous rounds take time about quadratic in N).
     #[arg(long, default_value_t = 1_000)]
     max_decentralised: usize,
     /// Time budget per measurement: repeat until it is spent (at least once, at most 20 runs).

@@ -19,13 +19,14 @@ pub struct CrashArgs {
     /// Seed of the kill moments.
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Scratch directory for the runs (emptied first).
+    /// Scratch directory for the runs: new, or one an earlier crash test wrote (its run
+    /// directories are replaced; a directory holding anything else is refused).
     #[arg(long, default_value = "target/crash-test")]
     dir: PathBuf,
 }
 
 /// A trainer under test: how to start it, how to continue it, and its weight files.
-struct Trainer {
+struct Target {
     name: &'static str,
     /// Arguments of a new run, without `--out DIR`.
     start: &'static [&'static str],
@@ -40,8 +41,8 @@ struct Trainer {
 
 /// A small `train` run that checkpoints after every step, so that many kills land in a
 /// checkpoint write, and a small `train-price` run.
-const TRAINERS: [Trainer; 2] = [
-    Trainer {
+const TARGETS: [Target; 2] = [
+    Target {
         name: "train",
         start: &[
             "train",
@@ -62,7 +63,7 @@ const TRAINERS: [Trainer; 2] = [
         finished: |dir| RunDir::new(dir).has_weights(),
         same_weights: same_network,
     },
-    Trainer {
+    Target {
         name: "train-price",
         start: &[
             "train-price",
@@ -102,14 +103,14 @@ struct Outcome {
 
 pub fn run(args: CrashArgs) -> Result<()> {
     let exe = std::env::current_exe().context("the xtask binary")?;
-    let _ = std::fs::remove_dir_all(&args.dir);
+    clear_scratch(&args.dir)?;
     let mut rng = ChaCha8Rng::seed_from_u64(args.seed);
     println!(
         "| trainer | kills | in a checkpoint write | resumes | restarts | runs completed | uninterrupted run | final weights equal |"
     );
     println!("|---|---|---|---|---|---|---|---|");
     let mut failed = Vec::new();
-    for trainer in &TRAINERS {
+    for trainer in &TARGETS {
         let o = crash_trainer(&exe, trainer, &args.dir, args.kills, &mut rng)?;
         println!(
             "| {} | {} | {} | {} | {} | {} | {:.1} s | {} |",
@@ -134,13 +135,42 @@ pub fn run(args: CrashArgs) -> Result<()> {
     Ok(())
 }
 
+/// Makes `dir` ready for the runs: an earlier crash test's run directories are
+/// removed, anything else there is an error (nothing of the user's is deleted).
+fn clear_scratch(dir: &Path) -> Result<()> {
+    let ours: Vec<String> = TARGETS
+        .iter()
+        .flat_map(|t| [t.name.to_owned(), format!("{}-killed", t.name)])
+        .collect();
+    if !dir.exists() {
+        return Ok(());
+    }
+    for entry in std::fs::read_dir(dir).with_context(|| format!("reading {}", dir.display()))? {
+        let name = entry?.file_name();
+        if !ours.iter().any(|o| name == o.as_str()) {
+            bail!(
+                "{} holds {} which no crash test wrote; pass a new or empty --dir",
+                dir.display(),
+                name.to_string_lossy()
+            );
+        }
+    }
+    for name in &ours {
+        let path = dir.join(name);
+        if path.exists() {
+            std::fs::remove_dir_all(&path)?;
+        }
+    }
+    Ok(())
+}
+
 /// Runs `trainer` once uninterrupted, then in a second directory kills it `kills`
 /// times, each at a random moment of a run, and continues it after each kill. A run
 /// that ends before its kill is compared with the uninterrupted one and started anew,
 /// so that the kills spread over the whole run; the last one is let end and compared.
 fn crash_trainer(
     exe: &Path,
-    trainer: &Trainer,
+    trainer: &Target,
     root: &Path,
     kills: usize,
     rng: &mut ChaCha8Rng,
@@ -225,7 +255,7 @@ fn same_price_model(a: &Path, b: &Path) -> Result<bool> {
 }
 
 /// Starts a run of `trainer` in `dir`: new, or continued with `--resume`.
-fn spawn(exe: &Path, trainer: &Trainer, dir: &Path, resume: bool) -> Result<Child> {
+fn spawn(exe: &Path, trainer: &Target, dir: &Path, resume: bool) -> Result<Child> {
     let mut command = Command::new(exe);
     if resume {
         command.args([trainer.start[0], "--resume"]);

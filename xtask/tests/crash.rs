@@ -27,5 +27,16 @@ fn killed_runs_resume_to_the_uninterrupted_weights() {
         assert_eq!(cells[2], "2", "kills: {row}");
         assert!(row.ends_with("| yes |"), "{row}");
     }
+    // A directory holding anything a crash test did not write is refused, untouched.
+    std::fs::write(dir.join("notes.txt"), "mine").unwrap();
+    let refused = Command::new(env!("CARGO_BIN_EXE_xtask"))
+        .args(["crash-test", "--dir"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(refused.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(err.contains("notes.txt which no crash test wrote"), "{err}");
+    assert!(dir.join("train").exists() && dir.join("notes.txt").exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
