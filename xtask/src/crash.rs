@@ -28,8 +28,10 @@ pub struct CrashArgs {
 /// A trainer under test: how to start it, how to continue it, and its weight files.
 struct Target {
     name: &'static str,
-    /// Arguments of a new run, without `--out DIR`.
+    /// The command and the arguments of a new run, without `--out DIR`.
     start: &'static [&'static str],
+    /// Arguments of every run, new or resumed.
+    always: &'static [&'static str],
     /// Whether a killed run continues with `--resume DIR`; otherwise (train-price, which
     /// keeps no checkpoints) the same command starts it again.
     resumes: bool,
@@ -39,7 +41,7 @@ struct Target {
     same_weights: fn(&Path, &Path) -> Result<bool>,
 }
 
-/// A small `train` run that checkpoints after every step, so that many kills land in a
+/// A small `train` run that checkpoints after every step, so that kills can land in a
 /// checkpoint write, and a small `train-price` run.
 const TARGETS: [Target; 2] = [
     Target {
@@ -56,9 +58,8 @@ const TARGETS: [Target; 2] = [
             "2",
             "--validate-every",
             "50",
-            "--checkpoint-secs",
-            "0",
         ],
+        always: &["--checkpoint-secs", "0"],
         resumes: true,
         finished: |dir| RunDir::new(dir).has_weights(),
         same_weights: same_network,
@@ -78,6 +79,7 @@ const TARGETS: [Target; 2] = [
             "--steps",
             "10",
         ],
+        always: &[],
         resumes: false,
         finished: |dir| dir.join(PriceModel::FILE_NAME).exists(),
         same_weights: same_price_model,
@@ -206,7 +208,14 @@ fn crash_trainer(
             compare(&mut o)?;
             break;
         }
-        std::thread::sleep(Duration::from_secs_f64(rng.random_range(0.0..span)));
+        let delay = Duration::from_secs_f64(rng.random_range(0.0..span));
+        if trainer.resumes && o.kills % 2 == 1 {
+            // Every second kill is aimed at a checkpoint write: it lands as soon as a
+            // new checkpoint directory appears (or at the random moment otherwise).
+            wait_for(&crashed.join("checkpoint.new"), &mut child, delay)?;
+        } else {
+            std::thread::sleep(delay);
+        }
         if let Some(status) = child.try_wait()? {
             // It ended before the kill, and must have succeeded.
             check(status, child, trainer.name)?;
@@ -254,6 +263,15 @@ fn same_price_model(a: &Path, b: &Path) -> Result<bool> {
     Ok(read(a)? == read(b)?)
 }
 
+/// Waits until `path` exists, `child` ends or `limit` has passed.
+fn wait_for(path: &Path, child: &mut Child, limit: Duration) -> Result<()> {
+    let start = Instant::now();
+    while !path.exists() && child.try_wait()?.is_none() && start.elapsed() < limit {
+        std::thread::sleep(Duration::from_micros(200));
+    }
+    Ok(())
+}
+
 /// Starts a run of `trainer` in `dir`: new, or continued with `--resume`.
 fn spawn(exe: &Path, trainer: &Target, dir: &Path, resume: bool) -> Result<Child> {
     let mut command = Command::new(exe);
@@ -262,8 +280,8 @@ fn spawn(exe: &Path, trainer: &Target, dir: &Path, resume: bool) -> Result<Child
     } else {
         command.args(trainer.start).arg("--out");
     }
+    command.arg(dir).args(trainer.always);
     Ok(command
-        .arg(dir)
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()?)
