@@ -282,15 +282,15 @@ impl Grid {
             fill[c] += 1;
         }
         let at = |i: u32| points[i as usize];
-        let same = |a: Point, b: Point| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y));
+        let by_position = |a: Point, b: Point| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y));
         grid.site_end = vec![0; points.len()];
         for c in 0..side * side {
             let robots = &mut grid.order[grid.starts[c]..grid.starts[c + 1]];
             // Counting sort kept the index order; a stable sort by position keeps it per site.
-            robots.sort_by(|&a, &b| same(at(a), at(b)));
+            robots.sort_by(|&a, &b| by_position(at(a), at(b)));
             let mut end = grid.starts[c + 1];
             for t in (grid.starts[c]..grid.starts[c + 1]).rev() {
-                if t + 1 < end && same(at(grid.order[t]), at(grid.order[t + 1])).is_ne() {
+                if t + 1 < end && by_position(at(grid.order[t]), at(grid.order[t + 1])).is_ne() {
                     end = t + 1;
                 }
                 grid.site_end[t] = end;
