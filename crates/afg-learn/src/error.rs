@@ -58,6 +58,15 @@ pub enum LearnError {
         /// The loss.
         loss: f32,
     },
+    /// A gradient step would have made a weight NaN or infinite (with a finite loss);
+    /// the weights were not updated.
+    #[error(
+        "step {step}: an update made a weight NaN or infinite; training stopped (the last checkpoint is the last good state; try a lower --lr)"
+    )]
+    NonFiniteWeights {
+        /// The gradient step that failed.
+        step: u64,
+    },
     /// Another trainer holds the run directory.
     #[error("{path} is in use by another training process")]
     RunInUse {

@@ -109,9 +109,10 @@ impl<B: Backend> ModuleVisitor<B> for Values {
     }
 }
 
-/// Every parameter value of `network`, in visiting order: what two networks of one
-/// configuration must share to compute the same thing. (Their weight files differ
-/// even then, in the random parameter ids that Burn records.)
+/// Every parameter value of a network (a Q network, the price network, any Burn
+/// module), in visiting order: what two networks of one configuration must share to
+/// compute the same thing. (Their weight files differ even then, in the random
+/// parameter ids that Burn records.)
 ///
 /// # Examples
 /// ```
@@ -121,7 +122,7 @@ impl<B: Backend> ModuleVisitor<B> for Values {
 /// let b = config.init::<InferBackend>(&Default::default());
 /// assert_eq!(parameter_values(&a), parameter_values(&b)); // one seed, one network
 /// ```
-pub fn parameter_values<B: Backend>(network: &QNetwork<B>) -> Vec<f32> {
+pub fn parameter_values<B: Backend>(network: &impl Module<B>) -> Vec<f32> {
     let mut v = Values(Vec::new());
     network.visit(&mut v);
     v.0
@@ -131,8 +132,8 @@ pub fn parameter_values<B: Backend>(network: &QNetwork<B>) -> Vec<f32> {
 ///
 /// # Errors
 /// [`LearnError::Weights`] for a missing or malformed header, a header of another
-/// format or version, a corrupt or truncated record, or parameters whose shapes differ
-/// from the network the header describes.
+/// format or version, a corrupt or truncated record, parameters whose shapes differ
+/// from the network the header describes, or a NaN or infinite weight.
 pub fn load_network<B: Backend>(
     stem: &Path,
     device: &B::Device,
@@ -206,6 +207,12 @@ pub fn load_network<B: Backend>(
                 "parameter shapes differ from the {} network its header describes",
                 header.network.name()
             ),
+        ));
+    }
+    if parameter_values(&network).iter().any(|w| !w.is_finite()) {
+        return Err(weights_error(
+            &record_path,
+            "holds a NaN or infinite weight; the network would compute nothing meaningful",
         ));
     }
     Ok((header.network, network))

@@ -10,7 +10,7 @@ use afg_learn::{
     Env, GraphTensors, InferBackend, LearnError, LearnedPolicy, NetworkConfig, TrainBackend,
     load_network, save_network,
 };
-use burn::module::AutodiffModule;
+use burn::module::{AutodiffModule, Module, ModuleMapper, Param};
 use burn::optim::{AdamConfig, GradientsParams, Optimizer};
 use burn::tensor::Tensor;
 use rand::{Rng, SeedableRng};
@@ -278,6 +278,14 @@ fn weights_round_trip_and_drive_the_same_policy() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// Makes every weight NaN.
+struct Poison;
+impl<Bk: burn::tensor::backend::Backend> ModuleMapper<Bk> for Poison {
+    fn map_float<const D: usize>(&mut self, param: Param<Tensor<Bk, D>>) -> Param<Tensor<Bk, D>> {
+        param.map(|t| t.mul_scalar(f32::NAN))
+    }
+}
+
 #[test]
 fn bad_weight_files_are_clear_errors() {
     let dir = temp_dir("bad");
@@ -294,6 +302,12 @@ fn bad_weight_files_are_clear_errors() {
     std::fs::copy(dir.join("other.json"), &json).unwrap();
     let err = load_network::<B>(&stem, &Default::default()).unwrap_err();
     assert!(matches!(err, LearnError::Weights { .. }), "{err}");
+
+    // A NaN weight: the file reads, but the network would compute nothing meaningful.
+    let poisoned = config.init::<B>(&Default::default()).map(&mut Poison);
+    save_network(poisoned, &config, &stem).unwrap();
+    let err = load_network::<B>(&stem, &Default::default()).unwrap_err();
+    assert!(err.to_string().contains("NaN or infinite weight"), "{err}");
 
     // Another width: d = 32 header over d = 64 weights.
     save_network(config.init::<B>(&Default::default()), &config, &stem).unwrap();

@@ -107,6 +107,23 @@ fn a_diverging_run_stops_with_a_clear_error_and_unchanged_weights() {
     assert!(err.to_string().contains("lower --lr"), "{err}");
 }
 
+/// A step whose loss is finite but whose update overflows a weight is refused too,
+/// before the weights change (a learning rate of 1e300 overflows f32 at once).
+#[test]
+fn an_update_that_overflows_a_weight_stops_with_unchanged_weights() {
+    let mut c = tiny(Algo::Dqn, NetworkConfig::afgnet(5, 3), 200);
+    (c.lr, c.lr_decay) = (1e300, false);
+    let mut t = Trainer::new(c).unwrap();
+    let before = values(&t.network());
+    let err = t.step().unwrap_err();
+    assert!(
+        matches!(err, LearnError::NonFiniteWeights { step: 1 }),
+        "{err}"
+    );
+    assert!(err.to_string().contains("NaN or infinite"), "{err}");
+    assert_eq!(values(&t.network()), before, "weights changed");
+}
+
 fn values(net: &QNetwork<InferBackend>) -> Vec<u32> {
     parameter_values(net)
         .into_iter()

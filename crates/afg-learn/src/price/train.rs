@@ -256,8 +256,10 @@ impl PriceTrainer {
     /// One round: roll out, fit, validate.
     ///
     /// # Errors
-    /// [`LearnError::NonFiniteLoss`] if the loss stops being finite (the weights of the
-    /// step that produced it are discarded); errors of the instance generator.
+    /// [`LearnError::NonFiniteLoss`] if the loss stops being finite, or
+    /// [`LearnError::NonFiniteWeights`] if an update would make a weight NaN or
+    /// infinite (the weights of the step are discarded either way); errors of the
+    /// instance generator.
     pub fn round(&mut self) -> Result<PriceRound, LearnError> {
         let expert_share = self.config.expert_decay.powi(self.round as i32);
         let mlp = PriceMlp::from_burn(&self.net);
@@ -379,7 +381,17 @@ impl PriceTrainer {
         let done = (self.round * self.config.steps_per_round) as f64;
         let lr = self.config.lr * (1.0 - 0.9 * (done / total).min(1.0));
         let grads = GradientsParams::from_grads(loss.backward(), &self.net);
-        self.net = self.optim.step(lr, self.net.clone(), grads);
+        let updated = self.optim.step(lr, self.net.clone(), grads);
+        // A finite loss can still have a gradient that overflows a weight.
+        if crate::parameter_values(&updated)
+            .iter()
+            .any(|w| !w.is_finite())
+        {
+            return Err(LearnError::NonFiniteWeights {
+                step: (self.round * self.config.steps_per_round) as u64,
+            });
+        }
+        self.net = updated;
         Ok(value)
     }
 
@@ -490,5 +502,21 @@ mod tests {
             last = t.step().unwrap();
         }
         assert!(last < 0.5 * first, "{first} → {last}");
+    }
+
+    /// An update that overflows a weight (a learning rate of 1e300 overflows f32 at
+    /// once) is refused and leaves the weights as they were.
+    #[test]
+    fn an_update_that_overflows_a_weight_is_refused() {
+        let mut config = tiny();
+        config.lr = 1e300;
+        let mut t = PriceTrainer::new(config).unwrap();
+        let inst = GeneratorConfig::paper(12, 3, 77).generate().unwrap();
+        let mlp = PriceMlp::from_burn(&t.net);
+        t.collect(&inst, &mlp, 1.0).unwrap();
+        let before = crate::parameter_values(&t.net);
+        let err = t.step().unwrap_err();
+        assert!(matches!(err, LearnError::NonFiniteWeights { .. }), "{err}");
+        assert_eq!(crate::parameter_values(&t.net), before);
     }
 }

@@ -323,8 +323,9 @@ impl Trainer {
         Ok(())
     }
 
-    /// One gradient step on a sampled batch; returns the loss. A non-finite loss is an
-    /// error and leaves the weights untouched.
+    /// One gradient step on a sampled batch; returns the loss. A non-finite loss, or an
+    /// update that would make a weight non-finite, is an error and leaves the weights
+    /// untouched.
     fn learn(&mut self) -> Result<f32, LearnError> {
         let device = Default::default();
         let loss = match self.config.algo {
@@ -387,7 +388,17 @@ impl Trainer {
         }
         let grads = GradientsParams::from_grads(loss.backward(), &self.online);
         let lr = self.config.learning_rate(self.step);
-        self.online = self.optim.step(lr, self.online.clone(), grads);
+        let updated = self.optim.step(lr, self.online.clone(), grads);
+        // A finite loss can still have a gradient that overflows a weight.
+        if crate::parameter_values(&updated)
+            .iter()
+            .any(|w| !w.is_finite())
+        {
+            return Err(LearnError::NonFiniteWeights {
+                step: self.step + 1,
+            });
+        }
+        self.online = updated;
         Ok(loss_value)
     }
 
