@@ -25,7 +25,7 @@ pub struct CrashArgs {
     dir: PathBuf,
 }
 
-/// A trainer under test: how to start it, how to continue it, and its weight files.
+/// A trainer under test: how to start it, how to continue it, how to compare its weights.
 struct Target {
     name: &'static str,
     /// The command and the arguments of a new run, without `--out DIR`.

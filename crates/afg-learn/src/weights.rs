@@ -128,6 +128,26 @@ pub fn parameter_values<B: Backend>(network: &impl Module<B>) -> Vec<f32> {
     v.0
 }
 
+/// Whether every parameter seen so far is finite.
+struct Finite(bool);
+
+impl<B: Backend> ModuleVisitor<B> for Finite {
+    fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<B, D>>) {
+        if self.0 {
+            let data = param.val().into_data().convert::<f32>();
+            self.0 = data.iter::<f32>().all(f32::is_finite);
+        }
+    }
+}
+
+/// Whether every weight of a network is finite (no NaN or infinity): checked when
+/// weights are loaded and after every training update.
+pub(crate) fn weights_are_finite<B: Backend>(network: &impl Module<B>) -> bool {
+    let mut v = Finite(true);
+    network.visit(&mut v);
+    v.0
+}
+
 /// Loads weights saved by [`save_network`].
 ///
 /// # Errors
@@ -209,7 +229,7 @@ pub fn load_network<B: Backend>(
             ),
         ));
     }
-    if parameter_values(&network).iter().any(|w| !w.is_finite()) {
+    if !weights_are_finite(&network) {
         return Err(weights_error(
             &record_path,
             "holds a NaN or infinite weight; the network would compute nothing meaningful",

@@ -383,10 +383,7 @@ impl PriceTrainer {
         let grads = GradientsParams::from_grads(loss.backward(), &self.net);
         let updated = self.optim.step(lr, self.net.clone(), grads);
         // A finite loss can still have a gradient that overflows a weight.
-        if crate::parameter_values(&updated)
-            .iter()
-            .any(|w| !w.is_finite())
-        {
+        if !crate::weights::weights_are_finite(&updated) {
             return Err(LearnError::NonFiniteWeights {
                 step: (self.round * self.config.steps_per_round) as u64,
             });

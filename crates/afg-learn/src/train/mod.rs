@@ -390,10 +390,7 @@ impl Trainer {
         let lr = self.config.learning_rate(self.step);
         let updated = self.optim.step(lr, self.online.clone(), grads);
         // A finite loss can still have a gradient that overflows a weight.
-        if crate::parameter_values(&updated)
-            .iter()
-            .any(|w| !w.is_finite())
-        {
+        if !crate::weights::weights_are_finite(&updated) {
             return Err(LearnError::NonFiniteWeights {
                 step: self.step + 1,
             });
