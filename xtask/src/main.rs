@@ -1,6 +1,7 @@
 //! `cargo xtask <command>`: the project's jobs — datasets, solving, benchmarks.
 
 mod bench;
+mod bench_opt;
 mod crash;
 mod curves;
 mod datasets;
@@ -51,6 +52,8 @@ enum Command {
     BenchBaselines(bench::BenchArgs),
     /// Time the networks: batched forward pass, training step, greedy rollout.
     BenchModels(bench::ModelBenchArgs),
+    /// The exact optimum against OR-Tools on the same files, each solution certified.
+    BenchOpt(bench_opt::BenchOptArgs),
     /// The learned policy (fast path, blocks, repair) against OPT, DA and greedy up to N = 100 000.
     BenchScale(scale::ScaleArgs),
     /// Train a Q network with DQN or Double DQN (resumable, seeded, with validation curves).
@@ -87,6 +90,7 @@ impl Command {
             Command::Solve(args) => solve::run(args),
             Command::BenchBaselines(args) => bench::run(args),
             Command::BenchModels(args) => bench::run_models(args),
+            Command::BenchOpt(args) => bench_opt::run(args),
             Command::BenchScale(args) => scale::run(args),
             Command::Train(args) => train::run(args),
             Command::PlotCurves(args) => curves::run_plot(args),

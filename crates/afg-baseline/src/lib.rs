@@ -34,7 +34,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 pub use dynamics::{CentralisedDa, DecentralisedDa, DecentralisedRun};
-pub use optimum::Optimum;
+pub use optimum::{Certificate, Optimum, verify_optimal};
 pub use simple::{Blind, Greedy, Nearest, RandomAllocator};
 
 /// An allocation method: instance in, complete assignment and statistics out.
@@ -111,6 +111,14 @@ pub enum AllocError {
         method: String,
         /// What went wrong.
         message: String,
+    },
+    /// Prices do not prove an assignment optimal ([`verify_optimal`]).
+    #[error("not proven optimal: welfare {welfare}, but the prices only bound it by {upper_bound}")]
+    NotOptimal {
+        /// The assignment's welfare.
+        welfare: f64,
+        /// The prices' upper bound on every assignment's welfare.
+        upper_bound: f64,
     },
     /// The dynamics did not settle within the safety bound of rounds.
     #[error("no stable partition after {rounds} rounds")]

@@ -1,0 +1,224 @@
+//! The exact welfare maximum (OPT) as a min-cost flow with M task nodes, with prices
+//! that prove it.
+//!
+//! Maximising `sum_j F_j(n_j) - beta sum_i d(i, g_i)` over complete assignments is
+//! a min-cost flow: robot i sends one unit to task j at cost `c_ij = beta d(i, j)`,
+//! and task j sends its n-th unit to the sink at cost `-(F_j(n) - F_j(n - 1))`.
+//! Concavity of F_j (eps ≥ φ) makes those slot costs increase with n, so a task's
+//! slots are filled in order and one "next slot" per task is all the graph needs.
+//! Between tasks, the residual edge j → k costs `min_{r in j} (c_rk - c_rj)`, read
+//! from one lazy-deletion heap per ordered task pair.
+//!
+//! Two solvers share that graph:
+//! - [`transport`]: the whole instance from prices — every robot at its cheapest task
+//!   under warm prices (from a subsample of the robots, solved the same way), then the
+//!   few units that are out of balance routed along shortest paths over the M + 1
+//!   nodes. Behind [`Optimum::allocate`] and [`Optimum::with_prices`].
+//! - [`augmenting`]: robot by robot, each along a shortest augmenting path. It can keep
+//!   some robots fixed: [`Optimum::complete`] and [`Optimum::action_values`] (the exact
+//!   Q\* oracle of the sequential MDP: with γ = 1 and the welfare difference as reward,
+//!   `Q*(s_t, a) = OPT(robots before t fixed, robot t on a) − W(s_t)`), and the
+//!   reference the first is tested against.
+//!
+//! [`verify_optimal`] checks an assignment against prices in O(N M) without trusting
+//! either solver: the duality gap it computes bounds how far the assignment is from
+//! the optimum.
+//!
+//! # Complexity
+//! [`Optimum::allocate`]: O(N M) to read the costs and place the robots, plus
+//! O(M² + L M log N) per routed unit, of which warm prices leave few.
+//! [`Optimum::complete`]: O(N M² log N). Both O(N M) memory; no N × N structure.
+
+mod augmenting;
+mod certificate;
+mod movers;
+mod transport;
+
+use afg_game::{Assignment, Instance, RobotId, TaskId};
+
+pub use certificate::{Certificate, verify_optimal};
+
+use crate::{AllocError, AllocStats, Allocation, Allocator, timed};
+
+/// The exact optimum. Deterministic.
+///
+/// # Examples
+/// ```
+/// use afg_baseline::{Allocator, Optimum};
+/// use afg_game::GeneratorConfig;
+/// let inst = GeneratorConfig::paper(100, 5, 1).generate()?;
+/// let opt = Optimum.allocate(&inst)?;
+/// assert!(opt.assignment.is_complete());
+/// assert!(inst.is_stable(&opt.assignment, afg_game::Preference::Balanced)); // paper Lemma 1
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Optimum;
+
+impl Optimum {
+    /// The best complete assignment that keeps every robot assigned in `partial` where
+    /// it is (its optimal completion). With an empty `partial` this is the optimum.
+    ///
+    /// # Errors
+    /// [`AllocError::InvalidParameter`] if `partial` has another N or M than the
+    /// instance, or puts more robots in a task than its capacity.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::{Allocator, Optimum};
+    /// use afg_game::{Assignment, GeneratorConfig, RobotId, TaskId};
+    /// let inst = GeneratorConfig::paper(30, 5, 1).generate()?;
+    /// let mut partial = Assignment::unassigned(30, 5);
+    /// partial.set(RobotId(0), Some(TaskId(3)));
+    /// let done = Optimum.complete(&inst, &partial)?;
+    /// assert_eq!(done.task_of(RobotId(0)), Some(TaskId(3)));
+    /// // Fixing a robot can only cost welfare.
+    /// let opt = Optimum.allocate(&inst)?.assignment;
+    /// assert!(inst.welfare(&done) <= inst.welfare(&opt) + 1e-9);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn complete(
+        &self,
+        instance: &Instance,
+        partial: &Assignment,
+    ) -> Result<Assignment, AllocError> {
+        check_partial(instance, partial)?;
+        Ok(augmenting::solved(instance, partial.clone(), None).assignment)
+    }
+
+    /// The optimum with its task prices π, which prove it ([`verify_optimal`]): every
+    /// robot's task minimises `β d(i, j) − π_j` over all tasks, and every task's price
+    /// lies between the marginal values of its last member and of one more,
+    /// `F_j(n_j + 1) − F_j(n_j) ≤ π_j ≤ F_j(n_j) − F_j(n_j − 1)` (LP duality for the
+    /// min-cost flow). Robots whose minimum is unique sit exactly where argmin sends
+    /// them; ties are settled by the counts.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::Optimum;
+    /// use afg_game::{GeneratorConfig, RobotId};
+    /// let inst = GeneratorConfig::paper(60, 5, 1).generate()?;
+    /// let (opt, prices) = Optimum.with_prices(&inst);
+    /// assert!(afg_baseline::verify_optimal(&inst, &opt, &prices).is_ok());
+    /// for i in inst.robot_ids() {
+    ///     let own = opt.task_of(i).unwrap();
+    ///     let value = |j: afg_game::TaskId| inst.cost(i, j) - prices[j.index()];
+    ///     assert!(inst.task_ids().all(|k| value(own) <= value(k) + 1e-9));
+    /// }
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn with_prices(&self, instance: &Instance) -> (Assignment, Vec<f64>) {
+        let solution = transport::solve(instance);
+        (assignment_of(instance, &solution.task_of), solution.prices)
+    }
+
+    /// For every task a, the best final welfare with the robots assigned in `partial`
+    /// fixed and `actor` (unassigned there) on a; `None` where a has no room for it.
+    /// The same numbers as one [`Optimum::complete`] per task, from one completion:
+    /// the others are completed without the actor, then the actor on a is one more
+    /// unit entering at task a, and (by the successive-shortest-path argument) the
+    /// cheapest augmenting path from a turns the others' optimum into the optimum with
+    /// the actor on a — one Dijkstra over the M task nodes per task.
+    ///
+    /// # Errors
+    /// As [`Optimum::complete`], and [`AllocError::InvalidParameter`] if `actor` is not
+    /// a robot of the instance or is assigned in `partial`.
+    ///
+    /// # Complexity
+    /// One completion, O(N M² log N), then O(M³) heap reads (amortised); one
+    /// completion per task would cost M times the first term.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::Optimum;
+    /// use afg_game::{Assignment, GeneratorConfig, RobotId, TaskId};
+    /// let inst = GeneratorConfig::paper(30, 5, 1).generate()?;
+    /// let mut partial = Assignment::unassigned(30, 5);
+    /// partial.set(RobotId(0), Some(TaskId(3)));
+    /// let values = Optimum.action_values(&inst, &partial, RobotId(1))?;
+    /// for j in inst.task_ids() {
+    ///     let mut forced = partial.clone();
+    ///     forced.set(RobotId(1), Some(j));
+    ///     let one = inst.welfare(&Optimum.complete(&inst, &forced)?);
+    ///     assert!((values[j.index()].unwrap() - one).abs() < 1e-9);
+    /// }
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn action_values(
+        &self,
+        instance: &Instance,
+        partial: &Assignment,
+        actor: RobotId,
+    ) -> Result<Vec<Option<f64>>, AllocError> {
+        check_partial(instance, partial)?;
+        if actor.index() >= instance.num_robots() || partial.task_of(actor).is_some() {
+            return Err(AllocError::InvalidParameter(format!(
+                "robot {actor} is not an unassigned robot of the instance"
+            )));
+        }
+        let mut s = augmenting::solved(instance, partial.clone(), Some(actor.index()));
+        let others = instance.welfare(&s.assignment);
+        Ok(instance
+            .task_ids()
+            .map(|a| {
+                if !partial.has_room(instance, actor, a) {
+                    return None;
+                }
+                s.dist.fill(f64::INFINITY);
+                s.dist[a.index()] = s.cost(actor.index(), a.index());
+                s.shortest_paths();
+                Some(others - s.best_end().1)
+            })
+            .collect())
+    }
+}
+
+/// Checks that `partial` fits `instance` and respects its capacities.
+fn check_partial(instance: &Instance, partial: &Assignment) -> Result<(), AllocError> {
+    if partial.num_robots() != instance.num_robots()
+        || partial.sizes().len() != instance.num_tasks()
+    {
+        return Err(AllocError::InvalidParameter(format!(
+            "the partial assignment has {} robots and {} tasks, the instance {} and {}",
+            partial.num_robots(),
+            partial.sizes().len(),
+            instance.num_robots(),
+            instance.num_tasks()
+        )));
+    }
+    if let Some(j) = instance
+        .task_ids()
+        .find(|&j| partial.size(j) > instance.capacity(j))
+    {
+        return Err(AllocError::InvalidParameter(format!(
+            "the partial assignment puts {} robots in task {j}, above its capacity {}",
+            partial.size(j),
+            instance.capacity(j)
+        )));
+    }
+    Ok(())
+}
+
+impl Allocator for Optimum {
+    fn name(&self) -> String {
+        "opt".into()
+    }
+
+    fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
+        let (solution, wall_time) = timed(|| transport::solve(instance));
+        Ok(Allocation {
+            assignment: assignment_of(instance, &solution.task_of),
+            stats: AllocStats {
+                iterations: solution.routed,
+                wall_time,
+                ..AllocStats::default()
+            },
+        })
+    }
+}
+
+/// The assignment of a solver's task indices.
+fn assignment_of(instance: &Instance, task_of: &[u32]) -> Assignment {
+    let tasks = task_of.iter().map(|&j| Some(TaskId(j))).collect();
+    Assignment::from_tasks(instance, tasks).expect("the solver respects capacities")
+}

@@ -1,0 +1,138 @@
+//! The residual edges between task nodes: for every ordered pair (j, k), the robots of
+//! task j keyed by the cost of moving them to k, cheapest first.
+
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+
+/// Marks a robot that is in no heap's task (unassigned, or fixed where it is).
+pub(super) const NOWHERE: u32 = u32::MAX;
+
+/// A robot in task j, keyed by the cost of moving it to task k: `c_rk − c_rj`.
+#[derive(Clone, Copy)]
+pub(super) struct Entry {
+    pub key: f64,
+    pub robot: u32,
+}
+
+impl PartialEq for Entry {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other) == Ordering::Equal
+    }
+}
+impl Eq for Entry {}
+impl PartialOrd for Entry {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+impl Ord for Entry {
+    /// Reversed, so that `BinaryHeap` pops the cheapest; ties by lower robot index.
+    fn cmp(&self, other: &Self) -> Ordering {
+        other
+            .key
+            .total_cmp(&self.key)
+            .then(other.robot.cmp(&self.robot))
+    }
+}
+
+/// The cheapest live robot of every ordered task pair, read in O(1), over one
+/// lazy-deletion heap per pair built the first time that pair's cheapest robot leaves.
+///
+/// An entry of heap (j, k) is live while its robot's task (in the caller's `task_of`)
+/// is j: a robot that leaves j leaves stale entries behind, dropped when they reach the
+/// top. A robot that comes back to j pushes an entry with the same key again, which is
+/// harmless. Most pairs never lose their cheapest robot, so most heaps are never built.
+pub(super) struct Movers {
+    m: usize,
+    /// `top[j * m + k]`: the cheapest live entry of pair (j, k); [`Entry::NONE`] if j
+    /// has no movable robot.
+    top: Vec<Entry>,
+    heaps: Vec<Option<BinaryHeap<Entry>>>,
+    /// Every robot that ever entered each task (some have left again).
+    members: Vec<Vec<u32>>,
+}
+
+impl Entry {
+    /// No robot: an edge that does not exist.
+    const NONE: Entry = Entry {
+        key: f64::INFINITY,
+        robot: NOWHERE,
+    };
+}
+
+impl Movers {
+    /// The movers of `task_of` (`NOWHERE` for a robot that may not move), with
+    /// `costs` the row-major N × M cost matrix: one pass over it.
+    pub fn new(m: usize, task_of: &[u32], costs: &[f64]) -> Self {
+        let mut movers = Movers {
+            m,
+            top: vec![Entry::NONE; m * m],
+            heaps: (0..m * m).map(|_| None).collect(),
+            members: vec![Vec::new(); m],
+        };
+        for (robot, &task) in task_of.iter().enumerate() {
+            if task != NOWHERE {
+                let row = &costs[robot * m..][..m];
+                movers.enter(robot as u32, task as usize, row);
+            }
+        }
+        movers
+    }
+
+    /// The cheapest robot of task `j` to move to each task k (`row(j)[k]`).
+    pub fn row(&self, j: usize) -> &[Entry] {
+        &self.top[j * self.m..][..self.m]
+    }
+
+    /// Records that `robot` (with cost row `costs`) has entered `task`.
+    pub fn enter(&mut self, robot: u32, task: usize, costs: &[f64]) {
+        self.members[task].push(robot);
+        for k in (0..self.m).filter(|&k| k != task) {
+            let pair = task * self.m + k;
+            let entry = Entry {
+                key: costs[k] - costs[task],
+                robot,
+            };
+            if let Some(heap) = &mut self.heaps[pair] {
+                heap.push(entry);
+            }
+            if entry > self.top[pair] {
+                self.top[pair] = entry;
+            }
+        }
+    }
+
+    /// Records that `robot` has left task `j` (`task_of` already says where it went),
+    /// refreshing the pairs whose cheapest robot it was.
+    pub fn leave(&mut self, robot: u32, j: usize, task_of: &[u32], costs: &[f64]) {
+        for k in (0..self.m).filter(|&k| k != j) {
+            let pair = j * self.m + k;
+            if self.top[pair].robot != robot {
+                continue;
+            }
+            let (m, members) = (self.m, &self.members[j]);
+            let heap = self.heaps[pair].get_or_insert_with(|| {
+                let entries: Vec<Entry> = members
+                    .iter()
+                    .filter(|&&r| task_of[r as usize] as usize == j)
+                    .map(|&robot| {
+                        let row = &costs[robot as usize * m..][..m];
+                        Entry {
+                            key: row[k] - row[j],
+                            robot,
+                        }
+                    })
+                    .collect();
+                BinaryHeap::from(entries)
+            });
+            self.top[pair] = Entry::NONE;
+            while let Some(&top) = heap.peek() {
+                if task_of[top.robot as usize] as usize == j {
+                    self.top[pair] = top;
+                    break;
+                }
+                heap.pop();
+            }
+        }
+    }
+}

@@ -1,0 +1,336 @@
+//! `cargo xtask bench-opt`: afg's exact optimum against OR-Tools' SimpleMinCostFlow on
+//! the same instance files, every timed solution certified by its prices.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::str::FromStr;
+use std::time::{Duration, Instant};
+
+use afg_baseline::{Allocator, Greedy, Nearest, Optimum, verify_optimal};
+use afg_eval::tables::duration;
+use afg_game::io::{dataset_to_jsonl, read_dataset, write_atomic};
+use afg_game::{Assignment, GeneratorConfig, Instance, TaskId};
+use anyhow::{Context, Result, bail, ensure};
+use clap::Args;
+use serde::Serialize;
+
+#[derive(Args)]
+pub struct BenchOptArgs {
+    /// Sizes as N x M.
+    #[arg(long, value_delimiter = ',', default_values = [
+        "1000x5", "1000x50", "10000x5", "10000x50", "10000x500",
+        "100000x5", "100000x50", "1000000x5", "1000000x50",
+    ])]
+    cases: Vec<Case>,
+    /// Seed of every instance: the files are `cargo xtask gen --robots N --tasks M --seed S`.
+    #[arg(long, default_value_t = 11)]
+    seed: u64,
+    /// A Python with OR-Tools and numpy, for the OR-Tools column (e.g. after
+    /// `python3 -m venv .venv-bench && .venv-bench/bin/pip install ortools numpy`,
+    /// pass `.venv-bench/bin/python`). Without it the column is left out.
+    #[arg(long)]
+    python: Option<PathBuf>,
+    /// Time budget per measurement: repeat until it is spent (at least once, at most 20 runs).
+    #[arg(long, default_value_t = 1.0)]
+    seconds: f64,
+    /// Largest N for the reference solver (robot by robot, O(N M² log N)).
+    #[arg(long, default_value_t = 100_000)]
+    reference_up_to: usize,
+    /// Folder for the instance files (kept); default: a temporary folder.
+    #[arg(long)]
+    dir: Option<PathBuf>,
+    /// Print JSON lines (one per case) instead of the Markdown table.
+    #[arg(long)]
+    json: bool,
+}
+
+/// One size of the benchmark.
+#[derive(Clone, Copy, Debug, Serialize)]
+struct Case {
+    robots: usize,
+    tasks: usize,
+}
+
+impl FromStr for Case {
+    type Err = String;
+
+    fn from_str(text: &str) -> Result<Self, String> {
+        let (n, m) = text
+            .split_once('x')
+            .ok_or_else(|| format!("`{text}`: write a size as NxM, e.g. 1000x5"))?;
+        let count = |s: &str| crate::at_least_one(s).map_err(|e| format!("`{text}`: {e}"));
+        Ok(Case {
+            robots: count(n)?,
+            tasks: count(m)?,
+        })
+    }
+}
+
+/// What one case measured; times are medians over the repeats.
+#[derive(Serialize)]
+struct Row {
+    robots: usize,
+    tasks: usize,
+    #[serde(with = "secs")]
+    opt: Duration,
+    #[serde(with = "secs")]
+    opt_one_thread: Duration,
+    /// The largest duality gap over every timed solution.
+    certified_gap: f64,
+    units_routed: u64,
+    #[serde(with = "secs_opt")]
+    reference: Option<Duration>,
+    ortools: Option<OrTools>,
+    #[serde(with = "secs")]
+    read_distances: Duration,
+    #[serde(with = "secs")]
+    greedy: Duration,
+    #[serde(with = "secs")]
+    nearest: Duration,
+}
+
+/// OR-Tools' time and how its optimum compares.
+#[derive(Serialize)]
+struct OrTools {
+    #[serde(with = "secs")]
+    solve: Duration,
+    /// |W(afg) − W(OR-Tools)| / |W(afg)|.
+    welfare_difference: f64,
+    cost_scale: f64,
+}
+
+pub fn run(args: BenchOptArgs) -> Result<()> {
+    let scratch = tempfile_dir(args.dir.as_deref())?;
+    if let Some(python) = &args.python {
+        check_python(python)?;
+    }
+    let bar = crate::progress(args.cases.len() as u64, "bench-opt");
+    let mut rows = Vec::new();
+    for &case in &args.cases {
+        bar.set_message(format!("bench-opt N = {} M = {}", case.robots, case.tasks));
+        let row = measure(case, &args, &scratch)?;
+        if args.json {
+            bar.suspend(|| println!("{}", serde_json::to_string(&row).expect("a row")));
+        }
+        rows.push(row);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    if !args.json {
+        print!("{}", markdown(&rows, rayon::current_num_threads()));
+    }
+    Ok(())
+}
+
+/// The folder for instance files: `dir`, or a fresh one under the system's temp folder.
+fn tempfile_dir(dir: Option<&Path>) -> Result<PathBuf> {
+    let dir = match dir {
+        Some(d) => d.to_path_buf(),
+        None => std::env::temp_dir().join(format!("afg-bench-opt-{}", std::process::id())),
+    };
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    Ok(dir)
+}
+
+fn check_python(python: &Path) -> Result<()> {
+    let ok = Command::new(python)
+        .args(["-c", "import ortools, numpy"])
+        .status()
+        .with_context(|| format!("running {}", python.display()))?;
+    ensure!(
+        ok.success(),
+        "{} cannot import ortools and numpy: install them with `{0} -m pip install ortools numpy`",
+        python.display()
+    );
+    Ok(())
+}
+
+fn measure(case: Case, args: &BenchOptArgs, dir: &Path) -> Result<Row> {
+    let file = dir.join(format!(
+        "n{}_m{}_seed{}.jsonl",
+        case.robots, case.tasks, args.seed
+    ));
+    let generated = GeneratorConfig::paper(case.robots, case.tasks, args.seed).generate()?;
+    write_atomic(&file, dataset_to_jsonl(&[generated]).as_bytes())?;
+    let inst = read_dataset(&file)?.remove(0);
+    let (opt, certified_gap, units_routed, welfare) = time_optimum(&inst, args.seconds)?;
+    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
+    let (opt_one_thread, ..) = one.install(|| time_optimum(&inst, args.seconds))?;
+    let reference = (case.robots <= args.reference_up_to)
+        .then(|| timed(args.seconds, || Optimum.complete(&inst, &empty(&inst))));
+    let reference = match reference {
+        Some(r) => Some(r?.0),
+        None => None,
+    };
+    let ortools = match &args.python {
+        Some(python) => Some(ortools(python, &file, &inst, welfare)?),
+        None => None,
+    };
+    let (read_distances, _) = timed(args.seconds, || {
+        anyhow::Ok(std::hint::black_box(nearest_pass(&inst)))
+    })?;
+    let (greedy, _) = timed(args.seconds, || Greedy.allocate(&inst))?;
+    let (nearest, _) = timed(args.seconds, || Nearest.allocate(&inst))?;
+    Ok(Row {
+        robots: case.robots,
+        tasks: case.tasks,
+        opt,
+        opt_one_thread,
+        certified_gap,
+        units_routed,
+        reference,
+        ortools,
+        read_distances,
+        greedy,
+        nearest,
+    })
+}
+
+fn empty(inst: &Instance) -> Assignment {
+    Assignment::unassigned(inst.num_robots(), inst.num_tasks())
+}
+
+/// Median time of [`Optimum::with_prices`], the largest duality gap of the solutions
+/// timed (each certified), the units the last one routed, and its welfare.
+fn time_optimum(inst: &Instance, budget_s: f64) -> Result<(Duration, f64, u64, f64)> {
+    let (mut times, mut gap, mut spent) = (Vec::new(), 0.0f64, 0.0);
+    let mut welfare = 0.0;
+    while times.is_empty() || (spent < budget_s && times.len() < 20) {
+        let start = Instant::now();
+        let (assignment, prices) = Optimum.with_prices(inst);
+        let took = start.elapsed();
+        let proof = verify_optimal(inst, &assignment, &prices)?;
+        gap = gap.max(proof.gap());
+        welfare = proof.welfare;
+        spent += took.as_secs_f64();
+        times.push(took);
+    }
+    let routed = Optimum.allocate(inst)?.stats.iterations;
+    times.sort();
+    Ok((times[times.len() / 2], gap, routed, welfare))
+}
+
+/// Median time of `job` over repeats within `budget_s` (at least one, at most 20).
+fn timed<T, E: Into<anyhow::Error>>(
+    budget_s: f64,
+    mut job: impl FnMut() -> Result<T, E>,
+) -> Result<(Duration, T)> {
+    let (mut times, mut spent) = (Vec::new(), 0.0);
+    loop {
+        let start = Instant::now();
+        let out = job().map_err(Into::into)?;
+        let took = start.elapsed();
+        spent += took.as_secs_f64();
+        times.push(took);
+        if spent >= budget_s || times.len() >= 20 {
+            times.sort();
+            return Ok((times[times.len() / 2], out));
+        }
+    }
+}
+
+/// The floor of any method that looks at every robot–task pair: one pass computing
+/// the N · M distances, keeping each robot's nearest task.
+fn nearest_pass(inst: &Instance) -> usize {
+    inst.robot_ids()
+        .map(|i| {
+            inst.task_ids()
+                .map(|j| inst.distance(i, j))
+                .enumerate()
+                .fold(
+                    (0, f64::INFINITY),
+                    |b, (j, d)| if d < b.1 { (j, d) } else { b },
+                )
+                .0
+        })
+        .sum()
+}
+
+/// Runs `scripts/ortools_opt.py` on `file` and compares its optimum's welfare.
+fn ortools(python: &Path, file: &Path, inst: &Instance, welfare: f64) -> Result<OrTools> {
+    #[derive(serde::Deserialize)]
+    struct Solved {
+        seconds: f64,
+        scale: f64,
+        tasks: Vec<u32>,
+    }
+    let out = file.with_extension("ortools.json");
+    let repeats = if inst.num_robots() >= 100_000 {
+        "1"
+    } else {
+        "3"
+    };
+    let script = crate::repo_root().join("scripts").join("ortools_opt.py");
+    let status = Command::new(python)
+        .arg(&script)
+        .args([file, &out])
+        .args(["--repeats", repeats])
+        .status()?;
+    if !status.success() {
+        bail!("{} failed on {}", script.display(), file.display());
+    }
+    let mut solved: Vec<Solved> = serde_json::from_slice(&std::fs::read(&out)?)?;
+    let solved = solved.pop().context("OR-Tools returned no solution")?;
+    let tasks = solved.tasks.iter().map(|&j| Some(TaskId(j))).collect();
+    let theirs = inst.welfare(&Assignment::from_tasks(inst, tasks)?);
+    Ok(OrTools {
+        solve: Duration::from_secs_f64(solved.seconds),
+        welfare_difference: (welfare - theirs).abs() / welfare.abs().max(1e-300),
+        cost_scale: solved.scale,
+    })
+}
+
+fn markdown(rows: &[Row], threads: usize) -> String {
+    let mut md = format!(
+        "| N | M | afg OPT ({threads} threads) | afg OPT (1 thread) | OR-Tools solve() | OR-Tools / afg \
+         | welfare rel. diff. | certified gap | units routed | reference (robot by robot) \
+         | read N·M distances | OPT / read | greedy | greedy / read | nearest |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
+    );
+    let ratio = |a: Duration, b: Duration| format!("{:.1}×", a.as_secs_f64() / b.as_secs_f64());
+    for r in rows {
+        let (ort, vs, diff) = match &r.ortools {
+            Some(o) => (
+                duration(o.solve),
+                ratio(o.solve, r.opt),
+                format!("{:.1e}", o.welfare_difference),
+            ),
+            None => ("—".into(), "—".into(), "—".into()),
+        };
+        let reference = r.reference.map_or("—".into(), duration);
+        md += &format!(
+            "| {} | {} | {} | {} | {ort} | {vs} | {diff} | {:.1e} | {} | {reference} | {} | {} | {} | {} | {} |\n",
+            r.robots,
+            r.tasks,
+            duration(r.opt),
+            duration(r.opt_one_thread),
+            r.certified_gap,
+            r.units_routed,
+            duration(r.read_distances),
+            ratio(r.opt, r.read_distances),
+            duration(r.greedy),
+            ratio(r.greedy, r.read_distances),
+            duration(r.nearest),
+        );
+    }
+    md
+}
+
+mod secs {
+    use std::time::Duration;
+
+    pub fn serialize<S: serde::Serializer>(d: &Duration, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_f64(d.as_secs_f64())
+    }
+}
+
+mod secs_opt {
+    use std::time::Duration;
+
+    pub fn serialize<S: serde::Serializer>(d: &Option<Duration>, s: S) -> Result<S::Ok, S::Error> {
+        match d {
+            Some(d) => s.serialize_some(&d.as_secs_f64()),
+            None => s.serialize_none(),
+        }
+    }
+}
