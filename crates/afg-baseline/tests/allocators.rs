@@ -2,7 +2,9 @@
 
 use std::path::PathBuf;
 
-use afg_baseline::{Allocator, Blind, CentralisedDa, DecentralisedDa, Method, Optimum};
+use afg_baseline::{
+    AllocError, Allocator, Blind, CentralisedDa, DecentralisedDa, Method, Optimum, verify_optimal,
+};
 use afg_game::io::read_dataset;
 use afg_game::{Assignment, GOLDEN_RATIO, GeneratorConfig, Instance, Preference, RobotId, TaskId};
 use afg_graph::{GraphKind, RobotGraph};
@@ -622,4 +624,107 @@ fn blind_beats_random_where_tasks_can_be_left_empty() {
     };
     let (blind, random) = (mean(Method::Blind), mean(Method::Random));
     assert!(blind > random + 1.0, "blind {blind}, random {random}");
+}
+
+/// An instance of `n` robots for the multi-scale solver: any eps ≥ φ and β, every
+/// second case with capacities, every third with the robots on a 10 × 10 grid (many
+/// robots at one spot: exact ties between robots at every level).
+fn scaled_instance(rng: &mut ChaCha8Rng, case: usize, n: usize, m: usize) -> Instance {
+    let mut cfg = GeneratorConfig::paper(n, m, rng.random());
+    cfg.eps = rng.random_range(GOLDEN_RATIO..12.0);
+    cfg.beta = rng.random_range(0.05..3.0);
+    if case % 2 == 1 {
+        cfg = cfg.with_capacity_slack(rng.random_range(1.0..1.3));
+    }
+    let inst = cfg.generate().unwrap();
+    if case % 3 != 2 {
+        return inst;
+    }
+    let snap = |v: f64| (v * 10.0).round() / 10.0;
+    let robots = inst
+        .robots()
+        .iter()
+        .map(|p| afg_game::Point::new(snap(p.x), snap(p.y)))
+        .collect();
+    Instance::new(robots, inst.tasks().to_vec(), inst.beta()).unwrap()
+}
+
+/// The optimum from prices (subsample levels from N = 2 048 on) reaches the robot by
+/// robot reference's welfare, and its prices prove it.
+#[test]
+fn optimum_from_prices_equals_the_reference_across_levels() {
+    let mut rng = ChaCha8Rng::seed_from_u64(30);
+    for case in 0..24 {
+        let n = rng.random_range(300..=4_000);
+        let m = rng.random_range(1..=24);
+        let inst = scaled_instance(&mut rng, case, n, m);
+        let (opt, prices) = Optimum.with_prices(&inst);
+        let empty = Assignment::unassigned(n, m);
+        let reference = inst.welfare(&Optimum.complete(&inst, &empty).unwrap());
+        let got = inst.welfare(&opt);
+        assert!(
+            (got - reference).abs() <= 1e-9 * reference.abs().max(1.0),
+            "case {case} (N = {n}, M = {m}): {got} vs reference {reference}"
+        );
+        let proof = verify_optimal(&inst, &opt, &prices).unwrap();
+        assert_eq!(proof.welfare, got);
+    }
+}
+
+/// Weak duality, checked against brute force: whatever the assignment and the prices,
+/// the certificate's bound is at least the optimum, so an accepted assignment is
+/// optimal; and the solver's own prices are always accepted.
+#[test]
+fn certificates_bound_the_optimum_and_accept_only_optima() {
+    let mut rng = ChaCha8Rng::seed_from_u64(31);
+    let mut rejected = 0;
+    for case in 0..600 {
+        let inst = small_instance(&mut rng, case);
+        let (n, m) = (inst.num_robots(), inst.num_tasks());
+        let best = brute_force(&inst);
+        let tol = 1e-9 * best.abs().max(1.0);
+        let (opt, prices) = Optimum.with_prices(&inst);
+        assert!(verify_optimal(&inst, &opt, &prices).is_ok(), "case {case}");
+        let tasks = (0..n)
+            .map(|_| Some(TaskId(rng.random_range(0..m as u32))))
+            .collect();
+        let Ok(any) = Assignment::from_tasks(&inst, tasks) else {
+            continue;
+        };
+        let shaken: Vec<f64> = prices
+            .iter()
+            .map(|p| p + rng.random_range(-1.0..1.0) * f64::from(u8::from(case % 2 == 0)))
+            .collect();
+        match verify_optimal(&inst, &any, &shaken) {
+            Ok(proof) => assert!(proof.welfare >= best - tol, "case {case}: accepted below OPT"),
+            Err(AllocError::NotOptimal { upper_bound, .. }) => {
+                assert!(upper_bound >= best - tol, "case {case}: bound below OPT");
+                rejected += 1;
+            }
+            Err(e) => panic!("case {case}: {e}"),
+        }
+    }
+    assert!(rejected > 100, "only {rejected} rejections");
+}
+
+#[test]
+fn certificate_rejects_inputs_that_do_not_fit() {
+    let inst = GeneratorConfig::paper(10, 3, 5).generate().unwrap();
+    let (opt, prices) = Optimum.with_prices(&inst);
+    assert!(verify_optimal(&inst, &opt, &prices[..2]).is_err());
+    assert!(verify_optimal(&inst, &opt, &[0.0, f64::NAN, 0.0]).is_err());
+    let mut partial = opt.clone();
+    partial.set(RobotId(0), None);
+    assert!(verify_optimal(&inst, &partial, &prices).is_err());
+}
+
+/// The same instance gives the same optimum and prices, bit for bit, on one core or all.
+#[test]
+fn optimum_from_prices_is_deterministic() {
+    let inst = GeneratorConfig::paper(20_000, 12, 4).generate().unwrap();
+    let (a, p) = Optimum.with_prices(&inst);
+    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let (b, q) = one.install(|| Optimum.with_prices(&inst));
+    assert_eq!(a, b);
+    assert_eq!(p, q);
 }
