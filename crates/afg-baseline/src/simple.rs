@@ -1,10 +1,14 @@
 //! Honest trivial baselines: greedy, nearest, random, blind.
 
-use afg_game::{Assignment, Instance, Preference, TaskId};
+use afg_game::{Assignment, Instance, Point, TaskId};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
 
 use crate::{AllocError, AllocStats, Allocation, Allocator, timed};
+
+/// Robot–task pairs from which the robots of an uncapped instance are placed on all cores.
+const PARALLEL_PAIRS: usize = 1 << 16;
 
 /// Robots in index order each join the task with the best marginal welfare that has
 /// room (the balanced score on the partial assignment); one pass, no revisions.
@@ -33,12 +37,33 @@ impl Greedy {
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn complete(&self, instance: &Instance, partial: &Assignment) -> Assignment {
+        let (positions, beta) = (task_positions(instance), instance.beta());
         let mut a = partial.clone();
-        for i in instance.robot_ids() {
-            if a.task_of(i).is_none() {
-                let task = instance.best_response(&a, i, Preference::Balanced);
-                a.set(i, task);
+        // What one more member adds to each task (−∞ when full): the balanced score
+        // without its travel cost. Only the joined task's entry changes per robot.
+        let next = |a: &Assignment, j: TaskId| {
+            if a.size(j) < instance.capacity(j) {
+                instance.marginal_value(j, a.size(j) + 1)
+            } else {
+                f64::NEG_INFINITY
             }
+        };
+        let mut gain: Vec<f64> = instance.task_ids().map(|j| next(&a, j)).collect();
+        for (i, &robot) in instance.robot_ids().zip(instance.robots()) {
+            if a.task_of(i).is_some() {
+                continue;
+            }
+            // As `Instance::best_response`: the first task of highest score.
+            let (mut best, mut score) = (0, f64::NEG_INFINITY);
+            for (j, (&g, &p)) in gain.iter().zip(&positions).enumerate() {
+                let s = g - beta * robot.distance(p);
+                if s > score {
+                    (best, score) = (j, s);
+                }
+            }
+            let task = TaskId(best as u32);
+            a.set(i, Some(task));
+            gain[best] = next(&a, task);
         }
         a
     }
@@ -50,10 +75,15 @@ impl Allocator for Greedy {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
-        Ok(one_pass(instance, None, |a, i| {
-            instance.best_response(a, i, Preference::Balanced)
-        }))
+        let empty = Assignment::unassigned(instance.num_robots(), instance.num_tasks());
+        let (assignment, wall_time) = timed(|| self.complete(instance, &empty));
+        Ok(pass_allocation(instance, assignment, wall_time, None))
     }
+}
+
+/// The task positions in one contiguous array, for the loops over all N · M pairs.
+fn task_positions(instance: &Instance) -> Vec<Point> {
+    instance.tasks().iter().map(|t| t.position).collect()
 }
 
 /// Each robot, in index order, joins its nearest task that still has room.
@@ -77,12 +107,46 @@ impl Allocator for Nearest {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
-        Ok(one_pass(instance, None, |a, i| {
-            instance
-                .task_ids()
-                .filter(|&j| a.has_room(instance, i, j))
-                .min_by(|&x, &y| instance.distance(i, x).total_cmp(&instance.distance(i, y)))
-        }))
+        let positions = task_positions(instance);
+        // The first nearest task among those `open` says have room.
+        let nearest = |robot: Point, open: &dyn Fn(usize) -> bool| {
+            let (mut best, mut distance) = (0, f64::INFINITY);
+            for (j, &p) in positions.iter().enumerate() {
+                let d = robot.distance(p);
+                if d < distance && open(j) {
+                    (best, distance) = (j, d);
+                }
+            }
+            Some(TaskId(best as u32))
+        };
+        let uncapped = instance
+            .task_ids()
+            .all(|j| instance.capacity(j) == usize::MAX);
+        if !uncapped {
+            return Ok(one_pass(instance, None, |a, i| {
+                let open = |j: usize| a.has_room(instance, i, TaskId(j as u32));
+                nearest(instance.robots()[i.index()], &open)
+            }));
+        }
+        // No capacities: robots do not interact, so they are placed on all cores.
+        let (assignment, wall_time) = timed(|| {
+            let tasks: Vec<Option<TaskId>> =
+                if instance.num_robots() * positions.len() >= PARALLEL_PAIRS {
+                    instance
+                        .robots()
+                        .par_iter()
+                        .map(|&r| nearest(r, &|_| true))
+                        .collect()
+                } else {
+                    instance
+                        .robots()
+                        .iter()
+                        .map(|&r| nearest(r, &|_| true))
+                        .collect()
+                };
+            Assignment::from_tasks(instance, tasks).expect("uncapped tasks take any robot")
+        });
+        Ok(pass_allocation(instance, assignment, wall_time, None))
     }
 }
 
@@ -173,6 +237,16 @@ fn one_pass(
         }
         a
     });
+    pass_allocation(instance, assignment, wall_time, seed)
+}
+
+/// The allocation of a one-pass method: every robot placed once, in one sweep.
+fn pass_allocation(
+    instance: &Instance,
+    assignment: Assignment,
+    wall_time: std::time::Duration,
+    seed: Option<u64>,
+) -> Allocation {
     let n = instance.num_robots() as u64;
     Allocation {
         assignment,

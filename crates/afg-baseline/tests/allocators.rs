@@ -696,7 +696,10 @@ fn certificates_bound_the_optimum_and_accept_only_optima() {
             .map(|p| p + rng.random_range(-1.0..1.0) * f64::from(u8::from(case % 2 == 0)))
             .collect();
         match verify_optimal(&inst, &any, &shaken) {
-            Ok(proof) => assert!(proof.welfare >= best - tol, "case {case}: accepted below OPT"),
+            Ok(proof) => assert!(
+                proof.welfare >= best - tol,
+                "case {case}: accepted below OPT"
+            ),
             Err(AllocError::NotOptimal { upper_bound, .. }) => {
                 assert!(upper_bound >= best - tol, "case {case}: bound below OPT");
                 rejected += 1;
@@ -723,7 +726,10 @@ fn certificate_rejects_inputs_that_do_not_fit() {
 fn optimum_from_prices_is_deterministic() {
     let inst = GeneratorConfig::paper(20_000, 12, 4).generate().unwrap();
     let (a, p) = Optimum.with_prices(&inst);
-    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
     let (b, q) = one.install(|| Optimum.with_prices(&inst));
     assert_eq!(a, b);
     assert_eq!(p, q);

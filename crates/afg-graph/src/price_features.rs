@@ -7,12 +7,16 @@
 
 use crate::{Units, VALUE_CAP};
 use afg_game::{Assignment, Instance, RobotId, TaskId};
+use rayon::prelude::*;
 
 /// Number of inputs per task ([`PriceState::features`]).
 pub const TASK_FEATURES: usize = 9;
 
 /// Temperatures (distance units) of the two soft demands.
 const SOFT_TEMPERATURES: [f64; 2] = [0.05, 0.2];
+
+/// Robot–task pairs from which a state's per-robot rows are computed on all cores.
+const PARALLEL_PAIRS: usize = 1 << 16;
 
 /// The state of a sequential allocation seen through per-task summaries: each task's
 /// members and the demand of the robots not yet placed.
@@ -60,38 +64,57 @@ impl<'a> PriceState<'a> {
     pub fn new(instance: &'a Instance) -> Self {
         let (n, m) = (instance.num_robots(), instance.num_tasks());
         let unit = Units::ScaleFree.welfare_unit(instance);
-        let mut nearest = Vec::with_capacity(n);
+        let mut nearest = vec![0u32; n];
         let mut soft = vec![0.0f32; n * 2 * m];
+        // Each robot's nearest task and soft-min weights (on all cores when large), then
+        // the demands summed in robot order, so the result is the same on any core count.
+        let robot_row =
+            |cost: &mut Vec<f64>, (i, (weights, near)): (usize, (&mut [f32], &mut u32))| {
+                cost.clear();
+                let robot = RobotId(i as u32);
+                cost.extend(instance.task_ids().map(|j| instance.cost(robot, j) / unit));
+                let (best, low) =
+                    cost.iter()
+                        .enumerate()
+                        .fold(
+                            (0, f64::INFINITY),
+                            |(b, lo), (j, &c)| {
+                                if c < lo { (j, c) } else { (b, lo) }
+                            },
+                        );
+                *near = best as u32;
+                for (weights, &tau) in weights.chunks_exact_mut(m).zip(&SOFT_TEMPERATURES) {
+                    let mut total = 0.0;
+                    for (w, &c) in weights.iter_mut().zip(cost.iter()) {
+                        let e = (-(c - low) / tau).exp();
+                        *w = e as f32;
+                        total += e;
+                    }
+                    for w in weights.iter_mut() {
+                        *w = (f64::from(*w) / total) as f32;
+                    }
+                }
+            };
+        let rows = soft
+            .chunks_exact_mut(2 * m)
+            .zip(nearest.iter_mut())
+            .enumerate();
+        if n * m >= PARALLEL_PAIRS {
+            let rows = soft
+                .par_chunks_exact_mut(2 * m)
+                .zip(nearest.par_iter_mut())
+                .enumerate();
+            rows.for_each_init(Vec::new, robot_row);
+        } else {
+            let mut cost = Vec::with_capacity(m);
+            rows.for_each(|row| robot_row(&mut cost, row));
+        }
         let mut demand_nearest = vec![0.0; m];
         let mut demand_soft = vec![0.0; 2 * m];
-        let mut cost = vec![0.0; m];
-        for i in instance.robot_ids() {
-            for j in instance.task_ids() {
-                cost[j.index()] = instance.cost(i, j) / unit;
-            }
-            let (best, low) =
-                cost.iter()
-                    .enumerate()
-                    .fold(
-                        (0, f64::INFINITY),
-                        |(b, lo), (j, &c)| {
-                            if c < lo { (j, c) } else { (b, lo) }
-                        },
-                    );
-            nearest.push(best as u32);
-            demand_nearest[best] += 1.0;
-            for (t, &tau) in SOFT_TEMPERATURES.iter().enumerate() {
-                let weights = &mut soft[(i.index() * 2 + t) * m..(i.index() * 2 + t + 1) * m];
-                let mut total = 0.0;
-                for (w, &c) in weights.iter_mut().zip(&cost) {
-                    let e = (-(c - low) / tau).exp();
-                    *w = e as f32;
-                    total += e;
-                }
-                for (j, w) in weights.iter_mut().enumerate() {
-                    *w = (f64::from(*w) / total) as f32;
-                    demand_soft[t * m + j] += f64::from(*w);
-                }
+        for (&near, weights) in nearest.iter().zip(soft.chunks_exact(2 * m)) {
+            demand_nearest[near as usize] += 1.0;
+            for (d, &w) in demand_soft.iter_mut().zip(weights) {
+                *d += f64::from(w);
             }
         }
         PriceState {

@@ -20,6 +20,9 @@
 //! prices are near the full problem's, so only a few units per task move at each level,
 //! and almost all the work is reading the N × M costs once.
 
+use std::cmp::{Ordering, Reverse};
+use std::collections::BinaryHeap;
+
 use afg_game::{Instance, Point, TaskId};
 use rayon::prelude::*;
 
@@ -115,10 +118,8 @@ impl<'a> Level<'a> {
     /// Solves this level from `warm` prices (sink potential 0), or from zero prices
     /// with the sink's potential set so that the counts they buy add up to N.
     fn solve(&self, warm: Option<&[f64]>) -> Solution {
-        let (prices, sink) = match warm {
-            Some(p) => (p.to_vec(), 0.0),
-            None => (vec![0.0; self.m], self.balancing_offset()),
-        };
+        let prices = warm.map_or_else(|| vec![0.0; self.m], <[f64]>::to_vec);
+        let sink = self.balancing_offset(&prices);
         let mut flow = Flow::new(self, prices, sink);
         let mut routed = 0;
         while let Some(target) = flow.shortest_path() {
@@ -133,23 +134,29 @@ impl<'a> Level<'a> {
         }
     }
 
-    /// A sink potential μ at which zero prices buy N slots in all (the smallest, by
-    /// bisection), so that a cold start begins balanced.
-    fn balancing_offset(&self) -> f64 {
-        let bought = |mu: f64| (0..self.m).map(|j| self.count_at(j, -mu)).sum::<usize>();
-        let top = (0..self.m)
-            .map(|j| self.marginal(j, 1))
-            .fold(f64::NEG_INFINITY, f64::max);
-        let (mut lo, mut hi) = (-top, 1.0f64);
+    /// A sink potential μ at which `prices` buy N slots in all (or, where ties make that
+    /// impossible, the least above), by bisection: the flow starts with the sink balanced.
+    fn balancing_offset(&self, prices: &[f64]) -> f64 {
+        let bought = |mu: f64| {
+            (0..self.m)
+                .map(|j| self.count_at(j, prices[j] - mu))
+                .sum::<usize>()
+        };
+        // At `lo` every price is at least its task's first marginal value: none buys.
+        let mut lo = (0..self.m)
+            .map(|j| prices[j] - self.marginal(j, 1))
+            .fold(f64::INFINITY, f64::min);
+        let (mut hi, mut step) = (lo + 1.0, 1.0);
         while bought(hi) < self.n {
-            hi = 2.0 * hi.abs() + 1.0;
+            step *= 2.0;
+            hi = lo + step;
         }
         for _ in 0..64 {
             let mid = 0.5 * (lo + hi);
-            if bought(mid) >= self.n {
-                hi = mid;
-            } else {
-                lo = mid;
+            match bought(mid).cmp(&self.n) {
+                Ordering::Equal => return mid,
+                Ordering::Greater => hi = mid,
+                Ordering::Less => lo = mid,
             }
         }
         hi
@@ -200,6 +207,23 @@ struct Flow<'l, 'a> {
     dist: Vec<f64>,
     pred: Vec<Pred>,
     done: Vec<bool>,
+    queue: BinaryHeap<Reverse<Queued>>,
+}
+
+/// A node waiting in Dijkstra's queue at a tentative distance.
+#[derive(Clone, Copy, PartialEq)]
+struct Queued(f64, usize);
+
+impl Eq for Queued {}
+impl PartialOrd for Queued {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+impl Ord for Queued {
+    fn cmp(&self, other: &Self) -> Ordering {
+        self.0.total_cmp(&other.0).then(self.1.cmp(&other.1))
+    }
 }
 
 /// How a node was reached on the current shortest-path tree.
@@ -258,6 +282,7 @@ impl<'l, 'a> Flow<'l, 'a> {
             dist: vec![0.0; m + 1],
             pred: vec![Pred::Source; m + 1],
             done: vec![false; m + 1],
+            queue: BinaryHeap::new(),
         }
     }
 
@@ -267,24 +292,26 @@ impl<'l, 'a> Flow<'l, 'a> {
     fn shortest_path(&mut self) -> Option<usize> {
         let m = self.level.m;
         let t = sink(m);
-        for u in 0..=m {
-            self.dist[u] = if self.excess[u] > 0 {
-                0.0
-            } else {
-                f64::INFINITY
-            };
-            self.pred[u] = Pred::Source;
-            self.done[u] = false;
-        }
-        if self.excess.iter().all(|&e| e <= 0) {
+        // One source, the node with most excess (searching from all of them would settle
+        // every one at distance 0 first).
+        let source = (0..=m).max_by_key(|&u| (self.excess[u], std::cmp::Reverse(u)))?;
+        if self.excess[source] <= 0 {
             return None;
         }
+        self.dist.fill(f64::INFINITY);
+        self.done.fill(false);
+        self.dist[source] = 0.0;
+        self.pred[source] = Pred::Source;
+        self.queue.clear();
+        self.queue.push(Reverse(Queued(0.0, source)));
         let target = loop {
-            let u = (0..=m)
-                .filter(|&u| !self.done[u])
-                .min_by(|&a, &b| self.dist[a].total_cmp(&self.dist[b]))
+            let Reverse(Queued(d, u)) = self
+                .queue
+                .pop()
                 .expect("a node short of units is reachable");
-            assert!(self.dist[u].is_finite(), "the residual graph is connected");
+            if self.done[u] || d > self.dist[u] {
+                continue;
+            }
             self.done[u] = true;
             if self.excess[u] < 0 {
                 break u;
@@ -308,6 +335,7 @@ impl<'l, 'a> Flow<'l, 'a> {
         if d < self.dist[to] {
             self.dist[to] = d;
             self.pred[to] = pred;
+            self.queue.push(Reverse(Queued(d, to)));
         }
     }
 
@@ -326,6 +354,7 @@ impl<'l, 'a> Flow<'l, 'a> {
                     from: j,
                     robot: e.robot,
                 };
+                self.queue.push(Reverse(Queued(d, k)));
             }
         }
         let t = sink(m);

@@ -26,6 +26,7 @@ use std::path::Path;
 
 use afg_baseline::{AllocError, AllocStats, Allocation, Allocator};
 use afg_game::{Instance, RobotId, TaskId};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use afg_graph::{PriceState, TASK_FEATURES};
@@ -323,6 +324,24 @@ impl PricePolicy {
         let mut scratch = PriceScratch::default();
         state.features(&mut features);
         self.mlp.prices_with(&features, &mut prices, &mut scratch);
+        let uncapped = instance
+            .task_ids()
+            .all(|j| instance.capacity(j) == usize::MAX);
+        if self.mode == PriceMode::OneShot && uncapped {
+            // Fixed prices and no capacities: robots do not interact, so every robot's
+            // choice is made on all cores, then placed in order.
+            let tasks: Vec<Option<TaskId>> = (0..instance.num_robots() as u32)
+                .into_par_iter()
+                .map_init(
+                    || (vec![0.0; m], vec![false; m]),
+                    |(q, mask), robot| Self::choose(&state, RobotId(robot), &prices, q, mask),
+                )
+                .collect();
+            for (robot, task) in instance.robot_ids().zip(tasks) {
+                state.assign(robot, task.expect("uncapped tasks take any robot"));
+            }
+            return Ok(state);
+        }
         for robot in instance.robot_ids() {
             let refresh = robot.index() > 0 && robot.index() % self.block == 0;
             if self.mode == PriceMode::Sequential && refresh {
