@@ -132,13 +132,7 @@ fn check_inputs(
             "robot {i} is unassigned: only complete assignments can be optimal"
         )));
     }
-    if prices.len() != instance.num_tasks() || prices.iter().any(|p| !p.is_finite()) {
-        return Err(AllocError::InvalidParameter(format!(
-            "need {} finite task prices, got {:?}",
-            instance.num_tasks(),
-            prices
-        )));
-    }
+    super::check_prices(instance, prices)?;
     Ok(())
 }
 

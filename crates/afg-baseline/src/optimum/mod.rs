@@ -112,6 +112,37 @@ impl Optimum {
         (assignment_of(instance, &solution.task_of), solution.prices)
     }
 
+    /// [`Optimum::with_prices`] started from `prices` (one per task, any common offset)
+    /// instead of from a subsample's: every robot starts at its cheapest task under
+    /// them and only what is out of balance is routed. Good prices — a previous
+    /// optimum's after robots left or joined, or a learned model's — leave little to
+    /// route; zero prices start from the nearest-task assignment.
+    ///
+    /// # Errors
+    /// [`AllocError::InvalidParameter`] unless `prices` are M finite numbers.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::Optimum;
+    /// use afg_game::GeneratorConfig;
+    /// let inst = GeneratorConfig::paper(500, 5, 3).generate()?;
+    /// let (opt, prices) = Optimum.with_prices(&inst);
+    /// let (cold, _) = Optimum.with_prices_from(&inst, &[0.0; 5])?;
+    /// let (warm, _) = Optimum.with_prices_from(&inst, &prices)?;
+    /// assert!((inst.welfare(&cold) - inst.welfare(&opt)).abs() < 1e-9);
+    /// assert!((inst.welfare(&warm) - inst.welfare(&opt)).abs() < 1e-9);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn with_prices_from(
+        &self,
+        instance: &Instance,
+        prices: &[f64],
+    ) -> Result<(Assignment, Vec<f64>), AllocError> {
+        check_prices(instance, prices)?;
+        let solution = transport::solve_from(instance, prices);
+        Ok((assignment_of(instance, &solution.task_of), solution.prices))
+    }
+
     /// For every task a, the best final welfare with the robots assigned in `partial`
     /// fixed and `actor` (unassigned there) on a; `None` where a has no room for it.
     /// The same numbers as one [`Optimum::complete`] per task, from one completion:
@@ -171,6 +202,17 @@ impl Optimum {
             })
             .collect())
     }
+}
+
+/// Checks that `prices` are one finite number per task.
+fn check_prices(instance: &Instance, prices: &[f64]) -> Result<(), AllocError> {
+    if prices.len() != instance.num_tasks() || prices.iter().any(|p| !p.is_finite()) {
+        return Err(AllocError::InvalidParameter(format!(
+            "need {} finite task prices, got {prices:?}",
+            instance.num_tasks()
+        )));
+    }
+    Ok(())
 }
 
 /// Checks that `partial` fits `instance` and respects its capacities.

@@ -50,6 +50,12 @@ pub(super) fn solve(inst: &Instance) -> Solution {
     Level::new(inst, 1).solve(warm.as_deref())
 }
 
+/// Solves `inst` exactly from `prices` (one per task, any common offset), without
+/// subsample levels.
+pub(super) fn solve_from(inst: &Instance, prices: &[f64]) -> Solution {
+    Level::new(inst, 1).solve(Some(prices))
+}
+
 /// The prices of the subsample of every `stride`-th robot, solved from the prices of
 /// its own subsample; `None` below [`BASE_ROBOTS`].
 fn coarse_prices(inst: &Instance, stride: usize) -> Option<Vec<f64>> {
@@ -286,7 +292,7 @@ impl<'l, 'a> Flow<'l, 'a> {
         }
     }
 
-    /// Dijkstra with reduced costs from every node with excess to the nearest node
+    /// Dijkstra with reduced costs from the node with most excess to the nearest node
     /// short of units; updates the potentials (keeping every reduced cost
     /// non-negative and the path's zero) and returns that node. `None` when balanced.
     fn shortest_path(&mut self) -> Option<usize> {
@@ -294,7 +300,7 @@ impl<'l, 'a> Flow<'l, 'a> {
         let t = sink(m);
         // One source, the node with most excess (searching from all of them would settle
         // every one at distance 0 first).
-        let source = (0..=m).max_by_key(|&u| (self.excess[u], std::cmp::Reverse(u)))?;
+        let source = (0..=m).max_by_key(|&u| (self.excess[u], Reverse(u)))?;
         if self.excess[source] <= 0 {
             return None;
         }
