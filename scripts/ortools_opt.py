@@ -61,26 +61,39 @@ def network(instance):
     return tails, heads, costs, n, m, sink
 
 
+def solve_once(tails, heads, unit_costs, n, m, sink):
+    """Builds the network (not timed), solves it (timed): (status, seconds, assignment)."""
+    smcf = min_cost_flow.SimpleMinCostFlow()
+    arcs = smcf.add_arcs_with_capacity_and_unit_cost(
+        tails.astype(np.int32), heads.astype(np.int32), np.ones(len(tails), np.int64), unit_costs
+    )
+    smcf.set_nodes_supplies(np.array([n, sink], np.int32), np.array([n, -n], np.int64))
+    start = time.perf_counter()
+    status = smcf.solve()
+    elapsed = time.perf_counter() - start
+    if status != smcf.OPTIMAL:
+        return status, elapsed, None
+    flows = smcf.flows(arcs[n : n + n * m])
+    return status, elapsed, np.argmax(flows.reshape(n, m), axis=1)
+
+
 def solve(instance, repeats):
     tails, heads, costs, n, m, sink = network(instance)
     nodes = sink + 1
     scale = min(MAX_SCALE, COST_LIMIT / (nodes * max(float(costs.max()), 1e-300)))
-    unit_costs = np.rint(costs * scale).astype(np.int64)
-    best, flows = math.inf, None
-    for _ in range(repeats):
-        smcf = min_cost_flow.SimpleMinCostFlow()
-        arcs = smcf.add_arcs_with_capacity_and_unit_cost(
-            tails.astype(np.int32), heads.astype(np.int32), np.ones(len(tails), np.int64), unit_costs
-        )
-        smcf.set_nodes_supplies(np.array([n, sink], np.int32), np.array([n, -n], np.int64))
-        start = time.perf_counter()
-        status = smcf.solve()
-        elapsed = time.perf_counter() - start
-        if status != smcf.OPTIMAL:
-            raise SystemExit(f"OR-Tools status {status} (not OPTIMAL)")
+    best, assignment = math.inf, None
+    while assignment is None:
+        unit_costs = np.rint(costs * scale).astype(np.int64)
+        status, elapsed, assignment = solve_once(tails, heads, unit_costs, n, m, sink)
+        if assignment is None:
+            if "BAD_COST_RANGE" not in str(status) or scale < 1.0:
+                raise SystemExit(f"OR-Tools status {status} (not OPTIMAL)")
+            # OR-Tools' own overflow check is stricter than the bound above.
+            scale /= 16.0
+    best = elapsed
+    for _ in range(repeats - 1):
+        _, elapsed, _ = solve_once(tails, heads, unit_costs, n, m, sink)
         best = min(best, elapsed)
-        flows = smcf.flows(arcs[n : n + n * m])
-    assignment = np.argmax(flows.reshape(n, m), axis=1)
     return {"seconds": best, "scale": scale, "tasks": assignment.tolist()}
 
 
