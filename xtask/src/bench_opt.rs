@@ -71,6 +71,8 @@ impl FromStr for Case {
 struct Row {
     robots: usize,
     tasks: usize,
+    /// Peak RSS of generating the instance and solving it once (nothing else held).
+    opt_peak_rss_mib: Option<f64>,
     #[serde(with = "secs")]
     opt: Duration,
     #[serde(with = "secs")]
@@ -150,6 +152,8 @@ fn check_python(python: &Path) -> Result<()> {
 }
 
 fn measure(case: Case, args: &BenchOptArgs, dir: &Path) -> Result<Row> {
+    afg_eval::bench::reset_peak_rss();
+    let opt_peak_rss_mib = peak_rss_of_optimum(case, args.seed)?;
     let file = dir.join(format!(
         "n{}_m{}_seed{}.jsonl",
         case.robots, case.tasks, args.seed
@@ -184,6 +188,7 @@ fn measure(case: Case, args: &BenchOptArgs, dir: &Path) -> Result<Row> {
     Ok(Row {
         robots: case.robots,
         tasks: case.tasks,
+        opt_peak_rss_mib,
         opt,
         opt_one_thread,
         opt_from_zero,
@@ -195,6 +200,14 @@ fn measure(case: Case, args: &BenchOptArgs, dir: &Path) -> Result<Row> {
         greedy,
         nearest,
     })
+}
+
+/// The peak RSS (MiB) of making the instance and solving it once, before anything
+/// else of the case is in memory.
+fn peak_rss_of_optimum(case: Case, seed: u64) -> Result<Option<f64>> {
+    let inst = GeneratorConfig::paper(case.robots, case.tasks, seed).generate()?;
+    std::hint::black_box(Optimum.with_prices(&inst));
+    Ok(afg_eval::bench::peak_rss_mib())
 }
 
 fn empty(inst: &Instance) -> Assignment {
@@ -301,8 +314,8 @@ fn markdown(rows: &[Row], threads: usize) -> String {
     let mut md = format!(
         "| N | M | afg OPT ({threads} threads) | afg OPT (1 thread) | OR-Tools solve() | OR-Tools / afg \
          | welfare rel. diff. | certified gap | units routed | from zero prices | reference (robot by robot) \
-         | read N·M distances | OPT / read | greedy | greedy / read | nearest |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
+         | read N·M distances | OPT / read | greedy | greedy / read | nearest | OPT peak RSS |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
     );
     let ratio = |a: Duration, b: Duration| format!("{:.1}×", a.as_secs_f64() / b.as_secs_f64());
     for r in rows {
@@ -315,8 +328,11 @@ fn markdown(rows: &[Row], threads: usize) -> String {
             None => ("—".into(), "—".into(), "—".into()),
         };
         let reference = r.reference.map_or("—".into(), duration);
+        let rss = r
+            .opt_peak_rss_mib
+            .map_or("—".into(), |m| format!("{m:.0} MiB"));
         md += &format!(
-            "| {} | {} | {} | {} | {ort} | {vs} | {diff} | {:.1e} | {} | {} | {reference} | {} | {} | {} | {} | {} |\n",
+            "| {} | {} | {} | {} | {ort} | {vs} | {diff} | {:.1e} | {} | {} | {reference} | {} | {} | {} | {} | {} | {rss} |\n",
             r.robots,
             r.tasks,
             duration(r.opt),

@@ -127,13 +127,6 @@ fn instance(case: &Case) -> Result<Instance, EvalError> {
     Ok(GeneratorConfig::paper(case.robots, case.tasks, case.seed).generate()?)
 }
 
-fn peak_rss_mib() -> Option<f64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib / 1024.0)
-}
-
 /// Runs one case in this process and measures it.
 ///
 /// # Errors
@@ -186,7 +179,7 @@ pub fn run_case(case: Case) -> Result<Outcome, EvalError> {
             }
         }
     }
-    out.peak_rss_mib = peak_rss_mib();
+    out.peak_rss_mib = crate::bench::peak_rss_mib();
     Ok(out)
 }
 

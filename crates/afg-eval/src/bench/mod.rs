@@ -28,6 +28,28 @@ use crate::tables::duration;
 const M: usize = GeneratorConfig::PAPER_TASKS;
 use plain::PaddedGraph;
 
+/// The peak resident set size of this process in MiB (Linux; `None` elsewhere).
+///
+/// # Examples
+/// ```
+/// afg_eval::bench::reset_peak_rss();
+/// let peak = afg_eval::bench::peak_rss_mib();
+/// assert!(peak.is_none_or(|mib| mib > 0.0));
+/// ```
+pub fn peak_rss_mib() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib / 1024.0)
+}
+
+/// Starts [`peak_rss_mib`] again from the current resident set (Linux ≥ 4.0; elsewhere,
+/// or where refused, the peak keeps counting from the start of the process).
+pub fn reset_peak_rss() {
+    // Writing 5 to clear_refs resets the high-water mark (proc(5)).
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+}
+
 /// Median wall time of `alloc` on `instance` over repeated runs (at least one, at most
 /// 20, until `budget_s` seconds are spent), and the welfare of its allocation.
 ///
