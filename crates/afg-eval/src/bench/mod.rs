@@ -256,7 +256,7 @@ pub fn allocators_markdown(
     methods.retain(|&m| m != Method::Random);
     methods.push(Method::DaDecentralised);
     let mut md = format!(
-        "M = {tasks}; instance seed 7, paper distribution; median wall time on one core, welfare as % of OPT.\n\n| N |"
+        "M = {tasks}; instance seed 7, paper distribution; median wall time (opt and nearest spread their N · M loops over all cores), welfare as % of OPT.\n\n| N |"
     );
     for m in &methods {
         md += &format!(" {m} |");
