@@ -131,15 +131,6 @@ impl Units {
             }
         }
     }
-
-    /// The command-line name: `mean-reward` or `scale-free`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Units::MeanReward => "mean-reward",
-            Units::ScaleFree => "scale-free",
-            Units::Bounded => "bounded",
-        }
-    }
 }
 
 /// The mean initial reward `mean_j r_j` of the instance (1 if all rewards are 0): the

@@ -219,15 +219,6 @@ pub enum Shaping {
 }
 
 impl Shaping {
-    /// `none`, `greedy` or `optimal`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Shaping::None => "none",
-            Shaping::Greedy => "greedy",
-            Shaping::Optimal => "optimal",
-        }
-    }
-
     /// `W(completion of assignment)` by this rule; `W(assignment)` for
     /// [`Shaping::None`] (so that Φ = 0).
     ///

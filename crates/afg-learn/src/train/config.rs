@@ -55,16 +55,6 @@ pub enum Preset {
     Paper,
 }
 
-impl Preset {
-    /// `ours` or `paper`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Preset::Ours => "ours",
-            Preset::Paper => "paper",
-        }
-    }
-}
-
 /// Every setting of a training run. Stored in the run directory; `--resume` refuses a
 /// directory whose settings differ from the ones asked for.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
