@@ -1,5 +1,6 @@
 //! SVG figures: validation curves of training runs and maps of assignments.
 
+use afg_baseline::Method;
 use afg_game::{Assignment, Instance};
 use plotters::prelude::*;
 
@@ -64,7 +65,7 @@ pub fn curves_svg(curves: &[Curve], title: &str) -> Result<String, EvalError> {
                 });
         }
         // The classical methods on each distinct validation set, dashed, in greys.
-        let mut drawn: Vec<(String, f64)> = Vec::new();
+        let mut drawn: Vec<(Method, f64)> = Vec::new();
         for c in curves {
             for (name, w) in &c.baselines {
                 if drawn
@@ -73,7 +74,7 @@ pub fn curves_svg(curves: &[Curve], title: &str) -> Result<String, EvalError> {
                 {
                     continue;
                 }
-                drawn.push((name.clone(), *w));
+                drawn.push((*name, *w));
                 let grey = 40 + 45 * (drawn.len() % 4) as u8;
                 let shade = RGBColor(grey, grey, grey);
                 chart

@@ -18,14 +18,14 @@ pub struct Curve {
     /// (gradient step, mean validation welfare).
     pub points: Vec<(f64, f64)>,
     /// Mean welfare of the classical methods on the validation set, as logged.
-    pub baselines: Vec<(String, f64)>,
+    pub baselines: Vec<(Method, f64)>,
 }
 
 /// What a run's log says about its training: the configuration and classical
 /// baselines of its start event, its validations and the last elapsed time.
 struct RunLog {
     config: Box<TrainConfig>,
-    baselines: BTreeMap<String, f64>,
+    baselines: BTreeMap<Method, f64>,
     validations: Vec<ValidationLine>,
     elapsed_s: f64,
 }
@@ -88,7 +88,7 @@ pub fn read_curve(dir: &Path) -> Result<Curve, EvalError> {
             .collect(),
         baselines: [Method::Opt, Method::Greedy, Method::Nearest, Method::Random]
             .into_iter()
-            .filter_map(|m| Some((m.name().to_owned(), *log.baselines.get(m.name())?)))
+            .filter_map(|m| Some((m, *log.baselines.get(&m)?)))
             .collect(),
     })
 }
@@ -106,7 +106,7 @@ pub fn report_markdown(dirs: &[PathBuf], at_step: Option<u64>) -> Result<String,
         "| run | N | steps | wall time | final validation welfare | % of OPT | best (step) | collapsed validations |\n|---|---|---|---|---|---|---|---|\n",
     );
     // Keyed by the scale's name: N, with M when it is not the paper's 5.
-    let mut baseline_rows: Vec<(String, BTreeMap<String, f64>)> = Vec::new();
+    let mut baseline_rows: Vec<(String, BTreeMap<Method, f64>)> = Vec::new();
     for dir in dirs {
         let run = RunDir::new(dir);
         let RunLog {
@@ -162,7 +162,7 @@ pub fn report_markdown(dirs: &[PathBuf], at_step: Option<u64>) -> Result<String,
     for (n, b) in baseline_rows {
         let cells: Vec<String> = methods
             .iter()
-            .map(|m| b.get(m.name()).map_or("–".into(), |v| format!("{v:.3}")))
+            .map(|m| b.get(m).map_or("–".into(), |v| format!("{v:.3}")))
             .collect();
         let _ = writeln!(out, "| {n} | {} |", cells.join(" | "));
     }

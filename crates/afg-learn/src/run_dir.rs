@@ -14,6 +14,7 @@ use std::fs::File;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+use afg_baseline::Method;
 use serde::{Deserialize, Serialize};
 
 use crate::{LearnError, TrainConfig, Validation};
@@ -29,9 +30,9 @@ pub enum LogEvent {
         /// The git revision it was started from, if known.
         #[serde(default)]
         git_revision: Option<String>,
-        /// Mean welfare of the classical methods on the validation set, by method name.
+        /// Mean welfare of the classical methods on the validation set.
         #[serde(default)]
-        baselines: BTreeMap<String, f64>,
+        baselines: BTreeMap<Method, f64>,
     },
     /// Mean loss over the last ten gradient steps.
     Step {

@@ -31,7 +31,7 @@ fn events_round_trip_and_old_validation_lines_still_read() {
         LogEvent::Start {
             config: Box::new(config()),
             git_revision: Some("abc".into()),
-            baselines: [("opt".to_owned(), 13.0)].into_iter().collect(),
+            baselines: [(afg_baseline::Method::Opt, 13.0)].into_iter().collect(),
         },
         LogEvent::Step {
             step: 10,

@@ -185,7 +185,7 @@ fn a_session_logs_and_saves_its_run_and_refuses_a_second_writer() {
         (**logged == config, git_revision.as_deref()),
         (true, Some("abc"))
     );
-    assert!(baselines["opt"] >= baselines["greedy"]);
+    assert!(baselines[&afg_baseline::Method::Opt] >= baselines[&afg_baseline::Method::Greedy]);
     let steps: Vec<u64> = log
         .iter()
         .filter(|e| matches!(e, LogEvent::Step { .. }))

@@ -137,8 +137,8 @@ impl Session {
     }
 }
 
-/// Mean welfare of the classical methods on the validation set of `config`, by name.
-fn baselines(config: &TrainConfig) -> Result<BTreeMap<String, f64>, LearnError> {
+/// Mean welfare of the classical methods on the validation set of `config`.
+fn baselines(config: &TrainConfig) -> Result<BTreeMap<Method, f64>, LearnError> {
     let insts = validation_instances(
         config.robots,
         config.network.tasks(),
@@ -151,7 +151,7 @@ fn baselines(config: &TrainConfig) -> Result<BTreeMap<String, f64>, LearnError> 
         for inst in &insts {
             total += inst.welfare(&alloc.allocate(inst)?.assignment);
         }
-        out.insert(m.name().to_owned(), total / insts.len() as f64);
+        out.insert(m, total / insts.len() as f64);
     }
     Ok(out)
 }
