@@ -37,6 +37,42 @@ pub use dynamics::{CentralisedDa, DecentralisedDa, DecentralisedRun};
 pub use optimum::{Certificate, Optimum, verify_optimal};
 pub use simple::{Blind, Greedy, Nearest, RandomAllocator};
 
+/// `100 · welfare / opt_welfare`, the one "% of OPT" of every table, command, training
+/// validation and summary; `None` when the optimum's welfare is not positive (all
+/// rewards zero, or tasks so far away that every robot loses): a ratio to it would
+/// flip sign or divide by zero.
+///
+/// # Examples
+/// ```
+/// use afg_baseline::percent_of_opt;
+/// assert_eq!(percent_of_opt(49.0, 50.0), Some(98.0));
+/// assert_eq!(percent_of_opt(-2.0, -1.0), None);
+/// assert_eq!(percent_of_opt(0.0, 0.0), None);
+/// ```
+pub fn percent_of_opt(welfare: f64, opt_welfare: f64) -> Option<f64> {
+    (opt_welfare > 0.0).then(|| 100.0 * welfare / opt_welfare)
+}
+
+/// The mean over instances of [`percent_of_opt`] for (welfare, optimum's welfare)
+/// pairs — a mean of ratios, as every table reports it, not a ratio of sums; `None`
+/// for no instances or when one instance's ratio is undefined.
+///
+/// # Examples
+/// ```
+/// use afg_baseline::mean_percent_of_opt;
+/// assert_eq!(mean_percent_of_opt([(9.0, 10.0), (1.0, 1.0)]), Some(95.0)); // a ratio of sums says 90.9
+/// assert_eq!(mean_percent_of_opt([(1.0, 1.0), (1.0, 0.0)]), None);
+/// assert_eq!(mean_percent_of_opt([]), None);
+/// ```
+pub fn mean_percent_of_opt(pairs: impl IntoIterator<Item = (f64, f64)>) -> Option<f64> {
+    let (mut total, mut count) = (0.0, 0usize);
+    for (welfare, opt) in pairs {
+        total += percent_of_opt(welfare, opt)?;
+        count += 1;
+    }
+    (count > 0).then(|| total / count as f64)
+}
+
 /// An allocation method: instance in, complete assignment and statistics out.
 ///
 /// `Send + Sync` so that evaluations can run instances on several threads.

@@ -22,6 +22,7 @@ mod score;
 pub mod solve;
 pub mod tables;
 
+pub use afg_baseline::percent_of_opt;
 pub use error::EvalError;
 pub use model::{ModelSpec, PriceSpec, Variant};
-pub use score::{Score, Summary, evaluate, optima, optimum_welfare, percent_of_opt};
+pub use score::{Score, Summary, evaluate, optima, optimum_welfare};

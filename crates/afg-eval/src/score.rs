@@ -2,7 +2,7 @@
 
 use std::time::Instant;
 
-use afg_baseline::{Allocator, Optimum};
+use afg_baseline::{Allocator, Optimum, percent_of_opt};
 use afg_game::{Assignment, Instance, Preference};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -65,21 +65,6 @@ impl Score {
             ns_rate_selfish: instance.ns_rate(assignment, Preference::Selfish),
         })
     }
-}
-
-/// `100 · welfare / opt_welfare`, the one "% of OPT" of every table and command; `None`
-/// when the optimum's welfare is not positive (all rewards zero, or tasks so far away
-/// that every robot loses): a ratio to it would flip sign or divide by zero.
-///
-/// # Examples
-/// ```
-/// use afg_eval::percent_of_opt;
-/// assert_eq!(percent_of_opt(49.0, 50.0), Some(98.0));
-/// assert_eq!(percent_of_opt(-2.0, -1.0), None);
-/// assert_eq!(percent_of_opt(0.0, 0.0), None);
-/// ```
-pub fn percent_of_opt(welfare: f64, opt_welfare: f64) -> Option<f64> {
-    (opt_welfare > 0.0).then(|| 100.0 * welfare / opt_welfare)
 }
 
 /// Welfare of the exact optimum of `instance`.

@@ -119,7 +119,8 @@ pub struct PriceRound {
     /// Mean training loss of the round's steps (β units squared).
     #[serde(with = "crate::log_float")]
     pub loss: f64,
-    /// Validation welfare of the sequential policy, % of OPT (sum over instances).
+    /// Validation welfare of the sequential policy, % of OPT (mean over instances;
+    /// logs written before 2026-12-02 hold the ratio of the sums).
     #[serde(with = "crate::log_float")]
     pub sequential: f64,
     /// The same for the one-shot policy.
@@ -207,7 +208,8 @@ pub struct PriceTrainer {
     round: usize,
     episodes: u64,
     validation: Vec<Instance>,
-    optimum: f64,
+    /// The optimum's welfare of each validation instance.
+    optima: Vec<f64>,
 }
 
 impl PriceTrainer {
@@ -219,7 +221,6 @@ impl PriceTrainer {
         config.validate()?;
         let (validation, optima) =
             validation_set(config.robots, config.tasks, config.validation_instances)?;
-        let optimum = optima.iter().sum();
         Ok(PriceTrainer {
             net: config.network.init(&Default::default()),
             optim: AdamConfig::new().init(),
@@ -233,7 +234,7 @@ impl PriceTrainer {
             round: 0,
             episodes: 0,
             validation,
-            optimum,
+            optima,
             config,
         })
     }
@@ -278,14 +279,15 @@ impl PriceTrainer {
         let mlp = PriceMlp::from_burn(&self.net);
         let score = |mode| -> Result<f64, LearnError> {
             let policy = PricePolicy::new(mlp.clone(), mode);
-            let mut total = 0.0;
+            let mut welfare = Vec::with_capacity(self.validation.len());
             for inst in &self.validation {
                 let state = policy
                     .rollout(inst)
                     .map_err(|e| LearnError::InvalidAction(e.to_string()))?;
-                total += inst.welfare(state.assignment());
+                welfare.push(inst.welfare(state.assignment()));
             }
-            Ok(100.0 * total / self.optimum)
+            let pairs = welfare.into_iter().zip(self.optima.iter().copied());
+            Ok(afg_baseline::mean_percent_of_opt(pairs).unwrap_or(f64::NAN))
         };
         Ok(PriceRound {
             round: self.round,

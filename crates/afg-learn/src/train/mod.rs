@@ -449,12 +449,11 @@ impl Trainer {
             .map(|(i, a)| i.welfare(a))
             .collect();
         let mean = welfare.iter().sum::<f64>() / k;
-        let pct = welfare
+        let pairs = welfare
             .iter()
-            .zip(&self.validation_opt)
-            .map(|(w, o)| 100.0 * w / o)
-            .sum::<f64>()
-            / k;
+            .copied()
+            .zip(self.validation_opt.iter().copied());
+        let pct = afg_baseline::mean_percent_of_opt(pairs).unwrap_or(f64::NAN);
         let largest_task_share = assignments
             .iter()
             .map(|a| {
