@@ -231,6 +231,38 @@ struct View {
 }
 
 impl View {
+    /// The view of `n` robots, none assigned, over `m` tasks.
+    fn empty(n: usize, m: usize) -> View {
+        View {
+            tasks: std::iter::repeat_n(None, n).collect(),
+            sizes: vec![0; m],
+            evolution: 0,
+            stamp: 0,
+            last: None,
+        }
+    }
+
+    /// The partition this view holds.
+    fn assignment(&self) -> Assignment {
+        let mut assignment = Assignment::unassigned(self.tasks.len(), self.sizes.len());
+        for (i, &task) in self.tasks.iter().enumerate() {
+            assignment.set(RobotId(i as u32), task);
+        }
+        assignment
+    }
+
+    /// The robots whose changes made this view, oldest first.
+    fn chain(&self) -> Vec<RobotId> {
+        let mut chain = Vec::with_capacity(self.evolution as usize);
+        let mut link = self.last.as_deref();
+        while let Some(c) = link {
+            chain.push(c.robot);
+            link = c.prev.as_deref();
+        }
+        chain.reverse();
+        chain
+    }
+
     fn key(&self) -> (u64, u64) {
         (self.evolution, self.stamp)
     }
@@ -279,13 +311,7 @@ impl DecentralisedDa {
             let added_edges = graph.connect_components(instance.robots());
             let per_round = 2 * graph.num_edges() as u64;
             let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
-            let empty = Rc::new(View {
-                tasks: std::iter::repeat_n(None, n).collect(),
-                sizes: vec![0; instance.num_tasks()],
-                evolution: 0,
-                stamp: 0,
-                last: None,
-            });
+            let empty = Rc::new(View::empty(n, instance.num_tasks()));
             let mut views: Vec<Rc<View>> = vec![empty; n];
             // Robots to act in the next round, in index order (the stamps are drawn in it).
             let mut unsatisfied: Vec<u32> = (0..n as u32).collect();
@@ -317,21 +343,11 @@ impl DecentralisedDa {
                 // A view that did not change since it was last sent cannot beat the
                 // receiver's, so only the changed ones are compared.
                 messages += per_round;
-                for &b in &senders {
-                    is_sender[b as usize] = false;
-                    let key = views[b as usize].key();
-                    for &a in graph.neighbours(RobotId(b)) {
-                        let best = offer[a as usize]
-                            .map_or(views[a as usize].key(), |c| views[c as usize].key());
-                        if key > best {
-                            if offer[a as usize].is_none() {
-                                offered.push(a);
-                            }
-                            offer[a as usize] = Some(b);
-                        }
-                    }
-                }
-                senders.clear();
+                let outbox = Outbox {
+                    senders: &mut senders,
+                    is_sender: &mut is_sender,
+                };
+                best_offers(&graph, &views, outbox, &mut offer, &mut offered);
                 let adopted: Vec<(u32, Rc<View>)> = offered
                     .drain(..)
                     .map(|a| {
@@ -356,17 +372,7 @@ impl DecentralisedDa {
             Ok((Rc::clone(&views[0]), rounds, messages, added_edges))
         });
         let (view, rounds, messages, added_edges) = result?;
-        let mut chain = Vec::with_capacity(view.evolution as usize);
-        let mut link = view.last.as_deref();
-        while let Some(c) = link {
-            chain.push(c.robot);
-            link = c.prev.as_deref();
-        }
-        chain.reverse();
-        let mut assignment = Assignment::unassigned(n, instance.num_tasks());
-        for (i, &task) in view.tasks.iter().enumerate() {
-            assignment.set(RobotId(i as u32), task);
-        }
+        let (assignment, chain) = (view.assignment(), view.chain());
         let stats = AllocStats {
             iterations: view.evolution,
             rounds,
@@ -380,6 +386,39 @@ impl DecentralisedDa {
             added_edges,
         })
     }
+}
+
+/// The robots whose view changed since they last sent it, and the flag of each robot.
+struct Outbox<'a> {
+    senders: &'a mut Vec<u32>,
+    is_sender: &'a mut [bool],
+}
+
+/// Sends every changed view to the sender's neighbours (emptying `outbox`): each
+/// neighbour's best offer (highest evolution, then stamp, above its own view) goes
+/// into `offer`, and the robots with an offer into `offered`.
+fn best_offers(
+    graph: &RobotGraph,
+    views: &[Rc<View>],
+    outbox: Outbox<'_>,
+    offer: &mut [Option<u32>],
+    offered: &mut Vec<u32>,
+) {
+    for &b in outbox.senders.iter() {
+        outbox.is_sender[b as usize] = false;
+        let key = views[b as usize].key();
+        for &a in graph.neighbours(RobotId(b)) {
+            let best =
+                offer[a as usize].map_or(views[a as usize].key(), |c| views[c as usize].key());
+            if key > best {
+                if offer[a as usize].is_none() {
+                    offered.push(a);
+                }
+                offer[a as usize] = Some(b);
+            }
+        }
+    }
+    outbox.senders.clear();
 }
 
 impl Allocator for DecentralisedDa {

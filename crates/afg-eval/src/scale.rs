@@ -217,31 +217,7 @@ pub fn cases(plan: &Plan) -> Result<Vec<Case>, EvalError> {
                 price: None,
                 no_repair: false,
             };
-            for dir in price_headed.iter().filter(|(_, m)| *m == tasks) {
-                for block in [robots.div_ceil(10), robots] {
-                    cases.push(Case {
-                        model: Some(dir.0.clone()),
-                        block,
-                        no_repair: true,
-                        ..base.clone()
-                    });
-                }
-            }
-            let price = plan.price_model.join(PriceModel::FILE_NAME);
-            if price.exists() {
-                let modes = [
-                    (PriceMode::Sequential, 1),
-                    (PriceMode::Sequential, robots.div_ceil(100)),
-                    (PriceMode::OneShot, 1),
-                ];
-                for (mode, block) in modes {
-                    cases.push(Case {
-                        price: Some((price.clone(), mode)),
-                        block,
-                        ..base.clone()
-                    });
-                }
-            }
+            cases.extend(price_cases(plan, &price_headed, &base));
             let decentralised =
                 (robots <= plan.decentralised_up_to).then_some(Method::DaDecentralised);
             let methods = [Method::Opt, Method::Da, Method::DaBalanced, Method::Greedy];
@@ -271,6 +247,38 @@ pub fn cases(plan: &Plan) -> Result<Vec<Case>, EvalError> {
         }
     }
     Ok(cases)
+}
+
+/// The price-headed models' cases (M as built) and the price model's of one size.
+fn price_cases(plan: &Plan, price_headed: &[(PathBuf, usize)], base: &Case) -> Vec<Case> {
+    let (robots, tasks) = (base.robots, base.tasks);
+    let mut cases = Vec::new();
+    for dir in price_headed.iter().filter(|(_, m)| *m == tasks) {
+        for block in [robots.div_ceil(10), robots] {
+            cases.push(Case {
+                model: Some(dir.0.clone()),
+                block,
+                no_repair: true,
+                ..base.clone()
+            });
+        }
+    }
+    let price = plan.price_model.join(PriceModel::FILE_NAME);
+    if price.exists() {
+        let modes = [
+            (PriceMode::Sequential, 1),
+            (PriceMode::Sequential, robots.div_ceil(100)),
+            (PriceMode::OneShot, 1),
+        ];
+        for (mode, block) in modes {
+            cases.push(Case {
+                price: Some((price.clone(), mode)),
+                block,
+                ..base.clone()
+            });
+        }
+    }
+    cases
 }
 
 /// The row label of a case.

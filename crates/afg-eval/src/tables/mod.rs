@@ -89,109 +89,13 @@ pub fn compute(root: &Path, quick: bool, mut on_scale: impl FnMut()) -> Result<T
     let mut missing = Vec::new();
     let mut table1 = Vec::new();
     for n in dataset::TABLE1_SIZES {
-        let insts: Vec<Instance> = dataset::load(root, n)?
-            .into_iter()
-            .take(t1_instances)
-            .collect();
-        let opt = optima(&insts)?;
-        let mut rows = Vec::new();
-        for spec in ModelSpec::table1(n) {
-            let run = spec.run_dir(root);
-            if !run.has_weights() {
-                // Our variants are optional; the paper's three models are expected.
-                if !spec.is_ours() {
-                    missing.push(format!("models/{}", spec.dir_name()));
-                }
-                continue;
-            }
-            let policy = LearnedPolicy::load(&run.weights())?;
-            rows.push(Row::of_model(
-                spec,
-                evaluate(&spec.label(), &policy, &insts, &opt)?,
-            ));
-        }
-        // The N = 60 models at the other scales (the paper's "Pretrain_60" at N = 20, 100),
-        // and at N = 60 those that are not one of Table I's kinds.
-        for pretrained in ModelSpec::TRANSFERRED {
-            let run = pretrained.run_dir(root);
-            let own_scale = n == ModelSpec::PRETRAINED_AT;
-            if !run.has_weights() || (own_scale && ModelSpec::table1(n).contains(&pretrained)) {
-                continue;
-            }
-            let policy = LearnedPolicy::load(&run.weights())?;
-            let label = if own_scale {
-                pretrained.label()
-            } else {
-                format!(
-                    "{} trained at N = {}",
-                    pretrained.label(),
-                    ModelSpec::PRETRAINED_AT
-                )
-            };
-            rows.push(Row::new(evaluate(&label, &policy, &insts, &opt)?));
-        }
-        // Models trained further at this N from a smaller one (warm starts).
-        for warm in ModelSpec::WARM_STARTS
-            .into_iter()
-            .filter(|w| w.trained_at == n)
-        {
-            let run = warm.run_dir(root);
-            if run.has_weights() {
-                let policy = LearnedPolicy::load(&run.weights())?;
-                rows.push(Row::new(evaluate(&warm.label(), &policy, &insts, &opt)?));
-            }
-        }
-        rows.extend(price_headed_rows(root, &insts, &opt)?);
-        rows.extend(price_model_rows(root, &insts, &opt)?);
-        rows.extend(classical_rows(&insts, &opt, insts.len())?);
+        table1.push(table1_scale(root, n, t1_instances, &mut missing)?);
         on_scale();
-        table1.push(Scale { robots: n, rows });
     }
     let mut table2 = Vec::new();
     for n in dataset::TABLE2_SIZES {
-        let insts: Vec<Instance> = dataset::load(root, n)?
-            .into_iter()
-            .take(t2_instances)
-            .collect();
-        let opt = optima(&insts)?;
-        let few = t2_learned.min(insts.len());
-        let mut rows = Vec::new();
-        rows.extend(classical_rows(&insts, &opt, few)?);
-        rows.extend(price_headed_rows(root, &insts, &opt)?);
-        rows.extend(price_model_rows(root, &insts, &opt)?);
-        // The paper's model and ours with the gain residual at every training N, then
-        // ours trained at N = 60 only.
-        let specs = [Variant::Paper, Variant::GainResidual]
-            .into_iter()
-            .flat_map(|variant| {
-                dataset::TABLE1_SIZES.map(|trained| ModelSpec {
-                    variant,
-                    ..ModelSpec::afgnet_ddqn(trained)
-                })
-            })
-            .chain(ModelSpec::TRANSFERRED.into_iter().filter(|s| s.is_ours()));
-        for spec in specs {
-            let run = spec.run_dir(root);
-            if !run.has_weights() {
-                continue;
-            }
-            let policy = LearnedPolicy::load(&run.weights())?;
-            let label = format!("{} trained at N = {}", spec.label(), spec.trained_at);
-            rows.push(Row::new(evaluate(
-                &label,
-                &policy,
-                &insts[..few],
-                &opt[..few],
-            )?));
-            if spec == ModelSpec::afgnet_ddqn(spec.trained_at) {
-                // The fast variant: one pass per N/100 robots, then balanced repair.
-                let policy = policy.with_block(n / 100)?.with_repair(true);
-                let label = format!("{label}, block {}, + repair", policy.block());
-                rows.push(Row::new(evaluate(&label, &policy, &insts, &opt)?));
-            }
-        }
+        table2.push(table2_scale(root, n, t2_instances, t2_learned)?);
         on_scale();
-        table2.push(Scale { robots: n, rows });
     }
     missing.sort();
     missing.dedup();
@@ -203,6 +107,124 @@ pub fn compute(root: &Path, quick: bool, mut on_scale: impl FnMut()) -> Result<T
         price_ablation_instances: t1_instances,
         missing_models: missing,
     })
+}
+
+/// Table I at `n` robots on its first `instances` test instances; the paper's models
+/// that are not there are added to `missing`.
+fn table1_scale(
+    root: &Path,
+    n: usize,
+    instances: usize,
+    missing: &mut Vec<String>,
+) -> Result<Scale, EvalError> {
+    let insts: Vec<Instance> = dataset::load(root, n)?
+        .into_iter()
+        .take(instances)
+        .collect();
+    let opt = optima(&insts)?;
+    let mut rows = Vec::new();
+    for spec in ModelSpec::table1(n) {
+        let run = spec.run_dir(root);
+        if !run.has_weights() {
+            // Our variants are optional; the paper's three models are expected.
+            if !spec.is_ours() {
+                missing.push(format!("models/{}", spec.dir_name()));
+            }
+            continue;
+        }
+        let policy = LearnedPolicy::load(&run.weights())?;
+        rows.push(Row::of_model(
+            spec,
+            evaluate(&spec.label(), &policy, &insts, &opt)?,
+        ));
+    }
+    // The N = 60 models at the other scales (the paper's "Pretrain_60" at N = 20, 100),
+    // and at N = 60 those that are not one of Table I's kinds.
+    for pretrained in ModelSpec::TRANSFERRED {
+        let run = pretrained.run_dir(root);
+        let own_scale = n == ModelSpec::PRETRAINED_AT;
+        if !run.has_weights() || (own_scale && ModelSpec::table1(n).contains(&pretrained)) {
+            continue;
+        }
+        let policy = LearnedPolicy::load(&run.weights())?;
+        let label = if own_scale {
+            pretrained.label()
+        } else {
+            format!(
+                "{} trained at N = {}",
+                pretrained.label(),
+                ModelSpec::PRETRAINED_AT
+            )
+        };
+        rows.push(Row::new(evaluate(&label, &policy, &insts, &opt)?));
+    }
+    // Models trained further at this N from a smaller one (warm starts).
+    for warm in ModelSpec::WARM_STARTS
+        .into_iter()
+        .filter(|w| w.trained_at == n)
+    {
+        let run = warm.run_dir(root);
+        if run.has_weights() {
+            let policy = LearnedPolicy::load(&run.weights())?;
+            rows.push(Row::new(evaluate(&warm.label(), &policy, &insts, &opt)?));
+        }
+    }
+    rows.extend(price_headed_rows(root, &insts, &opt)?);
+    rows.extend(price_model_rows(root, &insts, &opt)?);
+    rows.extend(classical_rows(&insts, &opt, insts.len())?);
+    Ok(Scale { robots: n, rows })
+}
+
+/// Table II at `n` robots on its first `instances` test instances, the slowest learned
+/// rows on the first `learned` of them.
+fn table2_scale(
+    root: &Path,
+    n: usize,
+    instances: usize,
+    learned: usize,
+) -> Result<Scale, EvalError> {
+    let insts: Vec<Instance> = dataset::load(root, n)?
+        .into_iter()
+        .take(instances)
+        .collect();
+    let opt = optima(&insts)?;
+    let few = learned.min(insts.len());
+    let mut rows = Vec::new();
+    rows.extend(classical_rows(&insts, &opt, few)?);
+    rows.extend(price_headed_rows(root, &insts, &opt)?);
+    rows.extend(price_model_rows(root, &insts, &opt)?);
+    // The paper's model and ours with the gain residual at every training N, then
+    // ours trained at N = 60 only.
+    let specs = [Variant::Paper, Variant::GainResidual]
+        .into_iter()
+        .flat_map(|variant| {
+            dataset::TABLE1_SIZES.map(|trained| ModelSpec {
+                variant,
+                ..ModelSpec::afgnet_ddqn(trained)
+            })
+        })
+        .chain(ModelSpec::TRANSFERRED.into_iter().filter(|s| s.is_ours()));
+    for spec in specs {
+        let run = spec.run_dir(root);
+        if !run.has_weights() {
+            continue;
+        }
+        let policy = LearnedPolicy::load(&run.weights())?;
+        let label = format!("{} trained at N = {}", spec.label(), spec.trained_at);
+        rows.push(Row::new(evaluate(
+            &label,
+            &policy,
+            &insts[..few],
+            &opt[..few],
+        )?));
+        if spec == ModelSpec::afgnet_ddqn(spec.trained_at) {
+            // The fast variant: one pass per N/100 robots, then balanced repair.
+            let policy = policy.with_block(n / 100)?.with_repair(true);
+            let label = format!("{label}, block {}, + repair", policy.block());
+            rows.push(Row::new(evaluate(&label, &policy, &insts, &opt)?));
+        }
+    }
+    Ok(Scale { robots: n, rows })
 }
 
 /// What Table I's rows are, under it.

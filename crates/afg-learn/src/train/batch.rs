@@ -92,6 +92,23 @@ impl Trainer {
         (k / self.config.robots, k % self.config.robots)
     }
 
+    /// The target network's Q values of the `next` states, and with `double` the online
+    /// network's too (empty otherwise, and both empty for no states).
+    fn next_q(&self, next: &GraphBatch, double: bool) -> (Vec<f32>, Vec<f32>) {
+        if next.num_graphs() == 0 {
+            return (Vec::new(), Vec::new());
+        }
+        let g = GraphTensors::<InferBackend>::new(next, &Default::default());
+        let target: Vec<f32> = self.target.forward(&g).into_data().to_vec().expect("f32");
+        let online: Vec<f32> = if double {
+            let q = self.online.valid().forward(&g);
+            q.into_data().to_vec().expect("f32")
+        } else {
+            Vec::new()
+        };
+        (target, online)
+    }
+
     /// A sampled batch of transitions: the states, the actions taken and their DQN
     /// targets, or Double DQN targets with `double`, and how many of them (the last
     /// rows) are demonstrations.
@@ -147,20 +164,7 @@ impl Trainer {
                 next.num_graphs() - 1
             }));
         }
-        let device = Default::default();
-        let (next_target, next_online) = if next.num_graphs() > 0 {
-            let g = GraphTensors::<InferBackend>::new(&next, &device);
-            let target: Vec<f32> = self.target.forward(&g).into_data().to_vec().expect("f32");
-            let online: Vec<f32> = if double {
-                let q = self.online.valid().forward(&g);
-                q.into_data().to_vec().expect("f32")
-            } else {
-                Vec::new()
-            };
-            (target, online)
-        } else {
-            (Vec::new(), Vec::new())
-        };
+        let (next_target, next_online) = self.next_q(&next, double);
         let targets: Vec<f32> = (0..b)
             .map(|i| match next_row[i] {
                 None => rewards[i],

@@ -321,7 +321,12 @@ impl TrainConfig {
         if self.replay_capacity < self.robots || self.warmup > self.replay_capacity {
             return bad("replay_capacity must hold an episode and the warmup");
         }
-        // Bounds on what a run may allocate, checked before anything is built.
+        self.check_sizes()?;
+        self.check_heads()
+    }
+
+    /// Bounds on what a run may allocate, checked before anything is built.
+    fn check_sizes(&self) -> Result<(), LearnError> {
         for (name, value, max) in [
             ("robots", self.robots, 100_000),
             ("batch", self.batch, 65_536),
@@ -341,6 +346,12 @@ impl TrainConfig {
                 )));
             }
         }
+        Ok(())
+    }
+
+    /// The settings that go together: gain residual, demonstrations, price head and loss.
+    fn check_heads(&self) -> Result<(), LearnError> {
+        let bad = |what: &str| Err(LearnError::InvalidConfig(what.to_owned()));
         if matches!(&self.network, NetworkConfig::AfgNet(c) if c.gain_residual == Some(true))
             && (!self.reward_scaling || self.shaping != Shaping::None)
         {
