@@ -368,3 +368,19 @@ mod secs_opt {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::Case;
+
+    #[test]
+    fn sizes_parse_and_bad_ones_say_how_to_write_them() {
+        let case: Case = "1000x50".parse().unwrap();
+        assert_eq!((case.robots, case.tasks), (1000, 50));
+        let err = "1000".parse::<Case>().unwrap_err();
+        assert_eq!(err, "`1000`: write a size as NxM, e.g. 1000x5");
+        let err = "0x5".parse::<Case>().unwrap_err();
+        assert_eq!(err, "`0x5`: must be at least 1");
+        assert!(crate::parse("bench-opt --cases 10x").is_err());
+    }
+}

@@ -719,6 +719,18 @@ fn certificate_rejects_inputs_that_do_not_fit() {
     let mut partial = opt.clone();
     partial.set(RobotId(0), None);
     assert!(verify_optimal(&inst, &partial, &prices).is_err());
+    // The same one-line error for starting prices that do not fit.
+    let err = Optimum.with_prices_from(&inst, &prices[..2]).unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "invalid parameter: need 3 finite task prices, got [".to_owned()
+            + &format!("{}, {}]", prices[0], prices[1])
+    );
+    assert!(
+        Optimum
+            .with_prices_from(&inst, &[0.0, f64::INFINITY, 0.0])
+            .is_err()
+    );
 }
 
 /// The same instance gives the same optimum and prices, bit for bit, on one core or all.
