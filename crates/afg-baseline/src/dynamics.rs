@@ -27,15 +27,10 @@
 //! those; the partitions, rounds and messages equal the plain simulation's (tested
 //! against it).
 
-use std::rc::Rc;
+use afg_game::{Assignment, Instance, Preference, RobotId};
+use afg_graph::GraphKind;
 
-use imbl::Vector;
-
-use afg_game::{Assignment, Instance, Preference, RobotId, TaskId};
-use afg_graph::{GraphKind, RobotGraph};
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
-
+use crate::swarm::{Grape, Network};
 use crate::{AllocError, AllocStats, Allocation, Allocator, timed};
 
 /// Best-response dynamics run centrally: robots take turns, first in the order of
@@ -155,8 +150,9 @@ impl Allocator for CentralisedDa {
 }
 
 /// GRAPE's decentralised algorithm, simulated round by round over the robot
-/// communication graph (see the module docs). The graph defaults to kNN, k = 10;
-/// if it is disconnected, each stray component is linked to its nearest robot
+/// communication graph on a perfect network (see the module docs; lossy, late and
+/// failing networks are [`Swarm`](crate::Swarm)'s). The graph defaults to kNN,
+/// k = 10; if it is disconnected, each stray component is linked to its nearest robot
 /// outside it (reported in [`DecentralisedRun::added_edges`]).
 ///
 /// # Examples
@@ -202,101 +198,6 @@ pub struct DecentralisedRun {
     pub added_edges: usize,
 }
 
-/// One change on a chain of views.
-struct Change {
-    robot: RobotId,
-    prev: Option<Rc<Change>>,
-}
-
-impl Drop for Change {
-    /// Unlinks the chain iteratively: a long chain dropped recursively would overflow the stack.
-    fn drop(&mut self) {
-        let mut prev = self.prev.take();
-        while let Some(rc) = prev {
-            match Rc::try_unwrap(rc) {
-                Ok(mut c) => prev = c.prev.take(),
-                Err(_) => break,
-            }
-        }
-    }
-}
-
-/// A robot's local view of the partition.
-struct View {
-    tasks: Vector<Option<TaskId>>,
-    sizes: Vec<usize>,
-    evolution: u64,
-    stamp: u64,
-    last: Option<Rc<Change>>,
-}
-
-impl View {
-    /// The view of `n` robots, none assigned, over `m` tasks.
-    fn empty(n: usize, m: usize) -> View {
-        View {
-            tasks: std::iter::repeat_n(None, n).collect(),
-            sizes: vec![0; m],
-            evolution: 0,
-            stamp: 0,
-            last: None,
-        }
-    }
-
-    /// The partition this view holds.
-    fn assignment(&self) -> Assignment {
-        let mut assignment = Assignment::unassigned(self.tasks.len(), self.sizes.len());
-        for (i, &task) in self.tasks.iter().enumerate() {
-            assignment.set(RobotId(i as u32), task);
-        }
-        assignment
-    }
-
-    /// The robots whose changes made this view, oldest first.
-    fn chain(&self) -> Vec<RobotId> {
-        let mut chain = Vec::with_capacity(self.evolution as usize);
-        let mut link = self.last.as_deref();
-        while let Some(c) = link {
-            chain.push(c.robot);
-            link = c.prev.as_deref();
-        }
-        chain.reverse();
-        chain
-    }
-
-    fn key(&self) -> (u64, u64) {
-        (self.evolution, self.stamp)
-    }
-
-    /// The view after `robot` moves to `task`, with a new stamp.
-    fn changed(&self, robot: RobotId, task: TaskId, stamp: u64) -> View {
-        let (mut tasks, mut sizes) = (self.tasks.clone(), self.sizes.clone());
-        if let Some(old) = tasks.set(robot.index(), Some(task)) {
-            sizes[old.index()] -= 1;
-        }
-        sizes[task.index()] += 1;
-        View {
-            tasks,
-            sizes,
-            evolution: self.evolution + 1,
-            stamp,
-            last: Some(Rc::new(Change {
-                robot,
-                prev: self.last.clone(),
-            })),
-        }
-    }
-
-    fn best_response(
-        &self,
-        instance: &Instance,
-        robot: RobotId,
-        pref: Preference,
-    ) -> Option<TaskId> {
-        let current = self.tasks[robot.index()];
-        instance.best_response_given(robot, current, &self.sizes, pref)
-    }
-}
-
 impl DecentralisedDa {
     /// Runs the algorithm and returns the chain of changes as well.
     ///
@@ -304,121 +205,36 @@ impl DecentralisedDa {
     /// [`AllocError::Graph`] if the communication graph cannot be built, and
     /// [`AllocError::NotConverged`] if the rounds exceed a safety bound (never seen).
     pub fn run(&self, instance: &Instance) -> Result<DecentralisedRun, AllocError> {
-        let n = instance.num_robots();
-        let limit = 1000 + 4 * (n as u64) * (n as u64 + 1);
-        let (result, wall_time) = timed(|| {
-            let mut graph = RobotGraph::build(instance.robots(), self.graph)?;
-            let added_edges = graph.connect_components(instance.robots());
-            let per_round = 2 * graph.num_edges() as u64;
-            let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
-            let empty = Rc::new(View::empty(n, instance.num_tasks()));
-            let mut views: Vec<Rc<View>> = vec![empty; n];
-            // Robots to act in the next round, in index order (the stamps are drawn in it).
-            let mut unsatisfied: Vec<u32> = (0..n as u32).collect();
-            // Robots whose view changed since they last sent it.
-            let mut senders: Vec<u32> = Vec::new();
-            let mut is_sender = vec![false; n];
-            // The best view offered to each robot this round, by its sender.
-            let mut offer: Vec<Option<u32>> = vec![None; n];
-            let mut offered: Vec<u32> = Vec::new();
-            let (mut rounds, mut messages) = (0u64, 0u64);
-            loop {
-                rounds += 1;
-                if rounds > limit {
-                    return Err(AllocError::NotConverged { rounds: limit });
-                }
-                let mut active = false;
-                for &a in &unsatisfied {
-                    let (i, view) = (RobotId(a), &views[a as usize]);
-                    if let Some(j) = view.best_response(instance, i, self.preference) {
-                        views[a as usize] = Rc::new(view.changed(i, j, rng.random()));
-                        active = true;
-                        if !std::mem::replace(&mut is_sender[a as usize], true) {
-                            senders.push(a);
-                        }
-                    }
-                }
-                unsatisfied.clear();
-                // Everyone broadcasts its view; each keeps the highest (evolution, stamp).
-                // A view that did not change since it was last sent cannot beat the
-                // receiver's, so only the changed ones are compared.
-                messages += per_round;
-                let outbox = Outbox {
-                    senders: &mut senders,
-                    is_sender: &mut is_sender,
-                };
-                best_offers(&graph, &views, outbox, &mut offer, &mut offered);
-                let adopted: Vec<(u32, Rc<View>)> = offered
-                    .drain(..)
-                    .map(|a| {
-                        let b = offer[a as usize]
-                            .take()
-                            .expect("an offered robot has an offer");
-                        (a, Rc::clone(&views[b as usize]))
-                    })
-                    .collect();
-                for (a, view) in adopted {
-                    views[a as usize] = view;
-                    unsatisfied.push(a);
-                    is_sender[a as usize] = true;
-                    senders.push(a);
-                    active = true;
-                }
-                unsatisfied.sort_unstable();
-                if !active {
-                    break;
-                }
-            }
-            Ok((Rc::clone(&views[0]), rounds, messages, added_edges))
+        let n = instance.num_robots() as u64;
+        let limit = 1000 + 4 * n * (n + 1);
+        let network = Network {
+            graph: self.graph,
+            ..Network::default()
+        };
+        let (outcome, wall_time) = timed(|| {
+            Grape::new(instance, self.preference, &network, self.seed)?.run(limit, |_| {})
         });
-        let (view, rounds, messages, added_edges) = result?;
-        let (assignment, chain) = (view.assignment(), view.chain());
+        let outcome = outcome?;
+        if !outcome.converged {
+            return Err(AllocError::NotConverged { rounds: limit });
+        }
+        let view = outcome.leader;
         let stats = AllocStats {
-            iterations: view.evolution,
-            rounds,
-            messages,
+            iterations: view.evolution(),
+            rounds: outcome.rounds,
+            messages: outcome.messages,
             wall_time,
             seed: Some(self.seed),
         };
         Ok(DecentralisedRun {
-            allocation: Allocation { assignment, stats },
-            chain,
-            added_edges,
+            allocation: Allocation {
+                assignment: view.assignment(),
+                stats,
+            },
+            chain: view.chain(),
+            added_edges: outcome.added_edges,
         })
     }
-}
-
-/// The robots whose view changed since they last sent it, and the flag of each robot.
-struct Outbox<'a> {
-    senders: &'a mut Vec<u32>,
-    is_sender: &'a mut [bool],
-}
-
-/// Sends every changed view to the sender's neighbours (emptying `outbox`): each
-/// neighbour's best offer (highest evolution, then stamp, above its own view) goes
-/// into `offer`, and the robots with an offer into `offered`.
-fn best_offers(
-    graph: &RobotGraph,
-    views: &[Rc<View>],
-    outbox: Outbox<'_>,
-    offer: &mut [Option<u32>],
-    offered: &mut Vec<u32>,
-) {
-    for &b in outbox.senders.iter() {
-        outbox.is_sender[b as usize] = false;
-        let key = views[b as usize].key();
-        for &a in graph.neighbours(RobotId(b)) {
-            let best =
-                offer[a as usize].map_or(views[a as usize].key(), |c| views[c as usize].key());
-            if key > best {
-                if offer[a as usize].is_none() {
-                    offered.push(a);
-                }
-                offer[a as usize] = Some(b);
-            }
-        }
-    }
-    outbox.senders.clear();
 }
 
 impl Allocator for DecentralisedDa {

@@ -25,6 +25,7 @@ pub struct ReadmeDoctests;
 mod dynamics;
 mod optimum;
 mod simple;
+mod swarm;
 
 use std::time::{Duration, Instant};
 
@@ -36,6 +37,7 @@ use thiserror::Error;
 pub use dynamics::{CentralisedDa, DecentralisedDa, DecentralisedRun};
 pub use optimum::{Certificate, Optimum, verify_optimal};
 pub use simple::{Blind, Greedy, Nearest, RandomAllocator};
+pub use swarm::{Failure, Network, Swarm, SwarmReport, TracePoint};
 
 /// `100 · welfare / opt_welfare`, the one "% of OPT" of every table, command, training
 /// validation and summary; `None` when the optimum's welfare is not positive (all
