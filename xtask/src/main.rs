@@ -11,6 +11,7 @@ mod realloc;
 mod regret;
 mod scale;
 mod solve;
+mod swarm;
 mod tables;
 mod train;
 mod train_all;
@@ -48,6 +49,8 @@ enum Command {
     Gen(datasets::GenCustomArgs),
     /// Solve an instance or a dataset with one allocator and print welfare, % of OPT, NS_rate.
     Solve(solve::SolveArgs),
+    /// GRAPE over a lossy, late, range-limited network where robots fail mid-run.
+    Swarm(swarm::SwarmArgs),
     /// Time the classical allocators over a sweep of N and print a Markdown table.
     BenchBaselines(bench::BenchArgs),
     /// Time the networks: batched forward pass, training step, greedy rollout.
@@ -88,6 +91,7 @@ impl Command {
             Command::GenDatasets(args) => datasets::run(args),
             Command::Gen(args) => datasets::run_custom(args),
             Command::Solve(args) => solve::run(args),
+            Command::Swarm(args) => swarm::run(args),
             Command::BenchBaselines(args) => bench::run(args),
             Command::BenchModels(args) => bench::run_models(args),
             Command::BenchOpt(args) => bench_opt::run(args),

@@ -67,7 +67,7 @@ pub struct SolveArgs {
 }
 
 /// Reads `--input`: a file or standard input ("-"), one instance or JSON Lines.
-fn read_instances(path: &std::path::Path) -> Result<Vec<Instance>> {
+pub(crate) fn read_instances(path: &std::path::Path) -> Result<Vec<Instance>> {
     let text = if path.as_os_str() == "-" {
         std::io::read_to_string(std::io::stdin()).context("reading standard input")?
     } else {

@@ -1,6 +1,6 @@
 //! SVG figures: validation curves of training runs and maps of assignments.
 
-use afg_baseline::Method;
+use afg_baseline::{Method, SwarmReport};
 use afg_game::{Assignment, Instance};
 use plotters::prelude::*;
 
@@ -164,6 +164,89 @@ pub fn assignments_svg(
             }
         }
         root_area.present()?;
+    }
+    Ok(svg)
+}
+
+/// Swarm runs against rounds as an SVG of two panels: the welfare of the highest view
+/// among the living robots as % of the survivors' optimum (above), and the share of
+/// the living robots that hold it (below); one line per run.
+///
+/// # Errors
+/// [`EvalError::Figure`] if no run has a trace, or drawing fails.
+///
+/// # Examples
+/// ```
+/// use afg_baseline::{Network, Swarm};
+/// use afg_game::{GeneratorConfig, Preference};
+/// let inst = GeneratorConfig::paper(40, 3, 1).generate()?;
+/// let mut swarm = Swarm::grape(Preference::Selfish, Network { loss: 0.3, ..Network::default() }, 1);
+/// swarm.trace = true;
+/// let report = swarm.run(&inst)?;
+/// let svg = afg_eval::figures::swarm_svg(&[("loss 30 %".into(), report)], "GRAPE, N = 40")?;
+/// assert!(svg.contains("loss 30 %"));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn swarm_svg(runs: &[(String, SwarmReport)], title: &str) -> Result<String, EvalError> {
+    let percent = |r: &SwarmReport, w: f64| 100.0 * w / r.opt_welfare;
+    let rounds = runs
+        .iter()
+        .flat_map(|(_, r)| r.trace.last().map(|p| p.round))
+        .max()
+        .ok_or_else(|| EvalError::Figure("no swarm run has a trace".into()))?;
+    let lowest = runs
+        .iter()
+        .flat_map(|(_, r)| r.trace.iter().map(move |p| percent(r, p.welfare)))
+        .filter(|p| p.is_finite())
+        .fold(100.0f64, f64::min)
+        .max(0.0);
+    let x_max = rounds.max(1) as f64;
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (800, 700)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let root = root.titled(title, ("sans-serif", 20))?;
+        let (top, bottom) = root.split_vertically(360);
+        let panels = [
+            (top, "welfare, % of the survivors' OPT", lowest..100.5),
+            (bottom, "share of living robots holding it", 0.0..1.02),
+        ];
+        for (panel, (area, label, y_range)) in panels.into_iter().enumerate() {
+            let mut chart = ChartBuilder::on(&area)
+                .margin(15)
+                .x_label_area_size(40)
+                .y_label_area_size(60)
+                .build_cartesian_2d(0.0..x_max, y_range)?;
+            chart
+                .configure_mesh()
+                .x_desc("round")
+                .y_desc(label)
+                .draw()?;
+            for (i, (name, r)) in runs.iter().enumerate() {
+                let color = Palette99::pick(i).to_rgba();
+                let points = r.trace.iter().map(|p| {
+                    let y = if panel == 0 {
+                        percent(r, p.welfare).max(lowest)
+                    } else {
+                        p.agreeing
+                    };
+                    (p.round as f64, y)
+                });
+                chart
+                    .draw_series(LineSeries::new(points, color.stroke_width(2)))?
+                    .label(name.clone())
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                    });
+            }
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::LowerRight)
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .draw()?;
+        }
+        root.present()?;
     }
     Ok(svg)
 }

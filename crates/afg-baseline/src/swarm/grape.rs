@@ -139,31 +139,33 @@ impl MessageSizes {
         }
     }
 
-    /// What `from` costs to send to a robot holding `to` as changes: the changes since
-    /// `to` when `to` is on `from`'s chain, the whole partition otherwise (or when
-    /// that is smaller).
+    /// What `from` costs to send, as changes, to a robot holding the lower view `to`:
+    /// the sender's changes since the last view both descend from (the receiver
+    /// undoes its own since then from its chain), or the whole partition when that is
+    /// smaller.
     fn delta(&self, from: &View, to: &View) -> u64 {
-        let steps = from.evolution.saturating_sub(to.evolution);
         let most = (self.full - self.header) / self.entry;
-        let (mut entries, mut link) = (0u64, from.last.as_deref());
-        for _ in 0..steps {
-            let Some(change) = link else { break };
-            entries += change.entries;
+        let (mut mine, mut theirs) = (from.last.as_deref(), to.last.as_deref());
+        let (mut above, mut entries) = (from.evolution - to.evolution, 0u64);
+        loop {
+            let (Some(a), b) = (mine, theirs) else {
+                break; // back at the empty partition
+            };
+            if b.is_some_and(|b| std::ptr::eq(a, b)) {
+                break;
+            }
+            entries += a.entries;
             if entries > most {
                 return self.full;
             }
-            link = change.prev.as_deref();
+            mine = a.prev.as_deref();
+            if above > 0 {
+                above -= 1;
+            } else {
+                theirs = b.and_then(|b| b.prev.as_deref());
+            }
         }
-        let on_chain = match (link, to.last.as_deref()) {
-            (Some(a), Some(b)) => std::ptr::eq(a, b),
-            (None, None) => true,
-            _ => false,
-        };
-        if steps > 0 && on_chain {
-            self.header + entries * self.entry
-        } else {
-            self.full
-        }
+        self.header + entries * self.entry
     }
 }
 
