@@ -120,6 +120,9 @@ impl View {
     }
 }
 
+/// Longest divergence of two views' chains that [`MessageSizes::delta`] walks.
+const DELTA_WALK: u64 = 64;
+
 /// Bytes of one message on the air: a 20-byte header (sender, evolution, stamp) and
 /// one task index per robot (a byte below 255 tasks); a change costs its robot id
 /// and task.
@@ -142,9 +145,10 @@ impl MessageSizes {
     /// What `from` costs to send, as changes, to a robot holding the lower view `to`:
     /// the sender's changes since the last view both descend from (the receiver
     /// undoes its own since then from its chain), or the whole partition when that is
-    /// smaller.
+    /// smaller or the branches part more than [`DELTA_WALK`] changes back (the walk
+    /// along the chains is the simulation's cost, not the robots').
     fn delta(&self, from: &View, to: &View) -> u64 {
-        let most = (self.full - self.header) / self.entry;
+        let most = ((self.full - self.header) / self.entry).min(DELTA_WALK);
         let (mut mine, mut theirs) = (from.last.as_deref(), to.last.as_deref());
         let (mut above, mut entries) = (from.evolution - to.evolution, 0u64);
         loop {
