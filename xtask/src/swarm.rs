@@ -253,8 +253,8 @@ fn label(network: &Network, robots: usize) -> String {
 /// The Markdown table: one row per cell, means over its seeds.
 fn table(cells: &[Cell], reports: &[(usize, SwarmReport)]) -> String {
     let mut out = String::from(
-        "| network | runs converged | fail at | rounds | messages | MB (partitions) | MB (changes) | agreeing | % of OPT (survivors) | stable | NS_rate balanced | NS_rate selfish | time |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| network | links added | runs converged | fail at | rounds | messages | MB (partitions) | MB (changes) | agreeing | % of OPT (survivors) | stable | NS_rate balanced | NS_rate selfish | time |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for (c, cell) in cells.iter().enumerate() {
         let runs: Vec<&SwarmReport> = reports
@@ -281,8 +281,9 @@ fn table(cells: &[Cell], reports: &[(usize, SwarmReport)]) -> String {
                 format!("{:.2} %", p.iter().sum::<f64>() / p.len() as f64)
             });
         out += &format!(
-            "| {} | {}/{} | {} | {:.0} | {:.0} | {:.1} | {:.2} | {:.1} % | {} | {}/{} | {:.1} % | {:.1} % | {} |\n",
+            "| {} | {:.0} | {}/{} | {} | {:.0} | {:.0} | {:.1} | {:.2} | {:.1} % | {} | {}/{} | {:.1} % | {:.1} % | {} |\n",
             label(&cell.network, cell.instance.num_robots()),
+            mean(&|r| r.added_edges as f64),
             count(&|r| r.converged),
             runs.len(),
             fail_at,

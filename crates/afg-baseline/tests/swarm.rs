@@ -352,3 +352,30 @@ fn a_run_cut_short_reports_it() {
     assert!(!report.converged);
     assert_eq!(report.rounds, 3);
 }
+
+/// The bar at N = 1000: 30 % of the messages lost and 10 % of the robots
+/// crashing mid-run (round 1700 of the ~3400 the run takes without them).
+#[test]
+fn a_thousand_robots_survive_loss_and_failures() {
+    let inst = GeneratorConfig::paper(1000, 5, 1).generate().unwrap();
+    let network = Network {
+        loss: 0.3,
+        failure: Some(Failure::new(0.1, 1700)),
+        ..Network::default()
+    };
+    let report = Swarm::grape(Preference::Selfish, network, 0)
+        .run(&inst)
+        .unwrap();
+    assert!(report.converged && report.stable);
+    assert_eq!((report.survivors, report.agreeing), (900, 1.0));
+    assert!(
+        report.rounds > 1700,
+        "the crash came after the end: {} rounds",
+        report.rounds
+    );
+    assert!(
+        report.percent_of_opt.unwrap() > 99.0,
+        "{:?}",
+        report.percent_of_opt
+    );
+}

@@ -151,10 +151,8 @@ impl MessageSizes {
         let most = ((self.full - self.header) / self.entry).min(DELTA_WALK);
         let (mut mine, mut theirs) = (from.last.as_deref(), to.last.as_deref());
         let (mut above, mut entries) = (from.evolution - to.evolution, 0u64);
-        loop {
-            let (Some(a), b) = (mine, theirs) else {
-                break; // back at the empty partition
-            };
+        // Until both chains meet (at the latest at the empty partition).
+        while let (Some(a), b) = (mine, theirs) {
             if b.is_some_and(|b| std::ptr::eq(a, b)) {
                 break;
             }
@@ -317,7 +315,7 @@ impl<'a> Grape<'a> {
         let converged = loop {
             let active = self.round()?;
             on_round(self.round);
-            if self.trace.is_some() && self.round % self.stride == 0 {
+            if self.trace.is_some() && self.round.is_multiple_of(self.stride) {
                 self.sample();
             }
             if !active && self.quiet() {
