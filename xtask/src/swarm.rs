@@ -304,3 +304,37 @@ fn table(cells: &[Cell], reports: &[(usize, SwarmReport)]) -> String {
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    /// A small grid runs end to end: one row per cell, the figure written.
+    #[test]
+    fn a_grid_runs_and_draws() {
+        let dir = std::env::temp_dir().join(format!("afg-swarm-{}", std::process::id()));
+        let svg = dir.join("runs.svg");
+        let line = format!(
+            "swarm --robots 30,40 --loss 0,0.3 --fail 0,0.2 --seeds 2 --svg {}",
+            svg.display()
+        );
+        crate::xtask(&line).unwrap();
+        let text = std::fs::read_to_string(&svg).unwrap();
+        assert!(text.contains("N = 40, loss 30 %, 20 % fail"));
+        std::fs::remove_dir_all(dir).unwrap();
+    }
+
+    #[test]
+    fn bad_knobs_say_what_is_wrong() {
+        let err = crate::xtask("swarm --robots 20 --loss 1.5").unwrap_err();
+        assert!(
+            err.to_string().contains("loss 1.5 must be in [0, 1)"),
+            "{err}"
+        );
+        let err = crate::xtask("swarm --robots 20 --async 0").unwrap_err();
+        assert!(
+            err.to_string().contains("activation 0 must be in (0, 1]"),
+            "{err}"
+        );
+        assert!(crate::parse("swarm --radius 0.1 --knn 5").is_err());
+        assert!(crate::parse("swarm --seeds 0").is_err());
+    }
+}
