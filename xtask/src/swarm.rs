@@ -228,10 +228,13 @@ fn run_one(args: &SwarmArgs, cell: &Cell, seed: u64) -> Result<SwarmReport> {
 
 /// What a cell's network is, in a few words.
 fn label(network: &Network, robots: usize) -> String {
-    let mut parts = vec![
-        format!("N = {robots}"),
-        format!("loss {:.0} %", 100.0 * network.loss),
-    ];
+    let mut parts = vec![format!("N = {robots}")];
+    match network.graph {
+        GraphKind::Radius { radius } => parts.push(format!("radius {radius}")),
+        GraphKind::Knn { k } if k != 10 => parts.push(format!("{k} nearest")),
+        _ => {}
+    }
+    parts.push(format!("loss {:.0} %", 100.0 * network.loss));
     if let Some(b) = network.burst {
         parts.push(format!("bursts of {b}"));
     }
