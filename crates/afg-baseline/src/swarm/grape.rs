@@ -19,7 +19,7 @@ use imbl::Vector;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::network::{Channel, Links, Network};
+use super::network::{Network, Radio};
 use crate::AllocError;
 
 /// One change on a chain of views.
@@ -204,15 +204,10 @@ pub(crate) struct Outcome {
 pub(crate) struct Grape<'a> {
     instance: &'a Instance,
     preference: Preference,
-    network: &'a Network,
-    channel: Channel,
-    links: Links,
-    /// GRAPE's stamps (drawn in robot order, only at changes) and the network's draws.
+    radio: Radio<Rc<View>>,
+    /// GRAPE's stamps, drawn in robot order, only at changes.
     stamps: ChaCha8Rng,
-    rng: ChaCha8Rng,
     views: Vec<Rc<View>>,
-    alive: Vec<bool>,
-    awake: Vec<bool>,
     /// Robots to act when next awake, in index order.
     unsatisfied: Vec<u32>,
     is_unsatisfied: Vec<bool>,
@@ -222,20 +217,12 @@ pub(crate) struct Grape<'a> {
     /// The best view offered to each robot this round.
     offer: Vec<Option<Rc<View>>>,
     offered: Vec<u32>,
-    /// Messages by arrival round modulo the longest delay + 1: (receiver, view).
-    in_flight: Vec<Vec<(u32, Rc<View>)>>,
-    in_flight_count: usize,
-    /// Crashed robots each robot has noticed, and the (noticer, crashed) pairs to come.
+    /// Crashed robots each robot has noticed.
     noticed: Vec<Vec<u32>>,
-    to_notice: Vec<(u32, u32)>,
-    notice_round: Option<u64>,
-    split_x: Option<f64>,
     sizes: MessageSizes,
-    round: u64,
     messages: u64,
     bytes: u64,
     delta_bytes: u64,
-    added_edges: usize,
     /// The sampled trace, when asked for (each point costs O(N)).
     trace: Option<Vec<TracePoint>>,
     stride: u64,
@@ -253,44 +240,26 @@ impl<'a> Grape<'a> {
         network: &'a Network,
         seed: u64,
     ) -> Result<Self, AllocError> {
-        network.check()?;
         let (n, m) = (instance.num_robots(), instance.num_tasks());
-        let split_x = network.partition_until.map(|_| median_x(instance));
-        let everyone: Vec<u32> = (0..n as u32).collect();
-        let (links, added_edges) =
-            Links::build(instance.robots(), &everyone, network.graph, split_x)?;
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        rng.set_stream(1);
+        let radio = Radio::new(instance.robots(), network, seed)?;
         let empty = Rc::new(View::empty(n, m));
         Ok(Grape {
             instance,
             preference,
-            network,
-            channel: Channel::new(network),
-            links,
+            radio,
             stamps: ChaCha8Rng::seed_from_u64(seed),
-            rng,
             views: vec![empty; n],
-            alive: vec![true; n],
-            awake: vec![true; n],
-            unsatisfied: everyone,
+            unsatisfied: (0..n as u32).collect(),
             is_unsatisfied: vec![true; n],
             senders: Vec::new(),
             is_sender: vec![false; n],
             offer: vec![None; n],
             offered: Vec::new(),
-            in_flight: vec![Vec::new(); network.max_delay as usize + 1],
-            in_flight_count: 0,
             noticed: vec![Vec::new(); n],
-            to_notice: Vec::new(),
-            notice_round: None,
-            split_x,
             sizes: MessageSizes::new(n, m),
-            round: 0,
             messages: 0,
             bytes: 0,
             delta_bytes: 0,
-            added_edges,
             trace: None,
             stride: 1,
         })
@@ -314,57 +283,62 @@ impl<'a> Grape<'a> {
     ) -> Result<Outcome, AllocError> {
         let converged = loop {
             let active = self.round()?;
-            on_round(self.round);
-            if self.trace.is_some() && self.round.is_multiple_of(self.stride) {
+            on_round(self.radio.round);
+            if self.trace.is_some() && self.radio.round.is_multiple_of(self.stride) {
                 self.sample();
             }
             if !active && self.quiet() {
                 break true;
             }
-            if self.round >= max_rounds {
+            if self.radio.round >= max_rounds {
                 break false;
             }
         };
         if self
             .trace
             .as_ref()
-            .is_some_and(|t| t.last().is_none_or(|p| p.round != self.round))
+            .is_some_and(|t| t.last().is_none_or(|p| p.round != self.radio.round))
         {
             self.sample();
         }
         Ok(Outcome {
             leader: Rc::clone(self.leader()),
+            alive: self
+                .views
+                .iter()
+                .enumerate()
+                .map(|(i, _)| self.radio.alive(i as u32))
+                .collect(),
             views: self.views,
-            alive: self.alive,
             converged,
-            rounds: self.round,
+            rounds: self.radio.round,
             messages: self.messages,
             bytes: self.bytes,
             delta_bytes: self.delta_bytes,
-            added_edges: self.added_edges,
+            added_edges: self.radio.added_edges,
             trace: self.trace.unwrap_or_default(),
         })
     }
 
     /// One round; whether any robot changed or adopted a view.
     fn round(&mut self) -> Result<bool, AllocError> {
-        self.round += 1;
-        if let Some(failure) = self.network.failure
-            && failure.at_round == self.round
-        {
-            self.crash(failure.fraction)?;
-            self.notice_round = Some(self.round + failure.detect_after);
+        let start = self.radio.next_round(self.instance.robots())?;
+        if !start.crashed.is_empty() {
+            // The survivors relinked: new neighbours may hold older views.
+            let living: Vec<u32> = self.radio.living().collect();
+            for a in living {
+                self.mark_sender(a);
+            }
         }
-        if self.notice_round == Some(self.round) {
-            for (noticer, crashed) in std::mem::take(&mut self.to_notice) {
+        if !start.noticed.is_empty() {
+            for (noticer, crashed) in start.noticed {
                 self.noticed[noticer as usize].push(crashed);
                 self.mark_unsatisfied(noticer);
             }
             self.unsatisfied.sort_unstable();
         }
-        let broadcasts = self.wake();
         let changed = self.act();
-        let sent = self.send(broadcasts);
+        let sent = self.send(start.broadcasts);
         self.deliver();
         let adopted = self.adopt();
         self.keep_sending(sent);
@@ -373,16 +347,7 @@ impl<'a> Grape<'a> {
 
     /// Nothing is left to do and nothing is scheduled.
     fn quiet(&self) -> bool {
-        let crash_ahead = self
-            .network
-            .failure
-            .is_some_and(|f| f.at_round > self.round);
-        let notice_ahead = self.notice_round.is_some_and(|r| r > self.round);
-        self.unsatisfied.is_empty()
-            && self.senders.is_empty()
-            && self.in_flight_count == 0
-            && !crash_ahead
-            && !notice_ahead
+        self.unsatisfied.is_empty() && self.senders.is_empty() && self.radio.idle()
     }
 
     fn mark_unsatisfied(&mut self, robot: u32) {
@@ -397,30 +362,14 @@ impl<'a> Grape<'a> {
         }
     }
 
-    /// Draws who is awake this round; returns the messages their broadcasts make.
-    fn wake(&mut self) -> u64 {
-        if self.network.activation == 1.0 {
-            return self.links.broadcast;
-        }
-        let mut messages = 0;
-        for i in 0..self.alive.len() {
-            let up = self.alive[i] && self.rng.random::<f64>() < self.network.activation;
-            self.awake[i] = up;
-            if up {
-                messages += self.links.degree(i as u32);
-            }
-        }
-        messages
-    }
-
     /// Every awake unsatisfied robot changes its view once, if it has a change to make.
     fn act(&mut self) -> bool {
         let mut changed = false;
         let mut asleep = Vec::new();
         for a in std::mem::take(&mut self.unsatisfied) {
             let i = a as usize;
-            if !self.alive[i] || !self.awake[i] {
-                if self.alive[i] {
+            if !self.radio.up(a) {
+                if self.radio.alive(a) {
                     asleep.push(a);
                 } else {
                     self.is_unsatisfied[i] = false;
@@ -464,18 +413,18 @@ impl<'a> Grape<'a> {
         let mut sent = Vec::new();
         let mut asleep = Vec::new();
         for b in std::mem::take(&mut self.senders) {
-            if !self.alive[b as usize] {
-                self.is_sender[b as usize] = false;
-                continue;
-            }
-            if !self.awake[b as usize] {
-                asleep.push(b);
+            if !self.radio.up(b) {
+                if self.radio.alive(b) {
+                    asleep.push(b);
+                } else {
+                    self.is_sender[b as usize] = false;
+                }
                 continue;
             }
             self.is_sender[b as usize] = false;
             sent.push(b);
             let view = Rc::clone(&self.views[b as usize]);
-            let links: Vec<(usize, u32)> = self.links.out(b).collect();
+            let links: Vec<(usize, u32)> = self.radio.out(b).collect();
             for (link, a) in links {
                 let theirs = &self.views[a as usize];
                 if theirs.key() >= view.key() {
@@ -483,16 +432,7 @@ impl<'a> Grape<'a> {
                 }
                 useful += 1;
                 useful_bytes += self.sizes.delta(&view, theirs);
-                if self
-                    .channel
-                    .lost(&mut self.links, link, self.round, &mut self.rng)
-                {
-                    continue;
-                }
-                let slot = (self.round as usize + self.channel.delay(&mut self.rng) as usize)
-                    % self.in_flight.len();
-                self.in_flight[slot].push((a, Rc::clone(&view)));
-                self.in_flight_count += 1;
+                self.radio.transmit(link, a, Rc::clone(&view));
             }
         }
         self.senders = asleep;
@@ -504,13 +444,8 @@ impl<'a> Grape<'a> {
 
     /// This round's arrivals: each living receiver's best offer above its own view.
     fn deliver(&mut self) {
-        let slot = self.round as usize % self.in_flight.len();
-        for (a, view) in std::mem::take(&mut self.in_flight[slot]) {
-            self.in_flight_count -= 1;
+        for (a, view) in self.radio.arrivals() {
             let i = a as usize;
-            if !self.alive[i] {
-                continue;
-            }
             let best = self.offer[i].as_ref().unwrap_or(&self.views[i]).key();
             if view.key() > best {
                 if self.offer[i].is_none() {
@@ -541,7 +476,7 @@ impl<'a> Grape<'a> {
         for b in sent {
             let key = self.views[b as usize].key();
             let behind = self
-                .links
+                .radio
                 .out(b)
                 .any(|(_, a)| self.views[a as usize].key() < key);
             if behind {
@@ -550,64 +485,11 @@ impl<'a> Grape<'a> {
         }
     }
 
-    /// `fraction` of the living robots stop; their neighbours will notice, and the
-    /// survivors relink.
-    fn crash(&mut self, fraction: f64) -> Result<(), AllocError> {
-        let living: Vec<u32> = (0..self.alive.len() as u32)
-            .filter(|&i| self.alive[i as usize])
-            .collect();
-        let count = ((fraction * living.len() as f64).round() as usize).min(living.len() - 1);
-        let mut crashed: Vec<u32> = rand::seq::index::sample(&mut self.rng, living.len(), count)
-            .into_iter()
-            .map(|k| living[k])
-            .collect();
-        crashed.sort_unstable();
-        for &c in &crashed {
-            self.alive[c as usize] = false;
-        }
-        let points = self.instance.robots();
-        for &c in &crashed {
-            let mut noticers: Vec<u32> = self
-                .links
-                .out(c)
-                .map(|(_, a)| a)
-                .filter(|&a| self.alive[a as usize])
-                .collect();
-            if noticers.is_empty() {
-                let nearest = living
-                    .iter()
-                    .copied()
-                    .filter(|&a| self.alive[a as usize])
-                    .min_by(|&a, &b| {
-                        let d = |x: u32| points[c as usize].distance(points[x as usize]);
-                        d(a).total_cmp(&d(b))
-                    })
-                    .expect("a robot survives");
-                noticers.push(nearest);
-            }
-            self.to_notice.extend(noticers.into_iter().map(|a| (a, c)));
-        }
-        let survivors: Vec<u32> = living
-            .into_iter()
-            .filter(|&a| self.alive[a as usize])
-            .collect();
-        let (links, added) = Links::build(points, &survivors, self.network.graph, self.split_x)?;
-        self.links = links;
-        self.added_edges += added;
-        // New neighbours may hold older views.
-        for a in survivors {
-            self.mark_sender(a);
-        }
-        Ok(())
-    }
-
     /// The highest view among the living robots.
     fn leader(&self) -> &Rc<View> {
-        self.views
-            .iter()
-            .zip(&self.alive)
-            .filter(|(_, alive)| **alive)
-            .map(|(v, _)| v)
+        self.radio
+            .living()
+            .map(|i| &self.views[i as usize])
             .max_by_key(|v| v.key())
             .expect("a robot survives")
     }
@@ -616,18 +498,18 @@ impl<'a> Grape<'a> {
     fn sample(&mut self) {
         let leader = Rc::clone(self.leader());
         let (mut living, mut agreeing) = (0usize, 0usize);
-        for (view, &alive) in self.views.iter().zip(&self.alive) {
-            living += usize::from(alive);
-            agreeing += usize::from(alive && view.key() == leader.key());
+        for i in self.radio.living() {
+            living += 1;
+            agreeing += usize::from(self.views[i as usize].key() == leader.key());
         }
         let mut assignment = leader.assignment();
-        for (i, &alive) in self.alive.iter().enumerate() {
-            if !alive {
-                assignment.set(RobotId(i as u32), None);
+        for i in 0..self.views.len() as u32 {
+            if !self.radio.alive(i) {
+                assignment.set(RobotId(i), None);
             }
         }
         let point = TracePoint {
-            round: self.round,
+            round: self.radio.round,
             welfare: self.instance.welfare(&assignment),
             agreeing: agreeing as f64 / living as f64,
         };
@@ -644,11 +526,4 @@ impl<'a> Grape<'a> {
             self.stride *= 2;
         }
     }
-}
-
-/// The median of the robots' x coordinates: the partition line.
-fn median_x(instance: &Instance) -> f64 {
-    let mut xs: Vec<f64> = instance.robots().iter().map(|p| p.x).collect();
-    let mid = xs.len() / 2;
-    *xs.select_nth_unstable_by(mid, f64::total_cmp).1
 }

@@ -3,7 +3,7 @@
 
 use afg_game::{Point, RobotId};
 use afg_graph::{GraphKind, RobotGraph};
-use rand::Rng;
+use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
@@ -147,7 +147,7 @@ fn gilbert_elliott(loss: f64, burst: f64) -> (f64, f64) {
 /// The links in force: a neighbour list per robot (by original robot id; a crashed
 /// robot has none), each directed link with its loss state and whether it crosses the
 /// partition line.
-pub(super) struct Links {
+struct Links {
     offsets: Vec<usize>,
     neighbours: Vec<u32>,
     crossing: Vec<bool>,
@@ -156,7 +156,7 @@ pub(super) struct Links {
     bad: Vec<bool>,
     drawn: Vec<u64>,
     /// Messages one round of broadcasts sends when every living robot is awake.
-    pub broadcast: u64,
+    broadcast: u64,
 }
 
 impl Links {
@@ -217,8 +217,216 @@ impl Links {
     }
 }
 
+/// The radio layer both decentralised methods run on: who is alive and awake this
+/// round, the links in force, messages in flight, crashes and who notices them.
+pub(super) struct Radio<M> {
+    network: Network,
+    links: Links,
+    channel: Channel,
+    /// The network's draws (GRAPE's stamps are another generator).
+    rng: ChaCha8Rng,
+    split_x: Option<f64>,
+    alive: Vec<bool>,
+    awake: Vec<bool>,
+    /// Messages by arrival round modulo the longest delay + 1: (receiver, message).
+    in_flight: Vec<Vec<(u32, M)>>,
+    in_flight_count: usize,
+    /// (noticer, crashed) pairs due at `notice_round`.
+    to_notice: Vec<(u32, u32)>,
+    notice_round: Option<u64>,
+    /// The current round (from 1).
+    pub round: u64,
+    /// Edges added to connect the graph (at the start and after the crash).
+    pub added_edges: usize,
+}
+
+/// What happens at the start of a round.
+pub(super) struct RoundStart {
+    /// Messages the awake robots' broadcasts make this round.
+    pub broadcasts: u64,
+    /// Robots crashed this round (the survivors have relinked).
+    pub crashed: Vec<u32>,
+    /// (noticer, crashed) pairs: who noticed whom this round.
+    pub noticed: Vec<(u32, u32)>,
+}
+
+impl<M> Radio<M> {
+    /// Every robot alive, linked by the network's graph; draws from stream 1 of `seed`.
+    pub fn new(points: &[Point], network: &Network, seed: u64) -> Result<Self, AllocError> {
+        network.check()?;
+        let n = points.len();
+        let split_x = network.partition_until.map(|_| median_x(points));
+        let everyone: Vec<u32> = (0..n as u32).collect();
+        let (links, added_edges) = Links::build(points, &everyone, network.graph, split_x)?;
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        rng.set_stream(1);
+        Ok(Radio {
+            network: network.clone(),
+            links,
+            channel: Channel::new(network),
+            rng,
+            split_x,
+            alive: vec![true; n],
+            awake: vec![true; n],
+            in_flight: (0..=network.max_delay).map(|_| Vec::new()).collect(),
+            in_flight_count: 0,
+            to_notice: Vec::new(),
+            notice_round: None,
+            round: 0,
+            added_edges,
+        })
+    }
+
+    /// Starts the next round: the crash and the noticing due now, then who wakes.
+    ///
+    /// # Errors
+    /// [`AllocError::Graph`] if the survivors' graph cannot be built.
+    pub fn next_round(&mut self, points: &[Point]) -> Result<RoundStart, AllocError> {
+        self.round += 1;
+        let mut crashed = Vec::new();
+        if let Some(failure) = self.network.failure
+            && failure.at_round == self.round
+        {
+            crashed = self.crash(points, failure.fraction)?;
+            self.notice_round = Some(self.round + failure.detect_after);
+        }
+        let noticed = if self.notice_round == Some(self.round) {
+            std::mem::take(&mut self.to_notice)
+        } else {
+            Vec::new()
+        };
+        Ok(RoundStart {
+            broadcasts: self.wake(),
+            crashed,
+            noticed,
+        })
+    }
+
+    /// Draws who is awake; returns the messages their broadcasts make.
+    fn wake(&mut self) -> u64 {
+        if self.network.activation == 1.0 {
+            return self.links.broadcast;
+        }
+        let mut messages = 0;
+        for i in 0..self.alive.len() {
+            let up = self.alive[i] && self.rng.random::<f64>() < self.network.activation;
+            self.awake[i] = up;
+            if up {
+                messages += self.links.degree(i as u32);
+            }
+        }
+        messages
+    }
+
+    /// `fraction` of the living robots stop; each is to be noticed by its living
+    /// neighbours (or its nearest living robot), and the survivors relink. Returns
+    /// the crashed robots.
+    fn crash(&mut self, points: &[Point], fraction: f64) -> Result<Vec<u32>, AllocError> {
+        let living: Vec<u32> = (0..self.alive.len() as u32)
+            .filter(|&i| self.alive[i as usize])
+            .collect();
+        let count = ((fraction * living.len() as f64).round() as usize).min(living.len() - 1);
+        let mut crashed: Vec<u32> = rand::seq::index::sample(&mut self.rng, living.len(), count)
+            .into_iter()
+            .map(|k| living[k])
+            .collect();
+        crashed.sort_unstable();
+        for &c in &crashed {
+            self.alive[c as usize] = false;
+        }
+        let survivors: Vec<u32> = living
+            .into_iter()
+            .filter(|&a| self.alive[a as usize])
+            .collect();
+        for &c in &crashed {
+            let mut noticers: Vec<u32> = self
+                .links
+                .out(c)
+                .map(|(_, a)| a)
+                .filter(|&a| self.alive[a as usize])
+                .collect();
+            if noticers.is_empty() {
+                let d = |x: u32| points[c as usize].distance(points[x as usize]);
+                let nearest = survivors
+                    .iter()
+                    .copied()
+                    .min_by(|&a, &b| d(a).total_cmp(&d(b)));
+                noticers.extend(nearest);
+            }
+            self.to_notice.extend(noticers.into_iter().map(|a| (a, c)));
+        }
+        let (links, added) = Links::build(points, &survivors, self.network.graph, self.split_x)?;
+        self.links = links;
+        self.added_edges += added;
+        Ok(crashed)
+    }
+
+    /// Whether `robot` is alive.
+    pub fn alive(&self, robot: u32) -> bool {
+        self.alive[robot as usize]
+    }
+
+    /// Whether `robot` is alive and awake this round.
+    pub fn up(&self, robot: u32) -> bool {
+        self.alive[robot as usize] && self.awake[robot as usize]
+    }
+
+    /// The living robots.
+    pub fn living(&self) -> impl Iterator<Item = u32> + '_ {
+        (0..self.alive.len() as u32).filter(|&i| self.alive[i as usize])
+    }
+
+    /// The links out of `robot`: (link, neighbour).
+    pub fn out(&self, robot: u32) -> impl Iterator<Item = (usize, u32)> + '_ {
+        self.links.out(robot)
+    }
+
+    /// Sends `message` over `link` to `to`: lost, or in flight until its arrival round.
+    pub fn transmit(&mut self, link: usize, to: u32, message: M) {
+        if self
+            .channel
+            .lost(&mut self.links, link, self.round, &mut self.rng)
+        {
+            return;
+        }
+        let delay = self.channel.delay(&mut self.rng) as usize;
+        let slot = (self.round as usize + delay) % self.in_flight.len();
+        self.in_flight[slot].push((to, message));
+        self.in_flight_count += 1;
+    }
+
+    /// This round's arrivals at living robots, in the order they were sent.
+    pub fn arrivals(&mut self) -> Vec<(u32, M)> {
+        let slot = self.round as usize % self.in_flight.len();
+        let arrived = std::mem::take(&mut self.in_flight[slot]);
+        self.in_flight_count -= arrived.len();
+        let alive = &self.alive;
+        arrived
+            .into_iter()
+            .filter(|(to, _)| alive[*to as usize])
+            .collect()
+    }
+
+    /// Nothing in flight and nothing scheduled.
+    pub fn idle(&self) -> bool {
+        let crash_ahead = self
+            .network
+            .failure
+            .is_some_and(|f| f.at_round > self.round);
+        let notice_ahead = self.notice_round.is_some_and(|r| r > self.round);
+        self.in_flight_count == 0 && !crash_ahead && !notice_ahead
+    }
+}
+
+/// The median of the points' x coordinates: the partition line.
+fn median_x(points: &[Point]) -> f64 {
+    let mut xs: Vec<f64> = points.iter().map(|p| p.x).collect();
+    let mid = xs.len() / 2;
+    *xs.select_nth_unstable_by(mid, f64::total_cmp).1
+}
+
 /// Draws the fate of messages: lost or delivered, and when.
-pub(super) struct Channel {
+struct Channel {
     loss: f64,
     /// Gilbert–Elliott (good → bad, bad → good), for bursty loss.
     transitions: Option<(f64, f64)>,
