@@ -49,7 +49,7 @@ enum Command {
     Gen(datasets::GenCustomArgs),
     /// Solve an instance or a dataset with one allocator and print welfare, % of OPT, NS_rate.
     Solve(solve::SolveArgs),
-    /// GRAPE over a lossy, late, range-limited network where robots fail mid-run.
+    /// GRAPE and a decentralised auction over a lossy, late, range-limited network where robots fail mid-run.
     Swarm(swarm::SwarmArgs),
     /// Time the classical allocators over a sweep of N and print a Markdown table.
     BenchBaselines(bench::BenchArgs),

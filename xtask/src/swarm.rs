@@ -1,10 +1,11 @@
-//! `cargo xtask swarm`: GRAPE over a lossy, late, range-limited network where robots
-//! fail mid-run; a grid of robot counts × loss rates × failing shares, several seeds
-//! each, as a Markdown table, JSON lines and an SVG of the runs against rounds.
+//! `cargo xtask swarm`: GRAPE and the decentralised auction over a lossy, late,
+//! range-limited network where robots fail mid-run; a grid of methods × robot counts ×
+//! loss rates × failing shares, several seeds each, as a Markdown table, JSON lines
+//! and an SVG of the runs against rounds.
 
 use std::path::PathBuf;
 
-use afg_baseline::{Failure, Network, Swarm, SwarmReport};
+use afg_baseline::{Failure, Network, Swarm, SwarmMethod, SwarmReport};
 use afg_game::{GeneratorConfig, Instance, Preference};
 use afg_graph::GraphKind;
 use anyhow::{Context, Result, ensure};
@@ -13,12 +14,17 @@ use rayon::prelude::*;
 
 #[derive(Args)]
 pub struct SwarmArgs {
-    /// Decentralised method (GRAPE's algorithm with its distributed mutex).
-    #[arg(long, value_enum, default_value_t = SwarmMethod::Grape)]
-    method: SwarmMethod,
+    /// Decentralised methods (comma-separated): grape (GRAPE with its distributed
+    /// mutex) or auction (robots bid for task places; prices and winners spread by
+    /// max-consensus).
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "grape")]
+    method: Vec<MethodName>,
     /// GRAPE's preference: selfish (the paper's GRAPE DA) or balanced.
     #[arg(long, value_enum, default_value_t = Pref::Selfish)]
     preference: Pref,
+    /// The auction's least price increment ε (its result is within N·ε of the optimum).
+    #[arg(long, default_value_t = 1e-4)]
+    epsilon: f64,
     /// Robot counts (comma-separated); instances drawn from the paper's distribution.
     #[arg(long, value_delimiter = ',', default_value = "1000")]
     robots: Vec<usize>,
@@ -80,8 +86,9 @@ pub struct SwarmArgs {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
-enum SwarmMethod {
+enum MethodName {
     Grape,
+    Auction,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -99,8 +106,9 @@ impl From<Pref> for Preference {
     }
 }
 
-/// One cell of the grid: an instance and a network, run over the seeds.
+/// One cell of the grid: a method, an instance and a network, run over the seeds.
 struct Cell {
+    method: SwarmMethod,
     instance: Instance,
     network: Network,
     /// Whether the crash round is left to mid-run.
@@ -126,7 +134,7 @@ pub fn run(args: SwarmArgs) -> Result<()> {
         let firsts: Vec<(String, SwarmReport)> = reports
             .iter()
             .filter(|(_, r)| r.seed == 0)
-            .map(|(c, r)| (label(&cells[*c].network, r.robots), r.clone()))
+            .map(|(c, r)| (label(&cells[*c]), r.clone()))
             .collect();
         let title = format!(
             "GRAPE ({}) over a failing network",
@@ -151,7 +159,7 @@ fn preference_name(p: Pref) -> &'static str {
     }
 }
 
-/// The grid: each instance × each loss × each failing share.
+/// The grid: each method × instance × loss × failing share.
 fn cells(args: &SwarmArgs) -> Result<Vec<Cell>> {
     let instances = match &args.input {
         Some(path) => crate::solve::read_instances(path)?,
@@ -170,8 +178,23 @@ fn cells(args: &SwarmArgs) -> Result<Vec<Cell>> {
         (None, Some(k)) => GraphKind::Knn { k },
         (None, None) => GraphKind::default(),
     };
+    let methods: Vec<SwarmMethod> = args
+        .method
+        .iter()
+        .map(|m| match m {
+            MethodName::Grape => SwarmMethod::Grape {
+                preference: args.preference.into(),
+            },
+            MethodName::Auction => SwarmMethod::Auction {
+                epsilon: args.epsilon,
+            },
+        })
+        .collect();
     let mut cells = Vec::new();
-    for instance in &instances {
+    for (&method, instance) in methods
+        .iter()
+        .flat_map(|m| instances.iter().map(move |i| (m, i)))
+    {
         for &loss in &args.loss {
             for &fail in &args.fail {
                 let failure = (fail > 0.0).then(|| Failure {
@@ -190,6 +213,7 @@ fn cells(args: &SwarmArgs) -> Result<Vec<Cell>> {
                 };
                 network.check()?;
                 cells.push(Cell {
+                    method,
                     instance: instance.clone(),
                     network,
                     crash_mid_run: fail > 0.0 && args.fail_at.is_none(),
@@ -205,8 +229,9 @@ fn cells(args: &SwarmArgs) -> Result<Vec<Cell>> {
 /// without failures.
 fn run_one(args: &SwarmArgs, cell: &Cell, seed: u64) -> Result<SwarmReport> {
     let swarm = |network: Network| {
-        let mut swarm = match args.method {
-            SwarmMethod::Grape => Swarm::grape(args.preference.into(), network, seed),
+        let mut swarm = match cell.method {
+            SwarmMethod::Grape { preference } => Swarm::grape(preference, network, seed),
+            SwarmMethod::Auction { epsilon } => Swarm::auction(epsilon, network, seed),
         };
         swarm.max_rounds = args.max_rounds.unwrap_or(0);
         swarm.trace = args.svg.is_some();
@@ -226,9 +251,14 @@ fn run_one(args: &SwarmArgs, cell: &Cell, seed: u64) -> Result<SwarmReport> {
     Ok(swarm(network).run(&cell.instance)?)
 }
 
-/// What a cell's network is, in a few words.
-fn label(network: &Network, robots: usize) -> String {
-    let mut parts = vec![format!("N = {robots}")];
+/// What a cell is, in a few words.
+fn label(cell: &Cell) -> String {
+    let network = &cell.network;
+    let method = match cell.method {
+        SwarmMethod::Grape { .. } => "GRAPE".to_string(),
+        SwarmMethod::Auction { epsilon } => format!("auction (ε = {epsilon})"),
+    };
+    let mut parts = vec![method, format!("N = {}", cell.instance.num_robots())];
     match network.graph {
         GraphKind::Radius { radius } => parts.push(format!("radius {radius}")),
         GraphKind::Knn { k } if k != 10 => parts.push(format!("{k} nearest")),
@@ -285,7 +315,7 @@ fn table(cells: &[Cell], reports: &[(usize, SwarmReport)]) -> String {
             });
         out += &format!(
             "| {} | {:.0} | {}/{} | {} | {:.0} | {:.0} | {:.1} | {:.2} | {:.1} % | {} | {}/{} | {:.1} % | {:.1} % | {} |\n",
-            label(&cell.network, cell.instance.num_robots()),
+            label(cell),
             mean(&|r| r.added_edges as f64),
             count(&|r| r.converged),
             runs.len(),

@@ -30,7 +30,7 @@
 use afg_game::{Assignment, Instance, Preference, RobotId};
 use afg_graph::GraphKind;
 
-use crate::swarm::{Grape, Network};
+use crate::swarm::{Grape, Network, drive};
 use crate::{AllocError, AllocStats, Allocation, Allocator, timed};
 
 /// Best-response dynamics run centrally: robots take turns, first in the order of
@@ -211,18 +211,19 @@ impl DecentralisedDa {
             graph: self.graph,
             ..Network::default()
         };
-        let (outcome, wall_time) = timed(|| {
-            Grape::new(instance, self.preference, &network, self.seed)?.run(limit, |_| {})
+        let (result, wall_time) = timed(|| {
+            let mut sim = Grape::new(instance, self.preference, &network, self.seed)?;
+            let (converged, trace) = drive(&mut sim, limit, false, |_| {})?;
+            Ok::<_, AllocError>(sim.finish(converged, trace))
         });
-        let outcome = outcome?;
+        let (outcome, view) = result?;
         if !outcome.converged {
             return Err(AllocError::NotConverged { rounds: limit });
         }
-        let view = outcome.leader;
         let stats = AllocStats {
             iterations: view.evolution(),
             rounds: outcome.rounds,
-            messages: outcome.messages,
+            messages: outcome.traffic.messages,
             wall_time,
             seed: Some(self.seed),
         };

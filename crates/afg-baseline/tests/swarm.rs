@@ -379,3 +379,57 @@ fn a_thousand_robots_survive_loss_and_failures() {
         report.percent_of_opt
     );
 }
+
+/// The auction ends within N·ε of the survivors' optimum (LP duality), on every
+/// network, every survivor agreeing.
+#[test]
+fn the_auction_ends_within_n_epsilon_of_the_optimum() {
+    let epsilon = 1e-3;
+    for (idx, inst) in instances(10, 33).iter().enumerate() {
+        for (name, network) in networks() {
+            let report = Swarm::auction(epsilon, network, idx as u64)
+                .run(inst)
+                .unwrap();
+            let why = format!("#{idx} N={} {name}", inst.num_robots());
+            assert!(report.converged, "{why}");
+            assert_eq!(report.agreeing, 1.0, "{why}");
+            let bound = report.survivors as f64 * epsilon;
+            assert!(
+                report.welfare >= report.opt_welfare - bound - 1e-9,
+                "{why}: {} < {} − {bound}",
+                report.welfare,
+                report.opt_welfare
+            );
+            let a = report.assignment.as_ref().unwrap();
+            let placed = inst.robot_ids().filter(|&i| a.task_of(i).is_some()).count();
+            assert_eq!(placed, report.survivors, "{why}");
+            assert!(
+                inst.task_ids().all(|j| a.size(j) <= inst.capacity(j)),
+                "{why}"
+            );
+        }
+    }
+}
+
+#[test]
+fn the_auction_repeats_per_seed_and_refuses_a_bad_increment() {
+    let inst = GeneratorConfig::paper(60, 4, 2).generate().unwrap();
+    let network = Network {
+        loss: 0.3,
+        activation: 0.5,
+        ..Network::default()
+    };
+    let run = |seed| {
+        Swarm::auction(1e-3, network.clone(), seed)
+            .run(&inst)
+            .unwrap()
+    };
+    assert_eq!(comparable(&run(3)), comparable(&run(3)));
+    assert!((4..10).any(|s| run(s).rounds != run(3).rounds));
+    for epsilon in [0.0, -1.0, f64::NAN] {
+        let err = Swarm::auction(epsilon, Network::default(), 0)
+            .run(&inst)
+            .unwrap_err();
+        assert!(err.to_string().contains("increment"), "{err}");
+    }
+}

@@ -20,6 +20,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::network::{Network, Radio};
+use super::{Outcome, Simulation, TracePoint, Traffic};
 use crate::AllocError;
 
 /// One change on a chain of views.
@@ -171,35 +172,6 @@ impl MessageSizes {
     }
 }
 
-/// A point of the run's trace.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct TracePoint {
-    /// Round (from 1).
-    pub round: u64,
-    /// Welfare of the highest view among the living robots, crashed robots left out.
-    pub welfare: f64,
-    /// Share of the living robots that hold that view.
-    pub agreeing: f64,
-}
-
-/// Most points a trace keeps: when it is full, every other point goes and the
-/// sampling stride doubles.
-const TRACE_POINTS: usize = 256;
-
-/// What a run left: the highest view among the living, every robot's view, counters.
-pub(crate) struct Outcome {
-    pub leader: Rc<View>,
-    pub views: Vec<Rc<View>>,
-    pub alive: Vec<bool>,
-    pub converged: bool,
-    pub rounds: u64,
-    pub messages: u64,
-    pub bytes: u64,
-    pub delta_bytes: u64,
-    pub added_edges: usize,
-    pub trace: Vec<TracePoint>,
-}
-
 /// The simulation's state between rounds.
 pub(crate) struct Grape<'a> {
     instance: &'a Instance,
@@ -220,12 +192,7 @@ pub(crate) struct Grape<'a> {
     /// Crashed robots each robot has noticed.
     noticed: Vec<Vec<u32>>,
     sizes: MessageSizes,
-    messages: u64,
-    bytes: u64,
-    delta_bytes: u64,
-    /// The sampled trace, when asked for (each point costs O(N)).
-    trace: Option<Vec<TracePoint>>,
-    stride: u64,
+    traffic: Traffic,
 }
 
 impl<'a> Grape<'a> {
@@ -257,71 +224,50 @@ impl<'a> Grape<'a> {
             offered: Vec::new(),
             noticed: vec![Vec::new(); n],
             sizes: MessageSizes::new(n, m),
-            messages: 0,
-            bytes: 0,
-            delta_bytes: 0,
-            trace: None,
-            stride: 1,
+            traffic: Traffic::default(),
         })
     }
 
-    /// Samples the leader's welfare and agreement as the rounds go.
-    pub fn traced(mut self) -> Self {
-        self.trace = Some(Vec::new());
-        self
-    }
-
-    /// Runs rounds until one changes nothing and nothing more can happen, or until
-    /// `max_rounds`; `on_round` sees each round's number.
-    ///
-    /// # Errors
-    /// [`AllocError::Graph`] if the survivors' graph cannot be built.
-    pub fn run(
-        mut self,
-        max_rounds: u64,
-        mut on_round: impl FnMut(u64),
-    ) -> Result<Outcome, AllocError> {
-        let converged = loop {
-            let active = self.round()?;
-            on_round(self.radio.round);
-            if self.trace.is_some() && self.radio.round.is_multiple_of(self.stride) {
-                self.sample();
+    /// What the run left, and the final partition's view.
+    pub fn finish(self, converged: bool, trace: Vec<TracePoint>) -> (Outcome, Rc<View>) {
+        let leader = Rc::clone(self.leader());
+        let alive: Vec<bool> = (0..self.views.len() as u32)
+            .map(|i| self.radio.alive(i))
+            .collect();
+        let agreeing = self.holding(&leader);
+        let mut tasks: Vec<_> = leader.assignment().tasks().to_vec();
+        for (task, &alive) in tasks.iter_mut().zip(&alive) {
+            if !alive {
+                *task = None;
             }
-            if !active && self.quiet() {
-                break true;
-            }
-            if self.radio.round >= max_rounds {
-                break false;
-            }
-        };
-        if self
-            .trace
-            .as_ref()
-            .is_some_and(|t| t.last().is_none_or(|p| p.round != self.radio.round))
-        {
-            self.sample();
         }
-        Ok(Outcome {
-            leader: Rc::clone(self.leader()),
-            alive: self
-                .views
-                .iter()
-                .enumerate()
-                .map(|(i, _)| self.radio.alive(i as u32))
-                .collect(),
-            views: self.views,
+        let outcome = Outcome {
+            tasks,
+            alive,
+            agreeing,
             converged,
             rounds: self.radio.round,
-            messages: self.messages,
-            bytes: self.bytes,
-            delta_bytes: self.delta_bytes,
+            changes: leader.evolution,
+            traffic: self.traffic,
             added_edges: self.radio.added_edges,
-            trace: self.trace.unwrap_or_default(),
-        })
+            trace,
+        };
+        (outcome, leader)
+    }
+
+    /// Share of the living robots whose view holds the same partition as `leader`.
+    fn holding(&self, leader: &Rc<View>) -> f64 {
+        let (mut living, mut agreeing) = (0usize, 0usize);
+        for i in self.radio.living() {
+            let view = &self.views[i as usize];
+            living += 1;
+            agreeing += usize::from(view.key() == leader.key() || view.tasks == leader.tasks);
+        }
+        agreeing as f64 / living as f64
     }
 
     /// One round; whether any robot changed or adopted a view.
-    fn round(&mut self) -> Result<bool, AllocError> {
+    fn round_impl(&mut self) -> Result<bool, AllocError> {
         let start = self.radio.next_round(self.instance.robots())?;
         if !start.crashed.is_empty() {
             // The survivors relinked: new neighbours may hold older views.
@@ -343,11 +289,6 @@ impl<'a> Grape<'a> {
         let adopted = self.adopt();
         self.keep_sending(sent);
         Ok(changed || adopted)
-    }
-
-    /// Nothing is left to do and nothing is scheduled.
-    fn quiet(&self) -> bool {
-        self.unsatisfied.is_empty() && self.senders.is_empty() && self.radio.idle()
     }
 
     fn mark_unsatisfied(&mut self, robot: u32) {
@@ -436,9 +377,9 @@ impl<'a> Grape<'a> {
             }
         }
         self.senders = asleep;
-        self.messages += broadcasts;
-        self.bytes += broadcasts * self.sizes.full;
-        self.delta_bytes += (broadcasts - useful) * self.sizes.header + useful_bytes;
+        self.traffic.messages += broadcasts;
+        self.traffic.bytes += broadcasts * self.sizes.full;
+        self.traffic.delta_bytes += (broadcasts - useful) * self.sizes.header + useful_bytes;
         sent
     }
 
@@ -493,37 +434,34 @@ impl<'a> Grape<'a> {
             .max_by_key(|v| v.key())
             .expect("a robot survives")
     }
+}
 
-    /// Records the leader's welfare and how many hold it; thins the trace when full.
-    fn sample(&mut self) {
-        let leader = Rc::clone(self.leader());
-        let (mut living, mut agreeing) = (0usize, 0usize);
-        for i in self.radio.living() {
-            living += 1;
-            agreeing += usize::from(self.views[i as usize].key() == leader.key());
-        }
+impl Simulation for Grape<'_> {
+    fn round(&mut self) -> Result<bool, AllocError> {
+        self.round_impl()
+    }
+
+    fn quiet(&self) -> bool {
+        self.unsatisfied.is_empty() && self.senders.is_empty() && self.radio.idle()
+    }
+
+    fn rounds(&self) -> u64 {
+        self.radio.round
+    }
+
+    /// The leader's welfare over the living robots, and how many hold it.
+    fn sample(&self) -> TracePoint {
+        let leader = self.leader();
         let mut assignment = leader.assignment();
         for i in 0..self.views.len() as u32 {
             if !self.radio.alive(i) {
                 assignment.set(RobotId(i), None);
             }
         }
-        let point = TracePoint {
+        TracePoint {
             round: self.radio.round,
             welfare: self.instance.welfare(&assignment),
-            agreeing: agreeing as f64 / living as f64,
-        };
-        let Some(trace) = self.trace.as_mut() else {
-            return;
-        };
-        trace.push(point);
-        if trace.len() >= TRACE_POINTS {
-            let mut keep = false;
-            trace.retain(|_| {
-                keep = !keep;
-                keep
-            });
-            self.stride *= 2;
+            agreeing: self.holding(leader),
         }
     }
 }

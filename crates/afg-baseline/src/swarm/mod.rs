@@ -12,19 +12,143 @@
 //! On the perfect network ([`Network::default`]) the run is exactly
 //! [`DecentralisedDa`](crate::DecentralisedDa) (tested).
 
+mod auction;
 mod grape;
 mod network;
 
 use std::time::Duration;
 
-use afg_game::{Assignment, Instance, Point, Preference, RobotId};
+use afg_game::{Assignment, Instance, Point, Preference, RobotId, TaskId};
 use serde::{Deserialize, Serialize};
 
 use crate::{AllocError, Allocator, Optimum, percent_of_opt, timed};
 
+use auction::Auction;
 pub(crate) use grape::Grape;
-pub use grape::TracePoint;
 pub use network::{Failure, Network};
+
+/// A point of a run's trace.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TracePoint {
+    /// Round (from 1).
+    pub round: u64,
+    /// Welfare of the partition the living robots are converging on (GRAPE: the
+    /// highest view; the auction: the slots each robot believes it holds), crashed
+    /// robots left out.
+    pub welfare: f64,
+    /// Share of the living robots whose local view is that partition.
+    pub agreeing: f64,
+}
+
+/// Most points a trace keeps: when it is full, every other point goes and the
+/// sampling stride doubles.
+const TRACE_POINTS: usize = 256;
+
+/// Messages and bytes sent.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Traffic {
+    pub messages: u64,
+    pub bytes: u64,
+    pub delta_bytes: u64,
+}
+
+/// What a run left, whatever the method.
+pub(crate) struct Outcome {
+    /// The final partition (crashed robots unassigned).
+    pub tasks: Vec<Option<TaskId>>,
+    pub alive: Vec<bool>,
+    /// Share of the living robots whose view is the final partition.
+    pub agreeing: f64,
+    pub converged: bool,
+    pub rounds: u64,
+    /// GRAPE: changes on the final chain; the auction: bids made.
+    pub changes: u64,
+    pub traffic: Traffic,
+    pub added_edges: usize,
+    pub trace: Vec<TracePoint>,
+}
+
+/// A decentralised method, round by round.
+pub(crate) trait Simulation {
+    /// Runs one round; whether any robot changed its mind or its view.
+    fn round(&mut self) -> Result<bool, AllocError>;
+    /// Nothing left to do and nothing scheduled.
+    fn quiet(&self) -> bool;
+    /// Rounds run.
+    fn rounds(&self) -> u64;
+    /// The trace point of now.
+    fn sample(&self) -> TracePoint;
+}
+
+/// Runs `sim` until a round changes nothing and nothing more can happen (converged)
+/// or until `max_rounds`; samples a trace if asked, thinning it as it fills.
+pub(crate) fn drive(
+    sim: &mut impl Simulation,
+    max_rounds: u64,
+    trace: bool,
+    mut on_round: impl FnMut(u64),
+) -> Result<(bool, Vec<TracePoint>), AllocError> {
+    let (mut points, mut stride) = (Vec::new(), 1u64);
+    let converged = loop {
+        let active = sim.round()?;
+        let round = sim.rounds();
+        on_round(round);
+        if trace && round.is_multiple_of(stride) {
+            points.push(sim.sample());
+            if points.len() >= TRACE_POINTS {
+                let mut keep = false;
+                points.retain(|_| {
+                    keep = !keep;
+                    keep
+                });
+                stride *= 2;
+            }
+        }
+        if !active && sim.quiet() {
+            break true;
+        }
+        if round >= max_rounds {
+            break false;
+        }
+    };
+    if trace
+        && points
+            .last()
+            .is_none_or(|p: &TracePoint| p.round != sim.rounds())
+    {
+        points.push(sim.sample());
+    }
+    Ok((converged, points))
+}
+
+/// The decentralised methods.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase", tag = "name")]
+pub enum SwarmMethod {
+    /// GRAPE with its distributed mutex, robots following `preference`.
+    Grape {
+        /// Selfish = the paper's GRAPE DA.
+        preference: Preference,
+    },
+    /// The consensus-based auction on task slots: robots bid for the k-th place of a
+    /// task (worth `F_j(k) − F_j(k−1)`), raising its price by at least `epsilon`;
+    /// prices and winners spread by max-consensus.
+    Auction {
+        /// The least price increment (the result is within N·ε of the optimum).
+        epsilon: f64,
+    },
+}
+
+impl SwarmMethod {
+    /// The preference the result's stability is judged under: GRAPE's own, or the
+    /// welfare (balanced) rule for the auction, which aims at the optimum.
+    pub fn preference(&self) -> Preference {
+        match *self {
+            SwarmMethod::Grape { preference } => preference,
+            SwarmMethod::Auction { .. } => Preference::Balanced,
+        }
+    }
+}
 
 /// A decentralised method run over a [`Network`].
 ///
@@ -34,20 +158,24 @@ pub use network::{Failure, Network};
 /// use afg_game::{GeneratorConfig, Preference};
 /// let inst = GeneratorConfig::paper(60, 5, 1).generate()?;
 /// let network = Network { loss: 0.3, failure: Some(Failure::new(0.1, 10)), ..Network::default() };
-/// let report = Swarm::grape(Preference::Selfish, network, 7).run(&inst)?;
-/// assert!(report.converged && report.agreeing == 1.0 && report.stable);
-/// assert_eq!(report.survivors, 54);
+/// let grape = Swarm::grape(Preference::Selfish, network.clone(), 7).run(&inst)?;
+/// assert!(grape.converged && grape.agreeing == 1.0 && grape.stable);
+/// assert_eq!(grape.survivors, 54);
+/// let auction = Swarm::auction(1e-4, network, 7).run(&inst)?;
+/// assert!(auction.converged && auction.agreeing == 1.0);
+/// assert!(auction.percent_of_opt.unwrap() > 99.9);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 #[derive(Clone, Debug)]
 pub struct Swarm {
-    /// GRAPE's preference (selfish = the paper's GRAPE DA).
-    pub preference: Preference,
+    /// The method.
+    pub method: SwarmMethod,
     /// The network.
     pub network: Network,
-    /// Seeds GRAPE's stamps and, on another stream, the network's draws.
+    /// Seeds the method's own draws and, on another stream, the network's.
     pub seed: u64,
-    /// Rounds after which the run stops unconverged.
+    /// Rounds after which the run stops unconverged (0: 1000 + 4 N (N + 1), stretched
+    /// by `(1 + max_delay) / ((1 − loss) · activation)`).
     pub max_rounds: u64,
     /// Whether to record the welfare and agreement as the rounds go.
     pub trace: bool,
@@ -56,8 +184,8 @@ pub struct Swarm {
 /// What a swarm run did and what it is worth.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct SwarmReport {
-    /// The method (`grape`).
-    pub method: String,
+    /// The method.
+    pub method: SwarmMethod,
     /// Robots at the start.
     pub robots: usize,
     /// Tasks.
@@ -71,7 +199,8 @@ pub struct SwarmReport {
     pub converged: bool,
     /// Rounds run, the last quiet one included.
     pub rounds: u64,
-    /// Changes on the final partition's chain (moves and removals of crashed robots).
+    /// GRAPE: changes on the final partition's chain (moves and removals of crashed
+    /// robots); the auction: bids made.
     pub changes: u64,
     /// Messages sent: every awake robot broadcasts to each neighbour every round.
     pub messages: u64,
@@ -90,7 +219,7 @@ pub struct SwarmReport {
     pub opt_welfare: f64,
     /// `100 · welfare / opt_welfare` (`None` when the optimum is not positive).
     pub percent_of_opt: Option<f64>,
-    /// Whether no survivor would move under the run's preference.
+    /// Whether no survivor would move under [`SwarmMethod::preference`].
     pub stable: bool,
     /// NS_rate of the survivors under the balanced preference.
     pub ns_rate_balanced: f64,
@@ -108,11 +237,20 @@ pub struct SwarmReport {
 }
 
 impl Swarm {
-    /// GRAPE under `preference` over `network`, no trace, a round limit of
-    /// 1000 + 4 N (N + 1) per unit of `1 / (1 − loss)` and of activation.
+    /// GRAPE under `preference` over `network`, no trace, the default round limit.
     pub fn grape(preference: Preference, network: Network, seed: u64) -> Self {
+        Self::new(SwarmMethod::Grape { preference }, network, seed)
+    }
+
+    /// The auction with least increment `epsilon` over `network`, no trace, the
+    /// default round limit.
+    pub fn auction(epsilon: f64, network: Network, seed: u64) -> Self {
+        Self::new(SwarmMethod::Auction { epsilon }, network, seed)
+    }
+
+    fn new(method: SwarmMethod, network: Network, seed: u64) -> Self {
         Swarm {
-            preference,
+            method,
             network,
             seed,
             max_rounds: 0,
@@ -143,52 +281,45 @@ impl Swarm {
         instance: &Instance,
         on_round: impl FnMut(u64),
     ) -> Result<SwarmReport, AllocError> {
-        let (outcome, wall_time) = timed(|| {
-            let mut sim = Grape::new(instance, self.preference, &self.network, self.seed)?;
-            if self.trace {
-                sim = sim.traced();
+        let limit = self.round_limit(instance.num_robots());
+        let (outcome, wall_time) = timed(|| match self.method {
+            SwarmMethod::Grape { preference } => {
+                let mut sim = Grape::new(instance, preference, &self.network, self.seed)?;
+                let (converged, trace) = drive(&mut sim, limit, self.trace, on_round)?;
+                Ok::<_, AllocError>(sim.finish(converged, trace).0)
             }
-            sim.run(self.round_limit(instance.num_robots()), on_round)
+            SwarmMethod::Auction { epsilon } => {
+                let mut sim = Auction::new(instance, epsilon, &self.network, self.seed)?;
+                let (converged, trace) = drive(&mut sim, limit, self.trace, on_round)?;
+                Ok(sim.finish(converged, trace))
+            }
         });
         let outcome = outcome?;
-        let final_tasks: Vec<_> = outcome.leader.assignment().tasks().to_vec();
         let survivors: Vec<usize> = (0..instance.num_robots())
             .filter(|&i| outcome.alive[i])
             .collect();
-        let agreeing = survivors
-            .iter()
-            .filter(|&&i| {
-                let view = &outcome.views[i];
-                std::rc::Rc::ptr_eq(view, &outcome.leader)
-                    || view.assignment().tasks() == final_tasks
-            })
-            .count() as f64
-            / survivors.len() as f64;
-        let (sub, sub_assignment) = survivors_game(instance, &survivors, &final_tasks)?;
+        let (sub, sub_assignment) = survivors_game(instance, &survivors, &outcome.tasks)?;
         let opt_welfare = sub.welfare(&Optimum.allocate(&sub)?.assignment);
         let welfare = sub.welfare(&sub_assignment);
-        let mut assignment = Assignment::unassigned(instance.num_robots(), instance.num_tasks());
-        for &i in &survivors {
-            assignment.set(RobotId(i as u32), final_tasks[i]);
-        }
+        let assignment = partition_of(&outcome.tasks, instance.num_tasks());
         Ok(SwarmReport {
-            method: "grape".into(),
+            method: self.method,
             robots: instance.num_robots(),
             tasks: instance.num_tasks(),
             network: self.network.clone(),
             seed: self.seed,
             converged: outcome.converged,
             rounds: outcome.rounds,
-            changes: outcome.leader.evolution(),
-            messages: outcome.messages,
-            bytes: outcome.bytes,
-            delta_bytes: outcome.delta_bytes,
+            changes: outcome.changes,
+            messages: outcome.traffic.messages,
+            bytes: outcome.traffic.bytes,
+            delta_bytes: outcome.traffic.delta_bytes,
             survivors: survivors.len(),
-            agreeing,
+            agreeing: outcome.agreeing,
             welfare,
             opt_welfare,
             percent_of_opt: percent_of_opt(welfare, opt_welfare),
-            stable: sub.is_stable(&sub_assignment, self.preference),
+            stable: sub.is_stable(&sub_assignment, self.method.preference()),
             ns_rate_balanced: sub.ns_rate(&sub_assignment, Preference::Balanced),
             ns_rate_selfish: sub.ns_rate(&sub_assignment, Preference::Selfish),
             added_edges: outcome.added_edges,
@@ -211,10 +342,20 @@ impl Swarm {
 fn survivors_game(
     instance: &Instance,
     survivors: &[usize],
-    tasks: &[Option<afg_game::TaskId>],
+    tasks: &[Option<TaskId>],
 ) -> Result<(Instance, Assignment), AllocError> {
     let points: Vec<Point> = survivors.iter().map(|&i| instance.robots()[i]).collect();
     let sub = Instance::new(points, instance.tasks().to_vec(), instance.beta())?;
-    let assignment = Assignment::from_tasks(&sub, survivors.iter().map(|&i| tasks[i]).collect())?;
-    Ok((sub, assignment))
+    let kept: Vec<Option<TaskId>> = survivors.iter().map(|&i| tasks[i]).collect();
+    Ok((sub, partition_of(&kept, instance.num_tasks())))
+}
+
+/// The assignment giving robot i `tasks[i]`, over `m` tasks. Capacities are not
+/// checked: robots of a run cut short may overfill a task (a converged run cannot).
+pub(crate) fn partition_of(tasks: &[Option<TaskId>], m: usize) -> Assignment {
+    let mut assignment = Assignment::unassigned(tasks.len(), m);
+    for (i, &task) in tasks.iter().enumerate() {
+        assignment.set(RobotId(i as u32), task);
+    }
+    assignment
 }

@@ -381,6 +381,11 @@ impl<M> Radio<M> {
         self.links.out(robot)
     }
 
+    /// Number of robots `robot` is linked to.
+    pub fn degree(&self, robot: u32) -> u64 {
+        self.links.degree(robot)
+    }
+
     /// Sends `message` over `link` to `to`: lost, or in flight until its arrival round.
     pub fn transmit(&mut self, link: usize, to: u32, message: M) {
         if self
