@@ -22,8 +22,8 @@ pub struct SwarmArgs {
     /// GRAPE's preference: selfish (the paper's GRAPE DA) or balanced.
     #[arg(long, value_enum, default_value_t = Pref::Selfish)]
     preference: Pref,
-    /// The auction's least price increment ε (its result is within N·ε of the optimum).
-    #[arg(long, default_value_t = 1e-4)]
+    /// The auction's least price increment ε (its result is within 2N·ε of the optimum).
+    #[arg(long, default_value_t = 1e-3)]
     epsilon: f64,
     /// Robot counts (comma-separated); instances drawn from the paper's distribution.
     #[arg(long, value_delimiter = ',', default_value = "1000")]

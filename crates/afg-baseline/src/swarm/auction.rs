@@ -11,9 +11,15 @@
 //! between neighbours — higher price wins, then the lower robot id — and a robot that
 //! learns it was outbid bids again.
 //!
+//! One departure (ours): a robot picks at random among the places within ε of its
+//! best, not always the best. Many robots with nearly the same tables otherwise bid
+//! for the same place in the same round and all but one bid again; spreading them
+//! over near-equal places halved the rounds at N = 1000. A place that is not the best
+//! is raised by ε alone, so each robot ends within 2ε of its best choice (2ε-CS).
+//!
 //! Prices only rise and every robot ends holding a place in every survivor's table,
-//! at ε-complementary slackness: by LP duality the matching is within N·ε of the best
-//! one, and the partition it gives (each robot at its place's task, places filled
+//! at 2ε-complementary slackness: by LP duality the matching is within 2N·ε of the
+//! best one, and the partition it gives (each robot at its place's task, places filled
 //! from k = 1 up, worth at least the matching) as well.
 //!
 //! A crashed robot leaves a place whose price was set with it in the market: keeping
@@ -28,6 +34,8 @@
 //! lower one; every broadcast is counted.
 
 use afg_game::{Instance, RobotId, TaskId};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 
 use super::network::{Network, Radio};
 use super::{Outcome, Simulation, TracePoint, Traffic, partition_of};
@@ -142,6 +150,8 @@ pub(crate) struct Auction<'a> {
     is_sender: Vec<bool>,
     /// The epoch noticers restart to: one more per crash noticed.
     epochs: u32,
+    /// Ties between places within ε of the best, drawn in bidding order.
+    draws: ChaCha8Rng,
     bids: u64,
     traffic: Traffic,
 }
@@ -186,6 +196,7 @@ impl<'a> Auction<'a> {
             senders: Vec::new(),
             is_sender: vec![false; n],
             epochs: 0,
+            draws: ChaCha8Rng::seed_from_u64(seed),
             bids: 0,
             traffic: Traffic::default(),
         })
@@ -291,35 +302,42 @@ impl<'a> Auction<'a> {
         self.mark_bidder(a);
     }
 
-    /// Robot `a`'s bid by its table: the place worth most to it at current prices, and
-    /// the price that leaves it ε less than indifferent to its second choice.
-    fn choose(&self, a: u32) -> Option<(Place, f64)> {
+    /// Robot `a`'s bid by its table: a place within ε of the one worth most to it at
+    /// current prices (drawn at random), and the price that leaves it ε below its
+    /// second choice (the best place's) or, for another place, ε above the old price.
+    fn choose(&mut self, a: u32) -> Option<(Place, f64)> {
         let table = &self.tables[a as usize];
         let open = Record::open(table.epoch);
         let robot = RobotId(a);
-        // (net value, place, price) of the best and the second-best net value.
-        let mut best: Option<(f64, Place, f64)> = None;
-        let mut second = f64::NEG_INFINITY;
+        // (net value, place, price) of every place worth bidding for: the places bid
+        // for so far, then each task's first open one.
+        let mut options: Vec<(f64, Place, f64)> = Vec::new();
         for j in self.instance.task_ids() {
             let cost = self.instance.cost(robot, j);
             let values = &self.values[j.index()];
             let places = &table.tasks[j.index()];
-            // The places bid for so far, then the first open one.
             let first_open = (places.len() < values.len()).then_some(open);
             for (k, r) in places.iter().copied().chain(first_open).enumerate() {
-                let net = values[k] - r.price - cost;
-                match best {
-                    Some((b, _, _)) if net <= b => second = second.max(net),
-                    _ => {
-                        second = second.max(best.map_or(f64::NEG_INFINITY, |b| b.0));
-                        best = Some((net, (j.0, k as u32), r.price));
-                    }
-                }
+                options.push((values[k] - r.price - cost, (j.0, k as u32), r.price));
             }
         }
-        let (net, place, price) = best?;
+        let best = options
+            .iter()
+            .map(|o| o.0)
+            .fold(f64::NEG_INFINITY, f64::max);
+        let near: Vec<usize> = (0..options.len())
+            .filter(|&o| options[o].0 >= best - self.epsilon)
+            .collect();
+        let pick = *near.get(self.draws.random_range(0..near.len().max(1)))?;
+        let (net, place, price) = options[pick];
+        let second = options
+            .iter()
+            .enumerate()
+            .filter(|&(o, _)| o != pick)
+            .map(|(_, o)| o.0)
+            .fold(f64::NEG_INFINITY, f64::max);
         let gap = if second.is_finite() {
-            net - second
+            (net - second).max(0.0)
         } else {
             0.0
         };

@@ -130,11 +130,11 @@ pub enum SwarmMethod {
         /// Selfish = the paper's GRAPE DA.
         preference: Preference,
     },
-    /// The consensus-based auction on task slots: robots bid for the k-th place of a
-    /// task (worth `F_j(k) − F_j(k−1)`), raising its price by at least `epsilon`;
+    /// The consensus-based auction on task places: robots bid for the k-th place of
+    /// a task (worth `F_j(k) − F_j(k−1)`), raising its price by at least `epsilon`;
     /// prices and winners spread by max-consensus.
     Auction {
-        /// The least price increment (the result is within N·ε of the optimum).
+        /// The least price increment (the result is within 2N·ε of the optimum).
         epsilon: f64,
     },
 }
@@ -161,7 +161,7 @@ impl SwarmMethod {
 /// let grape = Swarm::grape(Preference::Selfish, network.clone(), 7).run(&inst)?;
 /// assert!(grape.converged && grape.agreeing == 1.0 && grape.stable);
 /// assert_eq!(grape.survivors, 54);
-/// let auction = Swarm::auction(1e-4, network, 7).run(&inst)?;
+/// let auction = Swarm::auction(1e-3, network, 7).run(&inst)?;
 /// assert!(auction.converged && auction.agreeing == 1.0);
 /// assert!(auction.percent_of_opt.unwrap() > 99.9);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
