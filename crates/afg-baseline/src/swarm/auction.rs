@@ -37,7 +37,7 @@ use afg_game::{Instance, RobotId, TaskId};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::network::{Network, Radio};
+use super::network::{Network, Radio, Roster};
 use super::{Outcome, Simulation, TracePoint, Traffic, partition_of};
 use crate::AllocError;
 
@@ -142,12 +142,10 @@ pub(crate) struct Auction<'a> {
     /// The place each robot believes it holds.
     holding: Vec<Option<Place>>,
     /// Robots to bid when next awake.
-    bidders: Vec<u32>,
-    is_bidder: Vec<bool>,
+    bidders: Roster,
     /// Places whose record some neighbour may lack, per robot, and the robots with any.
     pending: Vec<Vec<Place>>,
-    senders: Vec<u32>,
-    is_sender: Vec<bool>,
+    senders: Roster,
     /// The epoch noticers restart to: one more per crash noticed.
     epochs: u32,
     /// Ties between places within ε of the best, drawn in bidding order.
@@ -190,11 +188,9 @@ impl<'a> Auction<'a> {
             values,
             tables: vec![Table::open(0, m); n],
             holding: vec![None; n],
-            bidders: (0..n as u32).collect(),
-            is_bidder: vec![true; n],
+            bidders: Roster::everyone(n),
             pending: vec![Vec::new(); n],
-            senders: Vec::new(),
-            is_sender: vec![false; n],
+            senders: Roster::empty(n),
             epochs: 0,
             draws: ChaCha8Rng::seed_from_u64(seed),
             bids: 0,
@@ -246,35 +242,17 @@ impl<'a> Auction<'a> {
         agreeing as f64 / living as f64
     }
 
-    fn mark_bidder(&mut self, robot: u32) {
-        if !std::mem::replace(&mut self.is_bidder[robot as usize], true) {
-            self.bidders.push(robot);
-        }
-    }
-
     /// `robot` writes `record` for `place` into its table and will spread it.
     fn write(&mut self, robot: u32, place: Place, record: Record) {
         self.tables[robot as usize].set(place, record);
         self.pending[robot as usize].push(place);
-        if !std::mem::replace(&mut self.is_sender[robot as usize], true) {
-            self.senders.push(robot);
-        }
+        self.senders.add(robot);
     }
 
     /// Every awake bidder bids if it holds no place. Returns whether anyone did.
     fn act(&mut self) -> bool {
         let mut acted = false;
-        let mut asleep = Vec::new();
-        for a in std::mem::take(&mut self.bidders) {
-            if !self.radio.up(a) {
-                if self.radio.alive(a) {
-                    asleep.push(a);
-                } else {
-                    self.is_bidder[a as usize] = false;
-                }
-                continue;
-            }
-            self.is_bidder[a as usize] = false;
+        for a in self.bidders.take_up(&self.radio) {
             if self.holding[a as usize].is_none()
                 && let Some((place, price)) = self.choose(a)
             {
@@ -289,7 +267,6 @@ impl<'a> Auction<'a> {
                 acted = true;
             }
         }
-        self.bidders = asleep;
         acted
     }
 
@@ -299,7 +276,7 @@ impl<'a> Auction<'a> {
         self.tables[a as usize] = Table::open(epoch, m);
         self.pending[a as usize].clear();
         self.holding[a as usize] = None;
-        self.mark_bidder(a);
+        self.bidders.add(a);
     }
 
     /// Robot `a`'s bid by its table: a place within ε of the one worth most to it at
@@ -348,20 +325,8 @@ impl<'a> Auction<'a> {
     /// Returns the robots that sent.
     fn send(&mut self, broadcasts: u64) -> Vec<u32> {
         let mut useful = 0u64;
-        let mut sent = Vec::new();
-        let mut asleep = Vec::new();
-        for b in std::mem::take(&mut self.senders) {
-            if !self.radio.up(b) {
-                if self.radio.alive(b) {
-                    asleep.push(b);
-                } else {
-                    self.is_sender[b as usize] = false;
-                    self.pending[b as usize].clear();
-                }
-                continue;
-            }
-            self.is_sender[b as usize] = false;
-            sent.push(b);
+        let sent = self.senders.take_up(&self.radio);
+        for &b in &sent {
             let places = &mut self.pending[b as usize];
             places.sort_unstable();
             places.dedup();
@@ -376,7 +341,6 @@ impl<'a> Auction<'a> {
                 }
             }
         }
-        self.senders = asleep;
         self.traffic.messages += broadcasts;
         self.traffic.bytes += self.full_bytes();
         self.traffic.delta_bytes += broadcasts * HEADER_BYTES + useful * RECORD_BYTES;
@@ -410,7 +374,7 @@ impl<'a> Auction<'a> {
             taken = true;
             if self.holding[a as usize] == Some(place) {
                 self.holding[a as usize] = None;
-                self.mark_bidder(a);
+                self.bidders.add(a);
             }
             self.write(a, place, record);
         }
@@ -430,8 +394,8 @@ impl<'a> Auction<'a> {
                     .iter()
                     .any(|&a| record.beats(&tables[a as usize].get(place)))
             });
-            if !places.is_empty() && !std::mem::replace(&mut self.is_sender[b as usize], true) {
-                self.senders.push(b);
+            if !places.is_empty() {
+                self.senders.add(b);
             }
             self.pending[b as usize].extend(places);
         }
@@ -451,9 +415,7 @@ impl Simulation for Auction<'_> {
                         (0..places.len() as u32).map(move |k| (j as u32, k))
                     });
                 self.pending[a as usize].extend(places);
-                if !std::mem::replace(&mut self.is_sender[a as usize], true) {
-                    self.senders.push(a);
-                }
+                self.senders.add(a);
             }
         }
         if !start.noticed.is_empty() {
@@ -464,7 +426,7 @@ impl Simulation for Auction<'_> {
                 }
             }
         }
-        self.bidders.sort_unstable();
+        self.bidders.sort();
         let acted = self.act();
         let sent = self.send(start.broadcasts);
         let taken = self.deliver();

@@ -19,7 +19,7 @@ use imbl::Vector;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::network::{Network, Radio};
+use super::network::{Network, Radio, Roster};
 use super::{Outcome, Simulation, TracePoint, Traffic};
 use crate::AllocError;
 
@@ -181,11 +181,9 @@ pub(crate) struct Grape<'a> {
     stamps: ChaCha8Rng,
     views: Vec<Rc<View>>,
     /// Robots to act when next awake, in index order.
-    unsatisfied: Vec<u32>,
-    is_unsatisfied: Vec<bool>,
+    unsatisfied: Roster,
     /// Robots with a view some neighbour lacks.
-    senders: Vec<u32>,
-    is_sender: Vec<bool>,
+    senders: Roster,
     /// The best view offered to each robot this round.
     offer: Vec<Option<Rc<View>>>,
     offered: Vec<u32>,
@@ -216,10 +214,8 @@ impl<'a> Grape<'a> {
             radio,
             stamps: ChaCha8Rng::seed_from_u64(seed),
             views: vec![empty; n],
-            unsatisfied: (0..n as u32).collect(),
-            is_unsatisfied: vec![true; n],
-            senders: Vec::new(),
-            is_sender: vec![false; n],
+            unsatisfied: Roster::everyone(n),
+            senders: Roster::empty(n),
             offer: vec![None; n],
             offered: Vec::new(),
             noticed: vec![Vec::new(); n],
@@ -273,15 +269,15 @@ impl<'a> Grape<'a> {
             // The survivors relinked: new neighbours may hold older views.
             let living: Vec<u32> = self.radio.living().collect();
             for a in living {
-                self.mark_sender(a);
+                self.senders.add(a);
             }
         }
         if !start.noticed.is_empty() {
             for (noticer, crashed) in start.noticed {
                 self.noticed[noticer as usize].push(crashed);
-                self.mark_unsatisfied(noticer);
+                self.unsatisfied.add(noticer);
             }
-            self.unsatisfied.sort_unstable();
+            self.unsatisfied.sort();
         }
         let changed = self.act();
         let sent = self.send(start.broadcasts);
@@ -291,40 +287,16 @@ impl<'a> Grape<'a> {
         Ok(changed || adopted)
     }
 
-    fn mark_unsatisfied(&mut self, robot: u32) {
-        if !std::mem::replace(&mut self.is_unsatisfied[robot as usize], true) {
-            self.unsatisfied.push(robot);
-        }
-    }
-
-    fn mark_sender(&mut self, robot: u32) {
-        if !std::mem::replace(&mut self.is_sender[robot as usize], true) {
-            self.senders.push(robot);
-        }
-    }
-
     /// Every awake unsatisfied robot changes its view once, if it has a change to make.
     fn act(&mut self) -> bool {
         let mut changed = false;
-        let mut asleep = Vec::new();
-        for a in std::mem::take(&mut self.unsatisfied) {
-            let i = a as usize;
-            if !self.radio.up(a) {
-                if self.radio.alive(a) {
-                    asleep.push(a);
-                } else {
-                    self.is_unsatisfied[i] = false;
-                }
-                continue;
-            }
-            self.is_unsatisfied[i] = false;
+        for a in self.unsatisfied.take_up(&self.radio) {
             if let Some(view) = self.next_view(a) {
-                self.views[i] = Rc::new(view);
+                self.views[a as usize] = Rc::new(view);
                 changed = true;
-                self.mark_sender(a);
+                self.senders.add(a);
             }
         }
-        self.unsatisfied = asleep;
         changed
     }
 
@@ -351,19 +323,8 @@ impl<'a> Grape<'a> {
     /// flight unless lost; all are counted. Returns the robots that sent.
     fn send(&mut self, broadcasts: u64) -> Vec<u32> {
         let (mut useful, mut useful_bytes) = (0u64, 0u64);
-        let mut sent = Vec::new();
-        let mut asleep = Vec::new();
-        for b in std::mem::take(&mut self.senders) {
-            if !self.radio.up(b) {
-                if self.radio.alive(b) {
-                    asleep.push(b);
-                } else {
-                    self.is_sender[b as usize] = false;
-                }
-                continue;
-            }
-            self.is_sender[b as usize] = false;
-            sent.push(b);
+        let sent = self.senders.take_up(&self.radio);
+        for &b in &sent {
             let view = Rc::clone(&self.views[b as usize]);
             let links: Vec<(usize, u32)> = self.radio.out(b).collect();
             for (link, a) in links {
@@ -376,7 +337,6 @@ impl<'a> Grape<'a> {
                 self.radio.transmit(link, a, Rc::clone(&view));
             }
         }
-        self.senders = asleep;
         self.traffic.messages += broadcasts;
         self.traffic.bytes += broadcasts * self.sizes.full;
         self.traffic.delta_bytes += (broadcasts - useful) * self.sizes.header + useful_bytes;
@@ -405,10 +365,10 @@ impl<'a> Grape<'a> {
                 .take()
                 .expect("an offered robot has an offer");
             self.views[a as usize] = view;
-            self.mark_unsatisfied(a);
-            self.mark_sender(a);
+            self.unsatisfied.add(a);
+            self.senders.add(a);
         }
-        self.unsatisfied.sort_unstable();
+        self.unsatisfied.sort();
         !offered.is_empty()
     }
 
@@ -421,7 +381,7 @@ impl<'a> Grape<'a> {
                 .out(b)
                 .any(|(_, a)| self.views[a as usize].key() < key);
             if behind {
-                self.mark_sender(b);
+                self.senders.add(b);
             }
         }
     }

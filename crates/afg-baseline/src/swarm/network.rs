@@ -423,6 +423,61 @@ impl<M> Radio<M> {
     }
 }
 
+/// Robots with something to do when next awake, each listed once.
+pub(super) struct Roster {
+    robots: Vec<u32>,
+    listed: Vec<bool>,
+}
+
+impl Roster {
+    /// None of `n` robots listed.
+    pub fn empty(n: usize) -> Roster {
+        Roster {
+            robots: Vec::new(),
+            listed: vec![false; n],
+        }
+    }
+
+    /// All `n` robots listed, in index order.
+    pub fn everyone(n: usize) -> Roster {
+        Roster {
+            robots: (0..n as u32).collect(),
+            listed: vec![true; n],
+        }
+    }
+
+    /// Lists `robot` (once).
+    pub fn add(&mut self, robot: u32) {
+        if !std::mem::replace(&mut self.listed[robot as usize], true) {
+            self.robots.push(robot);
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.robots.is_empty()
+    }
+
+    /// Puts the list in index order.
+    pub fn sort(&mut self) {
+        self.robots.sort_unstable();
+    }
+
+    /// The listed robots up this round, in list order, taken off the list; asleep
+    /// ones stay listed, crashed ones leave it.
+    pub fn take_up<M>(&mut self, radio: &Radio<M>) -> Vec<u32> {
+        let (up, asleep): (Vec<u32>, Vec<u32>) = std::mem::take(&mut self.robots)
+            .into_iter()
+            .filter(|&a| {
+                let alive = radio.alive(a);
+                self.listed[a as usize] = alive && !radio.up(a);
+                alive
+            })
+            .partition(|&a| radio.up(a));
+        self.robots = asleep;
+        up
+    }
+}
+
 /// The median of the points' x coordinates: the partition line.
 fn median_x(points: &[Point]) -> f64 {
     let mut xs: Vec<f64> = points.iter().map(|p| p.x).collect();
