@@ -70,9 +70,13 @@ pub struct SwarmArgs {
     /// Cut the links across the median x until this round.
     #[arg(long)]
     partition_until: Option<u64>,
-    /// Seeds per grid cell (0..SEEDS): the table shows their means.
+    /// Seeds per grid cell (SEED, SEED + 1, …): the table shows their means.
     #[arg(long, default_value_t = 1, value_parser = crate::at_least_one)]
     seeds: usize,
+    /// The first seed of each cell (GRAPE's stamps, the auction's ties and, on another
+    /// stream, the network's draws).
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
     /// Stop a run unconverged after this many rounds [default: GRAPE's bound, stretched
     /// by the loss, delay and asynchrony].
     #[arg(long)]
@@ -117,14 +121,22 @@ struct Cell {
 
 pub fn run(args: SwarmArgs) -> Result<()> {
     let cells = cells(&args)?;
+    let seeds = args.seed..args.seed + args.seeds as u64;
     let jobs: Vec<(usize, u64)> = (0..cells.len())
-        .flat_map(|c| (0..args.seeds as u64).map(move |s| (c, s)))
+        .flat_map(|c| seeds.clone().map(move |s| (c, s)))
         .collect();
     let bar = crate::progress(jobs.len() as u64, "swarm runs");
+    // One run alone shows its rounds as they go.
+    let single = jobs.len() == 1;
+    let on_round = |round: u64| {
+        if single && round.is_multiple_of(100) {
+            bar.set_message(format!("swarm run, round {round}"));
+        }
+    };
     let reports: Vec<(usize, SwarmReport)> = jobs
         .par_iter()
         .map(|&(c, seed)| {
-            let report = run_one(&args, &cells[c], seed)?;
+            let report = run_one(&args, &cells[c], seed, &on_round)?;
             bar.inc(1);
             Ok((c, report))
         })
@@ -133,11 +145,11 @@ pub fn run(args: SwarmArgs) -> Result<()> {
     if let Some(path) = &args.svg {
         let firsts: Vec<(String, SwarmReport)> = reports
             .iter()
-            .filter(|(_, r)| r.seed == 0)
+            .filter(|(_, r)| r.seed == args.seed)
             .map(|(c, r)| (label(&cells[*c]), r.clone()))
             .collect();
         let title = format!(
-            "GRAPE ({}) over a failing network",
+            "Decentralised allocation over a failing network (GRAPE: {})",
             preference_name(args.preference)
         );
         crate::write_svg(path, &afg_eval::figures::swarm_svg(&firsts, &title)?)?;
@@ -227,7 +239,12 @@ fn cells(args: &SwarmArgs) -> Result<Vec<Cell>> {
 
 /// One seed of one cell; a mid-run crash is placed at half the rounds of the same run
 /// without failures.
-fn run_one(args: &SwarmArgs, cell: &Cell, seed: u64) -> Result<SwarmReport> {
+fn run_one(
+    args: &SwarmArgs,
+    cell: &Cell,
+    seed: u64,
+    on_round: &(dyn Fn(u64) + Sync),
+) -> Result<SwarmReport> {
     let swarm = |network: Network| {
         let mut swarm = match cell.method {
             SwarmMethod::Grape { preference } => Swarm::grape(preference, network, seed),
@@ -248,7 +265,7 @@ fn run_one(args: &SwarmArgs, cell: &Cell, seed: u64) -> Result<SwarmReport> {
             f.at_round = (rounds / 2).max(1);
         }
     }
-    Ok(swarm(network).run(&cell.instance)?)
+    Ok(swarm(network).run_with(&cell.instance, on_round)?)
 }
 
 /// What a cell is, in a few words.
@@ -369,5 +386,7 @@ mod tests {
         );
         assert!(crate::parse("swarm --radius 0.1 --knn 5").is_err());
         assert!(crate::parse("swarm --seeds 0").is_err());
+        assert!(crate::parse("swarm --method grape,auction --seed 5 --seeds 2").is_ok());
+        assert!(crate::parse("swarm --method bogus").is_err());
     }
 }
