@@ -58,3 +58,26 @@ pub fn load(root: &Path, robots: usize) -> Result<Vec<Instance>, EvalError> {
         source,
     })
 }
+
+/// The first `count` instances of the committed dataset for `robots` robots, with
+/// the optimum's welfare of each (the denominators of "% of OPT").
+///
+/// # Errors
+/// As [`load`], and [`crate::optima`]'s.
+///
+/// # Examples
+/// ```no_run
+/// use std::path::Path;
+/// let (instances, opt) = afg_eval::dataset::first_with_optima(Path::new("."), 20, 5)?;
+/// assert_eq!((instances.len(), opt.len()), (5, 5));
+/// # Ok::<(), afg_eval::EvalError>(())
+/// ```
+pub fn first_with_optima(
+    root: &Path,
+    robots: usize,
+    count: usize,
+) -> Result<(Vec<Instance>, Vec<f64>), EvalError> {
+    let instances: Vec<Instance> = load(root, robots)?.into_iter().take(count).collect();
+    let opt = crate::optima(&instances)?;
+    Ok((instances, opt))
+}

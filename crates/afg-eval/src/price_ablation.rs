@@ -6,11 +6,10 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use afg_baseline::{Allocator, Method};
-use afg_game::Instance;
 use afg_learn::{PriceMode, PriceModel, PricePolicy, PriceRunSummary};
 use serde::Serialize;
 
-use crate::{EvalError, dataset, evaluate, optima};
+use crate::{EvalError, dataset, evaluate};
 
 /// One ablation of the price model: what it was trained with, and where it lives.
 struct Ablation {
@@ -61,11 +60,7 @@ pub struct PriceAblationRow {
 pub fn price_ablation(root: &Path, instances: usize) -> Result<Vec<PriceAblationRow>, EvalError> {
     let mut sets = Vec::new();
     for n in SIZES {
-        let insts: Vec<Instance> = dataset::load(root, n)?
-            .into_iter()
-            .take(instances)
-            .collect();
-        let opt = optima(&insts)?;
+        let (insts, opt) = dataset::first_with_optima(root, n, instances)?;
         sets.push((n, insts, opt));
     }
     let mut rows = Vec::new();

@@ -9,7 +9,6 @@ mod rows;
 use std::fmt::Write as _;
 use std::path::Path;
 
-use afg_game::Instance;
 use afg_learn::LearnedPolicy;
 use serde::Serialize;
 
@@ -18,7 +17,7 @@ pub use markdown::{duration, headline, models_table, table1_markdown, table2_mar
 pub use rows::{classical_rows, price_headed_rows, price_model_rows};
 
 use crate::price_ablation::{PriceAblationRow, price_ablation, price_ablation_markdown};
-use crate::{EvalError, ModelSpec, Summary, Variant, dataset, evaluate, optima};
+use crate::{EvalError, ModelSpec, Summary, Variant, dataset, evaluate};
 
 /// One row of a table: a measured method, and the learned model it measures when it
 /// is one of Table I's models at its own scale (then the paper's number stands beside
@@ -117,11 +116,7 @@ fn table1_scale(
     instances: usize,
     missing: &mut Vec<String>,
 ) -> Result<Scale, EvalError> {
-    let insts: Vec<Instance> = dataset::load(root, n)?
-        .into_iter()
-        .take(instances)
-        .collect();
-    let opt = optima(&insts)?;
+    let (insts, opt) = dataset::first_with_optima(root, n, instances)?;
     let mut rows = Vec::new();
     for spec in ModelSpec::table1(n) {
         let run = spec.run_dir(root);
@@ -183,11 +178,7 @@ fn table2_scale(
     instances: usize,
     learned: usize,
 ) -> Result<Scale, EvalError> {
-    let insts: Vec<Instance> = dataset::load(root, n)?
-        .into_iter()
-        .take(instances)
-        .collect();
-    let opt = optima(&insts)?;
+    let (insts, opt) = dataset::first_with_optima(root, n, instances)?;
     let few = learned.min(insts.len());
     let mut rows = Vec::new();
     rows.extend(classical_rows(&insts, &opt, few)?);
