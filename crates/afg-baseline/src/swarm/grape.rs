@@ -20,7 +20,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::network::{Network, Radio, Roster};
-use super::{Outcome, Simulation, TracePoint, Traffic};
+use super::{Outcome, Simulation, TracePoint, Traffic, partition_of};
 use crate::AllocError;
 
 /// One change on a chain of views.
@@ -68,11 +68,8 @@ impl View {
 
     /// The partition this view holds.
     pub fn assignment(&self) -> Assignment {
-        let mut assignment = Assignment::unassigned(self.tasks.len(), self.sizes.len());
-        for (i, &task) in self.tasks.iter().enumerate() {
-            assignment.set(RobotId(i as u32), task);
-        }
-        assignment
+        let tasks: Vec<Option<TaskId>> = self.tasks.iter().copied().collect();
+        partition_of(&tasks, self.sizes.len())
     }
 
     /// The robots whose changes made this view, oldest first.
@@ -230,17 +227,10 @@ impl<'a> Grape<'a> {
         let alive: Vec<bool> = (0..self.views.len() as u32)
             .map(|i| self.radio.alive(i))
             .collect();
-        let agreeing = self.holding(&leader);
-        let mut tasks: Vec<_> = leader.assignment().tasks().to_vec();
-        for (task, &alive) in tasks.iter_mut().zip(&alive) {
-            if !alive {
-                *task = None;
-            }
-        }
         let outcome = Outcome {
-            tasks,
+            agreeing: self.agreeing_with(&leader),
+            tasks: self.living_tasks(&leader),
             alive,
-            agreeing,
             converged,
             rounds: self.radio.round,
             changes: leader.evolution,
@@ -251,8 +241,15 @@ impl<'a> Grape<'a> {
         (outcome, leader)
     }
 
+    /// The task of each robot in `view`, crashed robots unassigned.
+    fn living_tasks(&self, view: &View) -> Vec<Option<TaskId>> {
+        (view.tasks.iter().enumerate())
+            .map(|(i, &task)| task.filter(|_| self.radio.alive(i as u32)))
+            .collect()
+    }
+
     /// Share of the living robots whose view holds the same partition as `leader`.
-    fn holding(&self, leader: &Rc<View>) -> f64 {
+    fn agreeing_with(&self, leader: &Rc<View>) -> f64 {
         let (mut living, mut agreeing) = (0usize, 0usize);
         for i in self.radio.living() {
             let view = &self.views[i as usize];
@@ -412,16 +409,11 @@ impl Simulation for Grape<'_> {
     /// The leader's welfare over the living robots, and how many hold it.
     fn sample(&self) -> TracePoint {
         let leader = self.leader();
-        let mut assignment = leader.assignment();
-        for i in 0..self.views.len() as u32 {
-            if !self.radio.alive(i) {
-                assignment.set(RobotId(i), None);
-            }
-        }
+        let assignment = partition_of(&self.living_tasks(leader), self.instance.num_tasks());
         TracePoint {
             round: self.radio.round,
             welfare: self.instance.welfare(&assignment),
-            agreeing: self.holding(leader),
+            agreeing: self.agreeing_with(leader),
         }
     }
 }
