@@ -200,9 +200,8 @@ impl<'a> Auction<'a> {
 
     /// What the run left: each survivor at the task of the place it holds.
     pub fn finish(self, converged: bool, trace: Vec<TracePoint>) -> Outcome {
-        let n = self.tables.len();
         let tasks = self.held();
-        let alive: Vec<bool> = (0..n as u32).map(|i| self.radio.alive(i)).collect();
+        let alive = self.radio.alive_flags();
         Outcome {
             agreeing: self.agreeing(&tasks),
             tasks,

@@ -224,9 +224,7 @@ impl<'a> Grape<'a> {
     /// What the run left, and the final partition's view.
     pub fn finish(self, converged: bool, trace: Vec<TracePoint>) -> (Outcome, Rc<View>) {
         let leader = Rc::clone(self.leader());
-        let alive: Vec<bool> = (0..self.views.len() as u32)
-            .map(|i| self.radio.alive(i))
-            .collect();
+        let alive = self.radio.alive_flags();
         let outcome = Outcome {
             agreeing: self.agreeing_with(&leader),
             tasks: self.living_tasks(&leader),

@@ -366,6 +366,11 @@ impl<M> Radio<M> {
         self.alive[robot as usize]
     }
 
+    /// Whether each robot is alive.
+    pub fn alive_flags(&self) -> Vec<bool> {
+        self.alive.clone()
+    }
+
     /// Whether `robot` is alive and awake this round.
     pub fn up(&self, robot: u32) -> bool {
         self.alive[robot as usize] && self.awake[robot as usize]
