@@ -128,6 +128,14 @@ fn the_perfect_network_is_decentralised_grape() {
             );
             assert!(report.converged && report.stable && report.agreeing == 1.0);
             assert_eq!(report.survivors, inst.num_robots());
+            // Each robot places itself by a change of its own, and holds the others'
+            // only by taking a view from a neighbour at least once.
+            let n = inst.num_robots() as u64;
+            assert!(
+                report.proposals >= report.changes && report.changes >= n,
+                "#{idx}"
+            );
+            assert!(report.adoptions >= n || n < 2, "#{idx}");
             // Every message carries the whole partition: 20 bytes, then a byte per robot.
             let full = 20 + inst.num_robots() as u64;
             assert_eq!(report.bytes, report.messages * full);
@@ -394,6 +402,11 @@ fn the_auction_ends_within_2n_epsilon_of_the_optimum() {
             let why = format!("#{idx} N={} {name}", inst.num_robots());
             assert!(report.converged, "{why}");
             assert_eq!(report.agreeing, 1.0, "{why}");
+            // Each robot wrote only its own bids, so every other survivor's record
+            // was taken from a neighbour.
+            let s = report.survivors as u64;
+            assert_eq!(report.proposals, report.changes, "{why}");
+            assert!(report.adoptions >= s * (s - 1), "{why}");
             let bound = 2.0 * report.survivors as f64 * epsilon;
             assert!(
                 report.welfare >= report.opt_welfare - bound - 1e-9,

@@ -151,6 +151,7 @@ pub(crate) struct Auction<'a> {
     /// Ties between places within ε of the best, drawn in bidding order.
     draws: ChaCha8Rng,
     bids: u64,
+    adoptions: u64,
     traffic: Traffic,
 }
 
@@ -194,6 +195,7 @@ impl<'a> Auction<'a> {
             epochs: 0,
             draws: ChaCha8Rng::seed_from_u64(seed),
             bids: 0,
+            adoptions: 0,
             traffic: Traffic::default(),
         })
     }
@@ -209,6 +211,8 @@ impl<'a> Auction<'a> {
             converged,
             rounds: self.radio.round,
             changes: self.bids,
+            proposals: self.bids,
+            adoptions: self.adoptions,
             traffic: self.traffic,
             added_edges: self.radio.added_edges,
             trace,
@@ -371,6 +375,7 @@ impl<'a> Auction<'a> {
                 continue;
             }
             taken = true;
+            self.adoptions += 1;
             if self.holding[a as usize] == Some(place) {
                 self.holding[a as usize] = None;
                 self.bidders.add(a);

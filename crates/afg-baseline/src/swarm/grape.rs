@@ -188,6 +188,8 @@ pub(crate) struct Grape<'a> {
     noticed: Vec<Vec<u32>>,
     sizes: MessageSizes,
     traffic: Traffic,
+    proposals: u64,
+    adoptions: u64,
 }
 
 impl<'a> Grape<'a> {
@@ -218,6 +220,8 @@ impl<'a> Grape<'a> {
             noticed: vec![Vec::new(); n],
             sizes: MessageSizes::new(n, m),
             traffic: Traffic::default(),
+            proposals: 0,
+            adoptions: 0,
         })
     }
 
@@ -232,6 +236,8 @@ impl<'a> Grape<'a> {
             converged,
             rounds: self.radio.round,
             changes: leader.evolution,
+            proposals: self.proposals,
+            adoptions: self.adoptions,
             traffic: self.traffic,
             added_edges: self.radio.added_edges,
             trace,
@@ -288,6 +294,7 @@ impl<'a> Grape<'a> {
         for a in self.unsatisfied.take_up(&self.radio) {
             if let Some(view) = self.next_view(a) {
                 self.views[a as usize] = Rc::new(view);
+                self.proposals += 1;
                 changed = true;
                 self.senders.add(a);
             }
@@ -364,6 +371,7 @@ impl<'a> Grape<'a> {
             self.senders.add(a);
         }
         self.unsatisfied.sort();
+        self.adoptions += offered.len() as u64;
         !offered.is_empty()
     }
 

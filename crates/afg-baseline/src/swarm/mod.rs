@@ -63,6 +63,11 @@ pub(crate) struct Outcome {
     pub rounds: u64,
     /// GRAPE: changes on the final chain; the auction: bids made.
     pub changes: u64,
+    /// GRAPE: changes any robot made, those the mutex discarded included; the
+    /// auction: bids made.
+    pub proposals: u64,
+    /// Views (GRAPE) or table records (the auction) robots took from a neighbour.
+    pub adoptions: u64,
     pub traffic: Traffic,
     pub added_edges: usize,
     pub trace: Vec<TracePoint>,
@@ -202,6 +207,12 @@ pub struct SwarmReport {
     /// GRAPE: changes on the final partition's chain (moves and removals of crashed
     /// robots); the auction: bids made.
     pub changes: u64,
+    /// GRAPE: changes any robot made to its view, those the mutex discarded
+    /// included; the auction: bids made (as `changes`).
+    pub proposals: u64,
+    /// Views (GRAPE) or table records (the auction) robots took from a neighbour:
+    /// each is a robot reconsidering, the simulation's unit of work.
+    pub adoptions: u64,
     /// Messages sent: every awake robot broadcasts to each neighbour every round.
     pub messages: u64,
     /// Bytes of those messages carrying whole partitions, as GRAPE sends them.
@@ -311,6 +322,8 @@ impl Swarm {
             converged: outcome.converged,
             rounds: outcome.rounds,
             changes: outcome.changes,
+            proposals: outcome.proposals,
+            adoptions: outcome.adoptions,
             messages: outcome.traffic.messages,
             bytes: outcome.traffic.bytes,
             delta_bytes: outcome.traffic.delta_bytes,
