@@ -22,7 +22,7 @@ pub struct BenchOptArgs {
         "100000x5", "100000x50", "1000000x5", "1000000x50",
     ])]
     cases: Vec<Case>,
-    /// Seed of every instance: the files are `cargo xtask gen --robots N --tasks M --seed S`.
+    /// Seed of every instance: the files are `afg gen --robots N --tasks M --seed S`.
     #[arg(long, default_value_t = 11)]
     seed: u64,
     /// A Python with OR-Tools and numpy, for the OR-Tools column (e.g. after
@@ -58,7 +58,7 @@ impl FromStr for Case {
         let (n, m) = text
             .split_once('x')
             .ok_or_else(|| format!("`{text}`: write a size as NxM, e.g. 1000x5"))?;
-        let count = |s: &str| crate::at_least_one(s).map_err(|e| format!("`{text}`: {e}"));
+        let count = |s: &str| afg_cli::at_least_one(s).map_err(|e| format!("`{text}`: {e}"));
         Ok(Case {
             robots: count(n)?,
             tasks: count(m)?,
@@ -110,7 +110,7 @@ pub fn run(args: BenchOptArgs) -> Result<()> {
     if let Some(python) = &args.python {
         check_python(python)?;
     }
-    let bar = crate::progress(args.cases.len() as u64, "bench-opt");
+    let bar = afg_cli::progress(args.cases.len() as u64, "bench-opt");
     let mut rows = Vec::new();
     for &case in &args.cases {
         bar.set_message(format!("bench-opt N = {} M = {}", case.robots, case.tasks));

@@ -1,5 +1,5 @@
-//! `cargo xtask crash-test`: SIGKILLs `train` and `train-price` at random moments and
-//! resumes them each time; the final weights must equal an uninterrupted run's.
+//! `cargo xtask crash-test`: SIGKILLs `afg train` and `afg train-price` at random moments
+//! and resumes them each time; the final weights must equal an uninterrupted run's.
 
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -189,7 +189,7 @@ fn crash_trainer(
     // A resumed run goes on from its checkpoint, so kills within the first half of
     // each resumed run reach its end after a few kills.
     let span = o.reference_s * if trainer.resumes { 0.5 } else { 0.9 };
-    let bar = crate::progress(kills as u64, &format!("crash-test {}", trainer.name));
+    let bar = afg_cli::progress(kills as u64, &format!("crash-test {}", trainer.name));
     let compare = |o: &mut Outcome| -> Result<()> {
         o.completed += 1;
         o.equal &= (trainer.same_weights)(&reference, &crashed)?;
@@ -274,7 +274,9 @@ fn wait_for(path: &Path, child: &mut Child, limit: Duration) -> Result<()> {
 
 /// Starts a run of `trainer` in `dir`: new, or continued with `--resume`.
 fn spawn(exe: &Path, trainer: &Target, dir: &Path, resume: bool) -> Result<Child> {
+    // `xtask afg …` runs the afg command in this binary.
     let mut command = Command::new(exe);
+    command.arg("afg");
     if resume {
         command.args([trainer.start[0], "--resume"]);
     } else {

@@ -2,15 +2,10 @@
 
 use std::path::{Path, PathBuf};
 
-use afg_learn::{RunDir, TrainConfig, TrainSettings};
+use afg_cli::train::command_line;
+use afg_learn::RunDir;
 use anyhow::Result;
 use clap::Args;
-
-/// The `cargo xtask train` command line that reproduces a configuration.
-pub fn command_line(config: &TrainConfig, dir: &Path) -> String {
-    let settings = crate::command_args(&TrainSettings::from_config(config)).join(" ");
-    format!("cargo xtask train {settings} --out {}", dir.display())
-}
 
 /// Writes `dir/manifest.json` from the run's config and log: the command, seed, steps,
 /// wall time, git revision and final validation welfare.

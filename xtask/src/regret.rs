@@ -30,7 +30,7 @@ pub fn run(args: RegretArgs) -> Result<()> {
         .dirs
         .iter()
         .map(|d| {
-            let bar = crate::progress(instances.len() as u64, &format!("regret {}", d.display()));
+            let bar = afg_cli::progress(instances.len() as u64, &format!("regret {}", d.display()));
             let summary = summarise(d, &instances, || bar.inc(1));
             bar.finish_and_clear();
             summary

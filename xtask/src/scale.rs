@@ -52,7 +52,7 @@ pub fn run(args: ScaleArgs) -> Result<()> {
         );
     }
     let cases = cases(&args.plan)?;
-    let bar = crate::progress(cases.len() as u64, "bench-scale");
+    let bar = afg_cli::progress(cases.len() as u64, "bench-scale");
     let mut outcomes = Vec::new();
     for case in &cases {
         bar.set_message(format!(

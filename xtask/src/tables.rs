@@ -71,7 +71,7 @@ pub fn run(args: TablesArgs) -> Result<()> {
 
 /// Every table, with a progress bar over the five test sets.
 fn compute_tables(root: &Path, quick: bool) -> Result<Tables> {
-    let bar = crate::progress(5, "reproduce-tables (datasets)");
+    let bar = afg_cli::progress(5, "reproduce-tables (datasets)");
     let tables = compute(root, quick, || bar.inc(1))?;
     bar.finish_and_clear();
     Ok(tables)
@@ -89,14 +89,14 @@ fn write_outputs(root: &Path, res: &Tables, tables: &str, quick: bool, minutes: 
             .map(|run| run.path().to_path_buf())
             .collect();
         if !dirs.is_empty() {
-            crate::curves::plot_curves(
+            afg_cli::curves::plot_curves(
                 &dirs,
                 &figures.join(format!("fig1_n{n}.svg")),
                 &format!("Fig. 1 — N = {n}: validation welfare (dashed: classical methods)"),
             )?;
         }
     }
-    crate::write_svg(
+    afg_cli::write_svg(
         &figures.join("assignment_n100.svg"),
         &assignment_map_svg(root)?,
     )?;

@@ -6,7 +6,7 @@ use afg_learn::TrainSettings;
 use anyhow::Result;
 use clap::Args;
 
-use crate::train::{TrainArgs, run};
+use afg_cli::train::{TrainArgs, run};
 
 #[derive(Args)]
 pub struct TrainAllArgs {

@@ -94,7 +94,7 @@ pub fn reallocate(
     })
 }
 
-/// The reallocation as `cargo xtask solve --from` prints it, one figure per line.
+/// The reallocation as `afg solve --from` prints it, one figure per line.
 impl std::fmt::Display for Reallocation {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let (welfare, opt) = (self.welfare, self.opt_welfare);

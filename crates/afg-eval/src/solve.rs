@@ -1,4 +1,4 @@
-//! One allocator on a set of instances, instance by instance (`cargo xtask solve`): the
+//! One allocator on a set of instances, instance by instance (`afg solve`): the
 //! trained model of a run directory as an allocator, each instance's score and the
 //! means.
 
@@ -221,7 +221,7 @@ pub fn percent_text(percent: Option<f64>) -> String {
     )
 }
 
-/// The report as `cargo xtask solve` prints it: the means, one per line.
+/// The report as `afg solve` prints it: the means, one per line.
 impl std::fmt::Display for Report {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let (m, k) = (&self.mean, self.instances);

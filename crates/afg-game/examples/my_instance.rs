@@ -36,7 +36,7 @@ fn main() -> Result<(), afg_game::GameError> {
         100.0 * instance.ns_rate(&a, Preference::Balanced)
     );
 
-    // The versioned JSON formats that `cargo xtask solve --input` reads and writes.
+    // The versioned JSON formats that `afg solve --input` reads and writes.
     let dir = std::env::temp_dir();
     instance.write(&dir.join("my_instance.json"))?;
     println!(

@@ -134,7 +134,7 @@ impl PriceModel {
 /// let dir = std::env::temp_dir().join(format!("afg_price_summary_doc_{}", std::process::id()));
 /// std::fs::create_dir_all(&dir)?;
 /// let summary = PriceRunSummary {
-///     command: "cargo xtask train-price --scale 60 --tasks 5 --seed 0 --out x".into(),
+///     command: "afg train-price --scale 60 --tasks 5 --seed 0 --out x".into(),
 ///     wall_s: 12.5,
 ///     last: PriceRound { round: 3, states: 10, expert_share: 0.5, loss: 0.01, sequential: 99.0, one_shot: 97.0 },
 /// };

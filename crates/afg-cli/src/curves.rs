@@ -1,4 +1,4 @@
-//! `cargo xtask plot-curves` and `cargo xtask training-report`: what training runs' logs show.
+//! `afg plot-curves` and `afg training-report`: what training runs' logs show.
 
 use std::path::{Path, PathBuf};
 
@@ -7,6 +7,7 @@ use afg_eval::runs::{read_curve, report_markdown};
 use anyhow::Result;
 use clap::Args;
 
+/// `afg plot-curves`: run directories and the SVG to draw.
 #[derive(Args)]
 pub struct PlotArgs {
     /// Run directories (each with a log.jsonl).
@@ -26,6 +27,10 @@ pub fn plot_curves(dirs: &[PathBuf], out: &Path, title: &str) -> Result<()> {
     crate::write_svg(out, &curves_svg(&curves, title)?)
 }
 
+/// Draws the runs' validation curves.
+///
+/// # Errors
+/// A run without a readable log, or the SVG not written.
 pub fn run_plot(args: PlotArgs) -> Result<()> {
     plot_curves(
         &args.dirs,
@@ -36,6 +41,7 @@ pub fn run_plot(args: PlotArgs) -> Result<()> {
     Ok(())
 }
 
+/// `afg training-report`: finished run directories.
 #[derive(Args)]
 pub struct ReportArgs {
     /// Run directories (each with a log.jsonl).

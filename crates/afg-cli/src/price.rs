@@ -1,4 +1,4 @@
-//! `cargo xtask train-price`: the price-structured model (ours), trained on the exact Q*.
+//! `afg train-price`: the price-structured model (ours), trained on the exact Q*.
 
 use std::path::PathBuf;
 
@@ -7,6 +7,7 @@ use anyhow::{Result, bail};
 use clap::Args;
 use serde::Serialize;
 
+/// `afg train-price`: the price model's training settings and run directory.
 #[derive(Args, Serialize)]
 pub struct PriceArgs {
     /// Robots per training instance N.
@@ -54,6 +55,10 @@ pub struct PriceArgs {
     force: bool,
 }
 
+/// Trains a price model into its run directory.
+///
+/// # Errors
+/// Bad settings, a directory that already holds a run, or a failed write.
 pub fn run(args: PriceArgs) -> Result<()> {
     let model_path = args.out.join(PriceModel::FILE_NAME);
     if model_path.exists() && !args.force {
@@ -73,10 +78,7 @@ pub fn run(args: PriceArgs) -> Result<()> {
     config.one_shot_weight = args.one_shot_weight.unwrap_or(config.one_shot_weight);
     let trainer = PriceTrainer::new(config)?;
     let bar = crate::progress(trainer.config().rounds as u64, "train-price");
-    let command = format!(
-        "cargo xtask train-price {}",
-        crate::command_args(&args).join(" ")
-    );
+    let command = format!("afg train-price {}", crate::command_args(&args).join(" "));
     let summary = trainer.run_in(&args.out, command, |round| {
         bar.inc(1);
         bar.println(format!(
@@ -87,4 +89,27 @@ pub fn run(args: PriceArgs) -> Result<()> {
     bar.finish_and_clear();
     println!("wrote {} ({:.0} s)", model_path.display(), summary.wall_s);
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    /// The committed price runs' commands are written back as they were given.
+    #[test]
+    fn command_args_write_a_command_back() {
+        for run in [
+            "price_n60",
+            "ablations/price_n60_expert",
+            "ablations/price_n60_qstar",
+        ] {
+            let dir = crate::repo_root().join("models").join(run);
+            let command = afg_learn::PriceRunSummary::load(&dir).unwrap().command;
+            let Ok(crate::Command::TrainPrice(args)) =
+                crate::parse(command.strip_prefix("afg ").unwrap())
+            else {
+                unreachable!("a train-price command")
+            };
+            let again = format!("afg train-price {}", crate::command_args(&args).join(" "));
+            assert_eq!(again, command);
+        }
+    }
 }

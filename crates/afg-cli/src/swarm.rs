@@ -1,4 +1,4 @@
-//! `cargo xtask swarm`: GRAPE and the decentralised auction over a lossy, late,
+//! `afg swarm`: GRAPE and the decentralised auction over a lossy, late,
 //! range-limited network where robots fail mid-run; a grid of methods × robot counts ×
 //! loss rates × failing shares, several seeds each, as a Markdown table, JSON lines
 //! and an SVG of the runs against rounds.
@@ -12,6 +12,8 @@ use anyhow::{Context, Result, ensure};
 use clap::{Args, ValueEnum};
 use rayon::prelude::*;
 
+/// `afg swarm`: the methods, the instances and the network's knobs (one run per
+/// combination of the listed values).
 #[derive(Args)]
 pub struct SwarmArgs {
     /// Decentralised methods (comma-separated): grape (GRAPE with its distributed
@@ -119,6 +121,10 @@ struct Cell {
     crash_mid_run: bool,
 }
 
+/// Runs every combination and prints the table (or JSON), with the figure if asked.
+///
+/// # Errors
+/// A knob out of range, an unreadable input, or a failed write.
 pub fn run(args: SwarmArgs) -> Result<()> {
     let cells = cells(&args)?;
     let seeds = args.seed..args.seed + args.seeds as u64;
@@ -366,7 +372,7 @@ mod tests {
             "swarm --robots 30,40 --loss 0,0.3 --fail 0,0.2 --seeds 2 --svg {}",
             svg.display()
         );
-        crate::xtask(&line).unwrap();
+        crate::afg(&line).unwrap();
         let text = std::fs::read_to_string(&svg).unwrap();
         assert!(text.contains("N = 40, loss 30 %, 20 % fail"));
         std::fs::remove_dir_all(dir).unwrap();
@@ -374,12 +380,12 @@ mod tests {
 
     #[test]
     fn bad_knobs_say_what_is_wrong() {
-        let err = crate::xtask("swarm --robots 20 --loss 1.5").unwrap_err();
+        let err = crate::afg("swarm --robots 20 --loss 1.5").unwrap_err();
         assert!(
             err.to_string().contains("loss 1.5 must be in [0, 1)"),
             "{err}"
         );
-        let err = crate::xtask("swarm --robots 20 --async 0").unwrap_err();
+        let err = crate::afg("swarm --robots 20 --async 0").unwrap_err();
         assert!(
             err.to_string().contains("activation 0 must be in (0, 1]"),
             "{err}"

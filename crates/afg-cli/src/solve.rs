@@ -1,4 +1,4 @@
-//! `cargo xtask solve`: one allocator on an instance file or a committed dataset.
+//! `afg solve`: one allocator on an instance file or a committed dataset.
 
 use std::path::PathBuf;
 
@@ -8,6 +8,7 @@ use afg_game::{Assignment, Instance};
 use anyhow::{Context, Result};
 use clap::Args;
 
+/// `afg solve`: an allocator, a source of instances and what to write.
 #[derive(Args)]
 #[command(group = clap::ArgGroup::new("source").required(true))]
 #[command(group = clap::ArgGroup::new("allocator").required(true))]
@@ -66,6 +67,20 @@ pub struct SolveArgs {
     pub(crate) json: bool,
 }
 
+/// `--dataset N`: the committed `datasets/n{N}.jsonl`, read from the current directory
+/// (the repository's root).
+fn committed_dataset(n: usize) -> Result<Vec<Instance>> {
+    let root = std::path::Path::new(".");
+    if !afg_eval::dataset::path(root, n).exists() {
+        anyhow::bail!(
+            "--dataset {n} reads datasets/n{n}.jsonl under the current directory, which has \
+             none: run afg from the repository's root (committed sizes: {:?}), or pass --input FILE",
+            afg_eval::dataset::SIZES
+        );
+    }
+    Ok(afg_eval::dataset::load(root, n)?)
+}
+
 /// Reads `--input`: a file or standard input ("-"), one instance or JSON Lines.
 pub(crate) fn read_instances(path: &std::path::Path) -> Result<Vec<Instance>> {
     let text = if path.as_os_str() == "-" {
@@ -81,6 +96,11 @@ pub(crate) fn read_instances(path: &std::path::Path) -> Result<Vec<Instance>> {
     Ok(instances)
 }
 
+/// Solves every instance and prints (or writes) the report.
+///
+/// # Errors
+/// Options that do not go together, an unreadable input or model, or a failed write
+/// (nothing is written then).
 pub fn run(args: SolveArgs) -> Result<()> {
     if args.model.is_none()
         && (args.block.is_some() || args.repair || args.exact_burn || args.one_shot)
@@ -91,7 +111,7 @@ pub fn run(args: SolveArgs) -> Result<()> {
     }
     let (source, mut instances) = match (&args.input, args.dataset) {
         (Some(p), _) => (p.display().to_string(), read_instances(p)?),
-        (None, Some(n)) => (format!("datasets/n{n}.jsonl"), crate::datasets::load(n)?),
+        (None, Some(n)) => (format!("datasets/n{n}.jsonl"), committed_dataset(n)?),
         (None, None) => unreachable!("clap requires a source"),
     };
     if let Some(k) = args.limit {
@@ -167,9 +187,9 @@ fn write_outputs(
 
 #[cfg(test)]
 mod tests {
-    /// Runs `cargo xtask solve ARGS` (arguments separated by single spaces).
+    /// Runs `afg solve ARGS` (arguments separated by single spaces).
     fn solve(args: &str) -> anyhow::Result<()> {
-        crate::xtask(&format!("solve {args}"))
+        crate::afg(&format!("solve {args}"))
     }
 
     /// An empty temporary directory, as a string.
@@ -260,6 +280,18 @@ mod tests {
         assert!(format!("{err:#}").contains("at least 1"), "{err:#}");
     }
 
+    /// `--dataset N` reads the committed file under the current directory; the tests
+    /// run in the crate's directory, which has none.
+    #[test]
+    fn a_dataset_outside_the_repository_says_where_to_run() {
+        let err = solve("--method greedy --dataset 20").unwrap_err();
+        let message = format!("{err:#}");
+        assert!(
+            message.contains("datasets/n20.jsonl") && message.contains("repository's root"),
+            "{message}"
+        );
+    }
+
     #[test]
     fn an_optimum_without_positive_welfare_has_no_percent() {
         let dir = temp("zero");
@@ -311,19 +343,23 @@ mod tests {
 
     #[test]
     fn learned_policies_solve_and_bad_options_are_refused() {
-        let model = crate::repo_root().join("models/afgnet_ddqn_n20");
+        let root = crate::repo_root();
+        let model = root.join("models/afgnet_ddqn_n20");
         let model = model.to_str().unwrap();
-        solve(&format!("--model {model} --dataset 20 --limit 2 --json")).unwrap();
+        let data = |n: usize| format!("--input {}/datasets/n{n}.jsonl", root.display());
+        solve(&format!("--model {model} {} --limit 2 --json", data(20))).unwrap();
         solve(&format!(
-            "--model {model} --dataset 100 --limit 1 --block 7 --repair"
+            "--model {model} {} --limit 1 --block 7 --repair",
+            data(100)
         ))
         .unwrap();
         let err = solve(&format!(
-            "--model {model} --dataset 20 --exact-burn --block 3"
+            "--model {model} {} --exact-burn --block 3",
+            data(20)
         ))
         .unwrap_err();
         assert!(format!("{err:#}").contains("block 1"), "{err:#}");
-        let err = solve("--model /nonexistent --dataset 20").unwrap_err();
+        let err = solve(&format!("--model /nonexistent {}", data(20))).unwrap_err();
         assert!(format!("{err:#}").contains("/nonexistent"), "{err:#}");
         // A method and a model at once, or --block without a model: usage errors.
         assert!(solve(&format!("--method opt --model {model} --dataset 20")).is_err());

@@ -1,4 +1,4 @@
-//! `cargo xtask train`.
+//! `afg train` (and `cargo xtask train`, the same code): a Q network by DQN or Double DQN.
 
 use std::path::PathBuf;
 use std::time::Duration;
@@ -7,19 +7,21 @@ use afg_learn::{RunDir, Session, TrainConfig, TrainSettings};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 
+/// `afg train`: the training settings and the run directory.
 #[derive(Args, Default)]
 pub struct TrainArgs {
+    /// The training settings.
     #[command(flatten)]
-    pub(crate) settings: TrainSettings,
+    pub settings: TrainSettings,
     /// Run directory: config.json, log.jsonl, checkpoint/, and model.{json,mpk} at the end.
     #[arg(long, conflicts_with = "resume")]
-    pub(crate) out: Option<PathBuf>,
+    pub out: Option<PathBuf>,
     /// Continue the run in this directory from its last checkpoint.
     #[arg(long)]
-    pub(crate) resume: Option<PathBuf>,
+    pub resume: Option<PathBuf>,
     /// Seconds between checkpoints.
     #[arg(long, default_value_t = 300)]
-    pub(crate) checkpoint_secs: u64,
+    pub checkpoint_secs: u64,
 }
 
 impl TrainArgs {
@@ -28,6 +30,11 @@ impl TrainArgs {
     }
 }
 
+/// Trains (or resumes) a run, checkpointing as it goes.
+///
+/// # Errors
+/// Bad settings, a directory that already holds a run, a resume that cannot continue,
+/// or a failed write.
 pub fn run(args: TrainArgs) -> Result<()> {
     let mut session = match &args.resume {
         Some(dir) => {
@@ -126,17 +133,23 @@ fn check_resume(args: &TrainArgs, dir: &std::path::Path) -> Result<()> {
 fn git_revision() -> Option<String> {
     std::process::Command::new("git")
         .args(["rev-parse", "HEAD"])
-        .current_dir(crate::repo_root())
         .output()
         .ok()
         .filter(|o| o.status.success())
         .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_owned())
 }
 
+/// The `cargo xtask train` command line that reproduces a configuration (what a run's
+/// manifest records; `afg train` takes the same flags).
+pub fn command_line(config: &TrainConfig, dir: &std::path::Path) -> String {
+    let settings = crate::command_args(&TrainSettings::from_config(config)).join(" ");
+    format!("cargo xtask train {settings} --out {}", dir.display())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Command, parse, xtask};
+    use crate::{Command, afg, parse};
     use std::path::Path;
 
     fn train_args(line: &str) -> TrainArgs {
@@ -171,7 +184,7 @@ mod tests {
             let config = train_args(&format!("train {flags} --out models/x"))
                 .config()
                 .unwrap();
-            let line = crate::manifest::command_line(&config, Path::new("models/x"));
+            let line = command_line(&config, Path::new("models/x"));
             let again = train_args(line.strip_prefix("cargo xtask ").unwrap());
             assert_eq!(again.config().unwrap(), config, "{line}");
             assert!(line.ends_with(" --out models/x"), "{line}");
@@ -189,7 +202,7 @@ mod tests {
                     continue; // a price model, or a run without a manifest
                 };
                 let dir = run.path().strip_prefix(&root).unwrap();
-                let line = crate::manifest::command_line(&config, dir);
+                let line = command_line(&config, dir);
                 assert_eq!(line, manifest.command, "{}", dir.display());
                 checked += 1;
             }
@@ -199,11 +212,11 @@ mod tests {
 
     #[test]
     fn train_writes_log_checkpoint_model_and_a_plottable_curve() {
-        let dir = std::env::temp_dir().join(format!("afg-xtask-train-{}", std::process::id()));
+        let dir = std::env::temp_dir().join(format!("afg-cli-train-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         let run_dir = dir.join("run");
         let out = run_dir.to_str().unwrap();
-        xtask(&format!(
+        afg(&format!(
             "train --scale 10 --steps 120 --batch 32 --net s2v --out {out}"
         ))
         .unwrap();
@@ -212,21 +225,21 @@ mod tests {
         assert!(run_dir.join("checkpoint/state.json").exists());
 
         let svg = dir.join("curves.svg");
-        xtask(&format!("plot-curves {out} --out {}", svg.display())).unwrap();
+        afg(&format!("plot-curves {out} --out {}", svg.display())).unwrap();
         let text = std::fs::read_to_string(&svg).unwrap();
         assert!(text.starts_with("<svg") && text.trim_end().ends_with("</svg>"));
         assert!(text.contains("run (s2v_ddqn, N = 10)"));
 
         // A second run into the same directory is refused; nothing is overwritten.
         let before = std::fs::read(run_dir.join("model.mpk")).unwrap();
-        let err = xtask(&format!("train --scale 10 --steps 5 --out {out}")).unwrap_err();
+        let err = afg(&format!("train --scale 10 --steps 5 --out {out}")).unwrap_err();
         let message = err.to_string();
         assert!(
             message.contains("already holds a training run"),
             "{message}"
         );
         // Extending the finished run is refused, saying how to start from its weights.
-        let err = xtask(&format!("train --resume {out} --steps 500")).unwrap_err();
+        let err = afg(&format!("train --resume {out} --steps 500")).unwrap_err();
         let message = err.to_string();
         assert!(
             message.contains("finished run (120 steps)") && message.contains("--init-from"),
@@ -235,12 +248,12 @@ mod tests {
         assert_eq!(std::fs::read(run_dir.join("model.mpk")).unwrap(), before);
         // An unfinished run resumed with other settings is refused too.
         std::fs::remove_file(run_dir.join("model.mpk")).unwrap();
-        let err = xtask(&format!("train --resume {out} --scale 20 --steps 5")).unwrap_err();
+        let err = afg(&format!("train --resume {out} --scale 20 --steps 5")).unwrap_err();
         assert!(err.to_string().contains("its own settings"), "{err}");
         // Unknown values are refused by the parser.
-        assert!(xtask(&format!("train --scale 20 --net gcn --out {out}")).is_err());
-        assert!(xtask(&format!("train --scale 20 --algo ppo --out {out}")).is_err());
-        let err = xtask(&format!("train --scale 33 --out {}/x", dir.display())).unwrap_err();
+        assert!(afg(&format!("train --scale 20 --net gcn --out {out}")).is_err());
+        assert!(afg(&format!("train --scale 20 --algo ppo --out {out}")).is_err());
+        let err = afg(&format!("train --scale 33 --out {}/x", dir.display())).unwrap_err();
         assert!(err.to_string().contains("no default budget"), "{err}");
         std::fs::remove_dir_all(&dir).unwrap();
     }

@@ -1,4 +1,4 @@
-//! `cargo xtask solve --from`: warm-start reallocation after robots or tasks changed.
+//! `afg solve --from`: warm-start reallocation after robots or tasks changed.
 
 use std::path::Path;
 
@@ -10,6 +10,12 @@ use anyhow::{Context, Result, bail};
 
 use crate::solve::SolveArgs;
 
+/// `afg solve --from FILE`: the warm start from a previous assignment, against OPT
+/// from scratch.
+///
+/// # Errors
+/// More than one instance, a method other than da / da-balanced, or an assignment
+/// file that does not fit the instance.
 pub fn run(args: &SolveArgs, from: &Path, instances: &[Instance]) -> Result<()> {
     let Some(preference) = args
         .method
@@ -59,6 +65,7 @@ pub fn run(args: &SolveArgs, from: &Path, instances: &[Instance]) -> Result<()> 
     Ok(())
 }
 
+/// `cargo xtask realloc-study`: the sizes, instances and departures to study.
 #[derive(clap::Args)]
 pub struct StudyArgs {
     /// Robots before the removal.

@@ -1,0 +1,207 @@
+//! The `afg` command line as a library: [`Cli`] parses a command, [`Command::run`] runs it.
+//!
+//! `cargo install --path crates/afg-cli` installs the `afg` binary (or run it in place with
+//! `cargo afg …`). Its commands:
+//!
+//! | command | what it does | module |
+//! |---|---|---|
+//! | `afg solve` | one allocator (or a trained model) on your instances or a committed dataset | [`solve`] |
+//! | `afg gen` | your own instances from the paper's distribution | [`generate`] |
+//! | `afg swarm` | GRAPE and a decentralised auction over a failing network | [`swarm`] |
+//! | `afg train` | a Q network by DQN or Double DQN, resumable | [`train`] |
+//! | `afg train-price` | the price model (ours) | [`price`] |
+//! | `afg plot-curves`, `afg training-report` | training runs as an SVG or a Markdown table | [`curves`] |
+//!
+//! The maintainer's commands (`cargo xtask reproduce-tables`, benchmarks, the dataset
+//! check) live in the repository's `xtask` and call this library.
+//!
+//! # Examples
+//! ```
+//! use afg_cli::Cli;
+//! use clap::Parser;
+//! let cli = Cli::try_parse_from(["afg", "gen", "--robots", "20", "--out", "x.jsonl"])?;
+//! assert!(matches!(cli.command, afg_cli::Command::Gen(_)));
+//! # Ok::<(), clap::Error>(())
+//! ```
+
+pub mod curves;
+pub mod generate;
+pub mod price;
+pub mod realloc;
+pub mod solve;
+pub mod swarm;
+pub mod train;
+
+use std::path::Path;
+
+use anyhow::Result;
+use clap::{Parser, Subcommand};
+
+/// Multi-robot task allocation as an alliance formation game: solve, draw, simulate, train.
+/// Run `afg <command> --help` for each command's options.
+#[derive(Parser)]
+#[command(name = "afg", version, about)]
+pub struct Cli {
+    /// The command.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The commands of `afg`.
+#[derive(Subcommand)]
+pub enum Command {
+    /// Solve an instance or a dataset with one allocator and print welfare, % of OPT, NS_rate.
+    Solve(solve::SolveArgs),
+    /// Draw your own instances (the paper's distribution, every knob) into a JSON Lines file.
+    Gen(generate::GenArgs),
+    /// GRAPE and a decentralised auction over a lossy, late, range-limited network where robots fail mid-run.
+    Swarm(swarm::SwarmArgs),
+    /// Train a Q network with DQN or Double DQN (resumable, seeded, with validation curves).
+    Train(train::TrainArgs),
+    /// Train the price-structured model (ours) by regression on the exact Q* (DAgger).
+    TrainPrice(price::PriceArgs),
+    /// Draw validation curves of training runs as an SVG (Fig. 1 style).
+    PlotCurves(curves::PlotArgs),
+    /// Summarise finished training runs against the classical methods (Markdown).
+    TrainingReport(curves::ReportArgs),
+}
+
+impl Command {
+    /// Runs the command.
+    ///
+    /// # Errors
+    /// Whatever the command refuses or fails at, with the file or flag to fix.
+    pub fn run(self) -> Result<()> {
+        match self {
+            Command::Solve(args) => solve::run(args),
+            Command::Gen(args) => generate::run(args),
+            Command::Swarm(args) => swarm::run(args),
+            Command::Train(args) => train::run(args),
+            Command::TrainPrice(args) => price::run(args),
+            Command::PlotCurves(args) => curves::run_plot(args),
+            Command::TrainingReport(args) => curves::run_report(args),
+        }
+    }
+}
+
+/// Parses `afg LINE` (arguments separated by single spaces).
+#[cfg(test)]
+fn parse(line: &str) -> Result<Command> {
+    let argv = ["afg"].into_iter().chain(line.split(' '));
+    Ok(Cli::try_parse_from(argv)?.command)
+}
+
+/// Runs `afg LINE` (arguments separated by single spaces).
+#[cfg(test)]
+fn afg(line: &str) -> Result<()> {
+    parse(line)?.run()
+}
+
+/// The repository root, where the tests find the committed datasets and models.
+#[cfg(test)]
+fn repo_root() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// The command-line arguments that give `args` back, in the order its flags are
+/// declared: `--flag` for a set switch, `--flag value` for a given value, nothing for an
+/// unset option or switch. Values are read through `args`' serde form, whose field names
+/// are the flags' ids.
+///
+/// # Panics
+/// If `args` does not serialise to a JSON object of strings, numbers and booleans.
+///
+/// # Examples
+/// ```
+/// #[derive(clap::Args, serde::Serialize)]
+/// struct Knobs {
+///     #[arg(long)]
+///     robots: usize,
+///     #[arg(long)]
+///     repair: bool,
+/// }
+/// let line = afg_cli::command_args(&Knobs { robots: 20, repair: true });
+/// assert_eq!(line, ["--robots", "20", "--repair"]);
+/// ```
+pub fn command_args<A: clap::Args + serde::Serialize>(args: &A) -> Vec<String> {
+    use serde_json::Value;
+    let values = serde_json::to_value(args).expect("arguments serialise to JSON");
+    let flags = A::augment_args(clap::Command::new("args"));
+    let mut out = Vec::new();
+    for flag in flags.get_arguments() {
+        let (Some(long), Some(value)) = (flag.get_long(), values.get(flag.get_id().as_str()))
+        else {
+            continue;
+        };
+        let value = match value {
+            Value::Null | Value::Bool(false) => continue,
+            Value::Bool(true) => None,
+            Value::String(s) => Some(s.clone()),
+            Value::Number(n) => Some(n.as_u64().map_or_else(
+                || n.as_f64().expect("a finite number").to_string(),
+                |u| u.to_string(),
+            )),
+            other => unreachable!("arguments hold no {other}"),
+        };
+        out.push(format!("--{long}"));
+        out.extend(value);
+    }
+    out
+}
+
+/// Parses a count that must be at least 1 (clap's `value_parser`).
+///
+/// # Errors
+/// A message for zero or for text that is not a count.
+///
+/// # Examples
+/// ```
+/// assert_eq!(afg_cli::at_least_one("3"), Ok(3));
+/// assert!(afg_cli::at_least_one("0").is_err());
+/// ```
+pub fn at_least_one(text: &str) -> Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(0) => Err("must be at least 1".into()),
+        Ok(k) => Ok(k),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
+/// A progress bar on stderr (hidden when stderr is not a terminal).
+///
+/// # Examples
+/// ```
+/// let bar = afg_cli::progress(10, "solving");
+/// bar.inc(1);
+/// bar.finish_and_clear();
+/// ```
+pub fn progress(len: u64, message: &str) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(len);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} ({eta})")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    bar.set_message(message.to_owned());
+    bar
+}
+
+/// Writes an SVG atomically, creating its folder.
+///
+/// # Errors
+/// If the folder cannot be made or the file written.
+///
+/// # Examples
+/// ```
+/// let path = std::env::temp_dir().join("afg-cli-doc/figure.svg");
+/// afg_cli::write_svg(&path, "<svg/>")?;
+/// assert_eq!(std::fs::read_to_string(&path)?, "<svg/>");
+/// # Ok::<(), anyhow::Error>(())
+/// ```
+pub fn write_svg(out: &Path, svg: &str) -> Result<()> {
+    if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent)?;
+    }
+    afg_game::io::write_atomic(out, svg.as_bytes())?;
+    Ok(())
+}
