@@ -3,7 +3,8 @@
 use std::path::PathBuf;
 
 use afg_baseline::{Allocator, Method, Optimum};
-use afg_eval::solve::{ModelOptions, Report, Row, load_model};
+use afg_eval::EvalError;
+use afg_eval::solve::{ModelOptions, OptionConflict, Report, Row, load_model};
 use afg_game::{Assignment, Instance};
 use anyhow::{Context, Result};
 use clap::Args;
@@ -65,6 +66,20 @@ pub struct SolveArgs {
     /// Print JSON (per instance and mean) instead of text.
     #[arg(long)]
     pub(crate) json: bool,
+}
+
+/// The library's error, with the flags to change when options conflict.
+fn with_flags(error: EvalError) -> anyhow::Error {
+    let EvalError::ModelOptions(conflict) = error else {
+        return error.into();
+    };
+    let fix = match conflict {
+        OptionConflict::QNetworkOptionOnPriceModel => "drop --repair and --exact-burn",
+        OptionConflict::BlockWithOneShot => "drop --one-shot or --block",
+        OptionConflict::OneShotOnQNetwork => "drop --one-shot",
+        OptionConflict::BlockWithExactBurn => "drop --block or --exact-burn",
+    };
+    anyhow::anyhow!("{conflict}: {fix}")
 }
 
 /// `--dataset N`: the committed `datasets/n{N}.jsonl`, read from the current directory
@@ -129,7 +144,10 @@ pub fn run(args: SolveArgs) -> Result<()> {
                 one_shot: args.one_shot,
                 exact_burn: args.exact_burn,
             };
-            (dir.display().to_string(), load_model(dir, options)?)
+            (
+                dir.display().to_string(),
+                load_model(dir, options).map_err(with_flags)?,
+            )
         }
         (None, None) => unreachable!("clap requires an allocator"),
     };
@@ -358,7 +376,11 @@ mod tests {
             data(20)
         ))
         .unwrap_err();
-        assert!(format!("{err:#}").contains("block 1"), "{err:#}");
+        let message = format!("{err:#}");
+        assert!(
+            message.contains("block 1") && message.contains("drop --block"),
+            "{message}"
+        );
         let err = solve(&format!("--model /nonexistent {}", data(20))).unwrap_err();
         assert!(format!("{err:#}").contains("/nonexistent"), "{err:#}");
         // A method and a model at once, or --block without a model: usage errors.

@@ -35,6 +35,9 @@ pub enum EvalError {
     /// Options that do not apply to the model or method at hand.
     #[error("{0}")]
     BadOptions(&'static str),
+    /// Model options that do not go together, or not with the model found.
+    #[error(transparent)]
+    ModelOptions(#[from] crate::solve::OptionConflict),
     /// A training run's log lacks what is needed.
     #[error("{path}: the log has {what}")]
     Log {

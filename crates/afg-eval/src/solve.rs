@@ -25,11 +25,31 @@ pub struct ModelOptions {
     pub exact_burn: bool,
 }
 
+/// [`ModelOptions`] that do not go together, or not with the model found. The messages
+/// name the options as [`ModelOptions`] does; a command line adds its flags.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum OptionConflict {
+    /// Repair or the exact Burn rollout asked of a price model.
+    #[error("repair and the exact Burn rollout apply to Q networks, not price models")]
+    QNetworkOptionOnPriceModel,
+    /// A block size with the one-shot mode.
+    #[error("a block size applies to the sequential mode, not the one-shot one")]
+    BlockWithOneShot,
+    /// The one-shot mode asked of a Q network.
+    #[error(
+        "the one-shot mode applies to price models (a directory holding price.json), not Q networks"
+    )]
+    OneShotOnQNetwork,
+    /// A block size other than 1 with the exact Burn rollout.
+    #[error("the exact Burn rollout places one robot at a time (block 1)")]
+    BlockWithExactBurn,
+}
+
 /// The trained model in `dir` as an allocator: a price model if the directory holds a
 /// price file ([`PriceModel::FILE_NAME`]), else the Q network of a training run.
 ///
 /// # Errors
-/// [`EvalError::BadOptions`] for options that do not apply to the model found, and
+/// [`EvalError::ModelOptions`] for options that do not apply to the model found, and
 /// [`EvalError::Model`] if it cannot be loaded.
 ///
 /// # Examples
@@ -37,11 +57,12 @@ pub struct ModelOptions {
 /// use afg_eval::solve::{ModelOptions, load_model};
 /// let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/afgnet_ddqn_n20");
 /// let one_shot = ModelOptions { one_shot: true, ..ModelOptions::default() };
-/// assert!(load_model(&dir, one_shot).is_err()); // a Q network has no one-shot mode
+/// let err = load_model(&dir, one_shot).err().unwrap(); // a Q network has no one-shot mode
+/// assert!(err.to_string().starts_with("the one-shot mode applies to price models"));
 /// assert!(load_model(&dir, ModelOptions::default()).is_ok());
 /// ```
 pub fn load_model(dir: &Path, options: ModelOptions) -> Result<Box<dyn Allocator>, EvalError> {
-    let bad = |why| Err(EvalError::BadOptions(why));
+    let bad = |conflict: OptionConflict| Err(conflict.into());
     let loading = |source| EvalError::Model {
         path: dir.display().to_string(),
         source,
@@ -49,10 +70,10 @@ pub fn load_model(dir: &Path, options: ModelOptions) -> Result<Box<dyn Allocator
     let price = dir.join(PriceModel::FILE_NAME);
     if price.exists() {
         if options.repair || options.exact_burn {
-            return bad("--repair and --exact-burn apply to Q networks, not price models");
+            return bad(OptionConflict::QNetworkOptionOnPriceModel);
         }
         if options.one_shot && options.block.is_some() {
-            return bad("--block applies to the sequential mode; drop --one-shot or --block");
+            return bad(OptionConflict::BlockWithOneShot);
         }
         let mode = if options.one_shot {
             PriceMode::OneShot
@@ -65,12 +86,12 @@ pub fn load_model(dir: &Path, options: ModelOptions) -> Result<Box<dyn Allocator
         return Ok(Box::new(policy));
     }
     if options.one_shot {
-        return bad("--one-shot applies to price models (a directory holding price.json)");
+        return bad(OptionConflict::OneShotOnQNetwork);
     }
     let policy = load_learned(dir)?.with_repair(options.repair);
     let policy = match (options.exact_burn, options.block) {
         (true, Some(b)) if b != 1 => {
-            return bad("--exact-burn rolls out one robot at a time (block 1); drop --block");
+            return bad(OptionConflict::BlockWithExactBurn);
         }
         (true, _) => policy.exact_burn(),
         (false, block) => policy.with_block(block.unwrap_or(1)).map_err(loading)?,

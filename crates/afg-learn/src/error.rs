@@ -50,7 +50,7 @@ pub enum LearnError {
     },
     /// Training produced a NaN or infinite loss; the weights were not updated.
     #[error(
-        "step {step}: the loss is {loss}; training stopped (the last checkpoint is the last good state; try a lower --lr)"
+        "step {step}: the loss is {loss}; training stopped (the last checkpoint is the last good state; try a lower learning rate)"
     )]
     NonFiniteLoss {
         /// The gradient step that failed.
@@ -61,7 +61,7 @@ pub enum LearnError {
     /// A gradient step would have made a weight NaN or infinite (with a finite loss);
     /// the weights were not updated.
     #[error(
-        "step {step}: an update made a weight NaN or infinite; training stopped (the last checkpoint is the last good state; try a lower --lr)"
+        "step {step}: an update made a weight NaN or infinite; training stopped (the last checkpoint is the last good state; try a lower learning rate)"
     )]
     NonFiniteWeights {
         /// The gradient step that failed.

@@ -104,7 +104,7 @@ fn a_diverging_run_stops_with_a_clear_error_and_unchanged_weights() {
         }
     };
     assert!(matches!(err, LearnError::NonFiniteLoss { .. }), "{err}");
-    assert!(err.to_string().contains("lower --lr"), "{err}");
+    assert!(err.to_string().contains("lower learning rate"), "{err}");
 }
 
 /// A step whose loss is finite but whose update overflows a weight is refused too,

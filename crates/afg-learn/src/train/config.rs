@@ -379,7 +379,7 @@ impl TrainConfig {
             return bad("price_loss must be finite and at least 0");
         }
         if self.price_loss > 0.0 && !price_head {
-            return bad("the price loss supervises a price head: it needs --price-head");
+            return bad("the price loss supervises a price head: it needs a price head");
         }
         if price_head
             && (!self.reward_scaling
