@@ -4,7 +4,7 @@
 
 use afg_game::RobotId;
 
-use crate::{AllocationState, PriceState, RobotGraph, TASK_FEATURES, task_inputs};
+use crate::{AllocationState, PriceState, RobotGraph, TASK_FEATURES, Units, task_inputs};
 
 /// A batch of graph states (one acting robot each), in flat row-major arrays.
 ///
@@ -14,8 +14,8 @@ use crate::{AllocationState, PriceState, RobotGraph, TASK_FEATURES, task_inputs}
 /// use afg_graph::{AllocationState, GraphBatch, GraphKind, RobotGraph};
 /// let inst = GeneratorConfig::paper(12, 3, 1).generate()?;
 /// let graph = RobotGraph::build(inst.robots(), GraphKind::Knn { k: 4 }).unwrap();
-/// let state = AllocationState::new(&inst);
-/// let mut batch = GraphBatch::new(3);
+/// let state = AllocationState::new(&inst, afg_graph::Units::Bounded);
+/// let mut batch = GraphBatch::new(3, afg_graph::Units::Bounded);
 /// batch.push(&graph, &state, RobotId(0));
 /// batch.push(&graph, &state, RobotId(5));
 /// assert_eq!((batch.num_graphs(), batch.num_nodes()), (2, 24));
@@ -26,6 +26,9 @@ use crate::{AllocationState, PriceState, RobotGraph, TASK_FEATURES, task_inputs}
 pub struct GraphBatch {
     /// Number of tasks M (feature width).
     pub num_tasks: usize,
+    /// The units of every feature, gain and cost in the batch: a network checks that
+    /// they are the ones it was trained in.
+    pub units: Units,
     /// Robot features ν, `[nodes, M]`.
     pub nu: Vec<f32>,
     /// Task features μ, `[nodes, M]`.
@@ -64,11 +67,12 @@ pub struct GraphBatch {
 }
 
 impl GraphBatch {
-    /// An empty batch for instances with `num_tasks` tasks, without the tasks'
-    /// summaries.
-    pub fn new(num_tasks: usize) -> Self {
+    /// An empty batch for instances with `num_tasks` tasks and states with features in
+    /// `units`, without the tasks' summaries.
+    pub fn new(num_tasks: usize, units: Units) -> Self {
         GraphBatch {
             num_tasks,
+            units,
             ..Default::default()
         }
     }
@@ -82,18 +86,18 @@ impl GraphBatch {
     /// use afg_graph::{AllocationState, GraphBatch, GraphKind, RobotGraph, TASK_FEATURES};
     /// let inst = GeneratorConfig::paper(12, 3, 1).generate()?;
     /// let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
-    /// let state = AllocationState::new(&inst);
-    /// let (mut plain, mut full) = (GraphBatch::new(3), GraphBatch::with_task_summaries(3));
+    /// let state = AllocationState::new(&inst, afg_graph::Units::Bounded);
+    /// let (mut plain, mut full) = (GraphBatch::new(3, afg_graph::Units::Bounded), GraphBatch::with_task_summaries(3, afg_graph::Units::Bounded));
     /// plain.push(&graph, &state, RobotId(0));
     /// full.push(&graph, &state, RobotId(0));
     /// assert!(plain.task_inputs.is_empty());
     /// assert_eq!(full.task_inputs.len(), 3 * 2 * TASK_FEATURES);
     /// # Ok::<(), afg_game::GameError>(())
     /// ```
-    pub fn with_task_summaries(num_tasks: usize) -> Self {
+    pub fn with_task_summaries(num_tasks: usize, units: Units) -> Self {
         GraphBatch {
             task_summaries: true,
-            ..GraphBatch::new(num_tasks)
+            ..GraphBatch::new(num_tasks, units)
         }
     }
 
@@ -115,14 +119,19 @@ impl GraphBatch {
     /// Appends one graph in `state`, with `actor` about to act.
     ///
     /// # Panics
-    /// If the state's task count differs from the batch's, or the graph was built for
-    /// another number of robots.
+    /// If the state's task count or units differ from the batch's, or the graph was
+    /// built for another number of robots.
     pub fn push(&mut self, graph: &RobotGraph, state: &AllocationState<'_>, actor: RobotId) {
         let inst = state.instance();
         assert_eq!(
             inst.num_tasks(),
             self.num_tasks,
             "every graph of a batch has the same M"
+        );
+        assert_eq!(
+            state.units(),
+            self.units,
+            "a state in other units than the batch's"
         );
         assert_eq!(
             graph.num_nodes(),

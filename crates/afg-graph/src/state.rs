@@ -30,7 +30,7 @@ use crate::Units;
 /// use afg_game::GeneratorConfig;
 /// use afg_graph::{AllocationState, Units, write_task_column};
 /// let inst = GeneratorConfig::paper(8, 3, 1).generate()?;
-/// let state = AllocationState::new(&inst);
+/// let state = AllocationState::new(&inst, afg_graph::Units::Bounded);
 /// let mut mu = vec![0.0; 8 * 3];
 /// for j in inst.task_ids() {
 ///     write_task_column(&inst, state.assignment(), Units::default(), j, &mut mu);
@@ -124,10 +124,10 @@ impl StateParts {
 /// use afg_game::{GeneratorConfig, RobotId, TaskId};
 /// use afg_graph::AllocationState;
 /// let inst = GeneratorConfig::paper(10, 3, 1).generate()?;
-/// let mut s = AllocationState::new(&inst);
+/// let mut s = AllocationState::new(&inst, afg_graph::Units::Bounded);
 /// s.assign(RobotId(0), TaskId(2));
 /// assert_eq!(s.nu(RobotId(0)), vec![0.0, 0.0, 1.0]);
-/// assert_eq!(s, AllocationState::from_assignment(&inst, s.assignment().clone()));
+/// assert_eq!(s, AllocationState::from_assignment(&inst, s.assignment().clone(), afg_graph::Units::Bounded));
 /// # Ok::<(), afg_game::GameError>(())
 /// ```
 #[derive(Clone, Debug, PartialEq)]
@@ -141,23 +141,18 @@ pub struct AllocationState<'a> {
 }
 
 impl<'a> AllocationState<'a> {
-    /// The empty assignment, in the default [`Units`].
-    pub fn new(instance: &'a Instance) -> Self {
-        Self::with_units(
+    /// The empty assignment, with features in `units`.
+    pub fn new(instance: &'a Instance, units: Units) -> Self {
+        Self::from_assignment(
             instance,
             Assignment::unassigned(instance.num_robots(), instance.num_tasks()),
-            Units::default(),
+            units,
         )
     }
 
-    /// Features of `assignment` in the default [`Units`], computed from scratch (the
-    /// reference for the incremental update).
-    pub fn from_assignment(instance: &'a Instance, assignment: Assignment) -> Self {
-        Self::with_units(instance, assignment, Units::default())
-    }
-
-    /// Features of `assignment` in `units`, computed from scratch.
-    pub fn with_units(instance: &'a Instance, assignment: Assignment, units: Units) -> Self {
+    /// Features of `assignment` in `units`, computed from scratch (the reference for
+    /// the incremental update).
+    pub fn from_assignment(instance: &'a Instance, assignment: Assignment, units: Units) -> Self {
         let mut s = AllocationState {
             instance,
             assignment,
@@ -189,7 +184,7 @@ impl<'a> AllocationState<'a> {
     /// use afg_game::{GeneratorConfig, RobotId, TaskId};
     /// use afg_graph::{AllocationState, Units};
     /// let inst = GeneratorConfig::paper(6, 2, 1).generate()?;
-    /// let mut s = AllocationState::with_units(&inst, afg_game::Assignment::unassigned(6, 2), Units::Bounded);
+    /// let mut s = AllocationState::from_assignment(&inst, afg_game::Assignment::unassigned(6, 2), Units::Bounded);
     /// s.assign(RobotId(0), TaskId(1));
     /// let again = AllocationState::from_parts(&inst, s.clone().into_parts());
     /// assert_eq!(again, s);
@@ -214,7 +209,7 @@ impl<'a> AllocationState<'a> {
         };
         debug_assert_eq!(
             state.mu,
-            AllocationState::with_units(instance, state.assignment.clone(), state.units).mu
+            AllocationState::from_assignment(instance, state.assignment.clone(), state.units).mu
         );
         state
     }

@@ -43,9 +43,8 @@ use crate::RobotGraph;
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 pub enum Units {
-    /// Welfare / mean initial reward; raw edge distances. The default of files written
+    /// Welfare / mean initial reward; raw edge distances. The units of networks saved
     /// before units were recorded.
-    #[default]
     #[cfg_attr(
         feature = "cli",
         value(help = "welfare / the mean task reward, raw edge weights (the first models' units)")
@@ -57,7 +56,9 @@ pub enum Units {
         value(help = "welfare / β, edge weights / their mean: the same at every N")
     )]
     ScaleFree,
-    /// [`Units::ScaleFree`] with the value part of the task features capped.
+    /// [`Units::ScaleFree`] with the value part of the task features capped. The
+    /// default: every model trained since uses it.
+    #[default]
     #[cfg_attr(
         feature = "cli",
         value(

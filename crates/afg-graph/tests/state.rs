@@ -17,14 +17,14 @@ proptest! {
         }
         let inst = cfg.generate().unwrap();
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let mut s = AllocationState::new(&inst);
+        let mut s = AllocationState::new(&inst, afg_graph::Units::Bounded);
         // A sequential episode, then some re-moves (as repair dynamics would make).
         let order: Vec<RobotId> = inst.robot_ids().chain((0..n).map(|_| RobotId(rng.random_range(0..n as u32)))).collect();
         for i in order {
             let open: Vec<TaskId> = inst.task_ids().filter(|&j| s.is_available(i, j)).collect();
             let j = open[rng.random_range(0..open.len())];
             s.assign(i, j);
-            let rebuilt = AllocationState::from_assignment(&inst, s.assignment().clone());
+            let rebuilt = AllocationState::from_assignment(&inst, s.assignment().clone(), afg_graph::Units::Bounded);
             prop_assert_eq!(&s, &rebuilt);
         }
     }
@@ -44,7 +44,7 @@ fn features_match_the_utility_definition() {
         (Units::ScaleFree, inst.beta(), -2.0),
     ] {
         // (Bounded units only cap the share of nearly empty tasks: a test of its own.)
-        let mut s = AllocationState::with_units(&inst, Assignment::unassigned(8, 3), units);
+        let mut s = AllocationState::from_assignment(&inst, Assignment::unassigned(8, 3), units);
         for i in 0..8u32 {
             let j = TaskId(i % 3);
             if s.is_available(RobotId(i), j) {
@@ -83,14 +83,16 @@ fn bounded_units_cap_the_value_part_only() {
     };
     let robots = vec![afg_game::Point::new(0.0, 0.0); 3];
     let inst = afg_game::Instance::new(robots, vec![task], 1.0).unwrap();
-    let empty = AllocationState::with_units(&inst, Assignment::unassigned(3, 1), Units::Bounded);
+    let empty =
+        AllocationState::from_assignment(&inst, Assignment::unassigned(3, 1), Units::Bounded);
     assert!((f64::from(empty.mu(RobotId(0))[0]) - (24.0 - 1.0)).abs() < 1e-5);
-    let free = AllocationState::with_units(&inst, Assignment::unassigned(3, 1), Units::ScaleFree);
+    let free =
+        AllocationState::from_assignment(&inst, Assignment::unassigned(3, 1), Units::ScaleFree);
     assert!((f64::from(free.mu(RobotId(0))[0]) - (30.0 - 1.0)).abs() < 1e-5);
     let mut two = Assignment::unassigned(3, 1);
     two.set(RobotId(0), Some(TaskId(0)));
     two.set(RobotId(1), Some(TaskId(0)));
-    let s = AllocationState::with_units(&inst, two, Units::Bounded);
+    let s = AllocationState::from_assignment(&inst, two, Units::Bounded);
     let want = 30.0 * 7f64.ln() / 5f64.ln() / 3.0 - 1.0;
     assert!((f64::from(s.mu(RobotId(2))[0]) - want).abs() < 1e-5);
 }
@@ -104,31 +106,49 @@ fn a_batch_carries_the_actors_costs_and_the_tasks_summaries() {
     for i in 0..12u32 {
         a.set(RobotId(i), Some(TaskId((i * 7) % 5)));
     }
-    let (mut batch, mut plain) = (GraphBatch::with_task_summaries(5), GraphBatch::new(5));
+    // One batch per units: a batch holds states in its own units only.
+    let mut batches = Vec::new();
     for units in [Units::MeanReward, Units::Bounded] {
-        let state = AllocationState::with_units(&inst, a.clone(), units);
-        batch.push(&graph, &state, RobotId(12));
-        plain.push(&graph, &state, RobotId(12));
+        let state = AllocationState::from_assignment(&inst, a.clone(), units);
+        let (mut batch, mut plain) = (
+            GraphBatch::with_task_summaries(5, units),
+            GraphBatch::new(5, units),
+        );
+        for _ in 0..2 {
+            batch.push(&graph, &state, RobotId(12));
+            plain.push(&graph, &state, RobotId(12));
+        }
+        // Without summaries the batch is the same but for them.
+        assert!(plain.task_inputs.is_empty());
+        assert_eq!(
+            GraphBatch {
+                task_inputs: Vec::new(),
+                task_summaries: false,
+                ..batch.clone()
+            },
+            plain
+        );
+        batches.push(batch);
     }
-    // Without summaries the batch is the same but for them.
-    assert!(plain.task_inputs.is_empty());
-    assert_eq!(
-        GraphBatch {
-            task_inputs: Vec::new(),
-            task_summaries: false,
-            ..batch.clone()
-        },
-        plain
-    );
     // Costs: β d(12, j) in each state's welfare unit (the mean reward, then β = 1).
-    for (g, unit) in [feature_scale(&inst), 1.0].into_iter().enumerate() {
-        for j in 0..5 {
-            let by_hand = inst.distance(RobotId(12), TaskId(j as u32)) / unit;
-            assert!((f64::from(batch.cost[g * 5 + j]) - by_hand).abs() < 1e-6);
+    for (batch, unit) in batches.iter().zip([feature_scale(&inst), 1.0]) {
+        for g in 0..2 {
+            for j in 0..5 {
+                let by_hand = inst.distance(RobotId(12), TaskId(j as u32)) / unit;
+                assert!((f64::from(batch.cost[g * 5 + j]) - by_hand).abs() < 1e-6);
+            }
         }
     }
+    // A state in other units than the batch's is refused.
+    let bounded = AllocationState::from_assignment(&inst, a.clone(), Units::Bounded);
+    let refused = std::panic::catch_unwind(|| {
+        GraphBatch::new(5, Units::MeanReward).push(&graph, &bounded, RobotId(12))
+    });
+    assert!(refused.is_err());
     // Task summaries: the same for both units, and those of the robots placed in
     // order; after each task's own features comes the mean over the tasks.
+    let batch = &batches[0];
+    assert_eq!(batches[0].task_inputs, batches[1].task_inputs);
     let mut sequential = PriceState::new(&inst);
     for i in 0..12u32 {
         sequential.assign(RobotId(i), TaskId((i * 7) % 5));

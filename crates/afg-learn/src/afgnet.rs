@@ -86,7 +86,7 @@ impl AfgNetConfig {
             price,
             activation: self.activation,
             gain_residual: self.gain_residual.unwrap_or(false),
-            units: self.units.unwrap_or_default(),
+            units: self.units.unwrap_or(Units::MeanReward),
         }
     }
 }
@@ -136,7 +136,11 @@ impl<B: Backend> AfgNet<B> {
     ///
     /// # Shapes
     /// output: `[V, d]`
+    ///
+    /// # Panics
+    /// If the batch's features are in other units than the network's.
     pub fn embed(&self, g: &GraphTensors<B>) -> Tensor<B, 2> {
+        g.expect_units(self.units);
         let s = self.activation;
         // eq. 4: δ_i = σ(θ1 ν_i) + σ(θ2 μ_i)                        [V, d]
         let mut delta =

@@ -15,7 +15,7 @@ use crate::LearnError;
 /// use afg_game::{GeneratorConfig, TaskId};
 /// use afg_learn::Env;
 /// let inst = GeneratorConfig::paper(6, 2, 1).generate()?;
-/// let mut env = Env::reset(&inst);
+/// let mut env = Env::reset(&inst, afg_graph::Units::Bounded);
 /// let mut ret = 0.0;
 /// while env.actor().is_some() {
 ///     let (reward, _done) = env.step(TaskId(0)).unwrap();
@@ -31,20 +31,11 @@ pub struct Env<'a> {
 }
 
 impl<'a> Env<'a> {
-    /// A fresh episode: nobody assigned, robot 0 to act; features in the default
-    /// [`Units`].
-    pub fn reset(instance: &'a Instance) -> Self {
-        Self::reset_in(instance, Units::default())
-    }
-
-    /// A fresh episode with features in `units` (rewards stay raw welfare).
-    pub fn reset_in(instance: &'a Instance, units: Units) -> Self {
+    /// A fresh episode: nobody assigned, robot 0 to act; features in `units` (rewards
+    /// stay raw welfare).
+    pub fn reset(instance: &'a Instance, units: Units) -> Self {
         Env {
-            state: AllocationState::with_units(
-                instance,
-                afg_game::Assignment::unassigned(instance.num_robots(), instance.num_tasks()),
-                units,
-            ),
+            state: AllocationState::new(instance, units),
             next: 0,
         }
     }
@@ -63,7 +54,7 @@ impl<'a> Env<'a> {
     /// use afg_graph::Units;
     /// use afg_learn::Env;
     /// let inst = GeneratorConfig::paper(4, 2, 1).generate()?;
-    /// let mut env = Env::reset_in(&inst, Units::Bounded);
+    /// let mut env = Env::reset(&inst, Units::Bounded);
     /// env.step(TaskId(1))?;
     /// let again = Env::resume_at(&inst, env.state().assignment().clone(), Units::Bounded)?;
     /// assert_eq!((again.actor(), again.state()), (Some(RobotId(1)), env.state()));
@@ -79,7 +70,7 @@ impl<'a> Env<'a> {
     ) -> Result<Self, LearnError> {
         let next = acted(instance, &assignment)?;
         Ok(Env {
-            state: AllocationState::with_units(instance, assignment, units),
+            state: AllocationState::from_assignment(instance, assignment, units),
             next,
         })
     }
@@ -98,7 +89,7 @@ impl<'a> Env<'a> {
     /// use afg_graph::Units;
     /// use afg_learn::Env;
     /// let inst = GeneratorConfig::paper(4, 2, 1).generate()?;
-    /// let mut env = Env::reset_in(&inst, Units::Bounded);
+    /// let mut env = Env::reset(&inst, Units::Bounded);
     /// env.step(TaskId(1))?;
     /// let again = Env::from_parts(&inst, env.clone().into_parts())?;
     /// assert_eq!((again.actor(), again.state()), (env.actor(), env.state()));

@@ -96,14 +96,16 @@ impl TryFrom<serde_json::Value> for NetworkConfig {
 }
 
 impl NetworkConfig {
-    /// AFGNet with the defaults of docs/models.md (d = 64, L = 3, ReLU) for `tasks` tasks.
+    /// AFGNet with the defaults of docs/models.md (d = 64, L = 3, ReLU) for `tasks` tasks,
+    /// in the default [`Units`].
     pub fn afgnet(tasks: usize, seed: u64) -> Self {
-        NetworkConfig::AfgNet(AfgNetConfig::new(tasks).with_seed(seed))
+        NetworkConfig::AfgNet(AfgNetConfig::new(tasks).with_seed(seed)).with_units(Units::default())
     }
 
-    /// S2V with the defaults of docs/models.md (p = 64, T = 4) for `tasks` tasks.
+    /// S2V with the defaults of docs/models.md (p = 64, T = 4) for `tasks` tasks, in the
+    /// default [`Units`].
     pub fn s2v(tasks: usize, seed: u64) -> Self {
-        NetworkConfig::S2v(S2vConfig::new(tasks).with_seed(seed))
+        NetworkConfig::S2v(S2vConfig::new(tasks).with_seed(seed)).with_units(Units::default())
     }
 
     /// Number of tasks (actions).
@@ -120,7 +122,7 @@ impl NetworkConfig {
             NetworkConfig::AfgNet(c) => c.units,
             NetworkConfig::S2v(c) => c.units,
         }
-        .unwrap_or_default()
+        .unwrap_or(Units::MeanReward)
     }
 
     /// The same network in other units (`None` for [`Units::MeanReward`], so that the
@@ -225,8 +227,10 @@ impl<B: Backend> QNetwork<B> {
     /// ([`GraphBatch::with_task_summaries`]), without them otherwise.
     pub fn empty_batch(&self, tasks: usize) -> GraphBatch {
         match self {
-            QNetwork::AfgNet(n) if n.price.is_some() => GraphBatch::with_task_summaries(tasks),
-            _ => GraphBatch::new(tasks),
+            QNetwork::AfgNet(n) if n.price.is_some() => {
+                GraphBatch::with_task_summaries(tasks, self.units())
+            }
+            _ => GraphBatch::new(tasks, self.units()),
         }
     }
 

@@ -31,7 +31,7 @@ pub fn greedy_rollouts<B: Backend>(
         .map(|i| RobotGraph::build(i.robots(), graph))
         .collect::<Result<Vec<_>, _>>()?;
     let units = network.units();
-    let mut envs: Vec<Env<'_>> = instances.iter().map(|i| Env::reset_in(i, units)).collect();
+    let mut envs: Vec<Env<'_>> = instances.iter().map(|i| Env::reset(i, units)).collect();
     loop {
         let live: Vec<usize> = (0..envs.len())
             .filter(|&e| envs[e].actor().is_some())

@@ -48,7 +48,7 @@ impl S2vConfig {
             theta4: seeded_linear(&mut rng, 1, p, device),
             head: QHead::new(&mut rng, p, m, self.activation, device),
             iterations: self.iterations,
-            units: self.units.unwrap_or_default(),
+            units: self.units.unwrap_or(Units::MeanReward),
         }
     }
 }
@@ -83,7 +83,11 @@ impl<B: Backend> S2v<B> {
     ///
     /// # Shapes
     /// output: `[V, p]`
+    ///
+    /// # Panics
+    /// If the batch's features are in other units than the network's.
     pub fn embed(&self, g: &GraphTensors<B>) -> Tensor<B, 2> {
+        g.expect_units(self.units);
         let own = self.theta1.forward(g.nu.clone());
         let p = own.dims()[1];
         // The edge term does not change between iterations.

@@ -11,6 +11,8 @@ use burn::tensor::{IndexingUpdateOp, Int, Tensor, TensorData};
 /// and `M` for tasks.
 #[derive(Clone, Debug)]
 pub struct GraphTensors<B: Backend> {
+    /// The units of the batch's features ([`GraphBatch::units`]).
+    pub units: afg_graph::Units,
     /// Robot features ν, `[V, M]`.
     pub nu: Tensor<B, 2>,
     /// Task features μ, `[V, M]`.
@@ -73,6 +75,19 @@ fn int1<B: Backend>(values: &[u32], device: &B::Device) -> Tensor<B, 1, Int> {
 }
 
 impl<B: Backend> GraphTensors<B> {
+    /// Stops a network from reading features in units it was not trained in: the
+    /// numbers would be meaningful, and wrong.
+    ///
+    /// # Panics
+    /// If the batch's units are not `units`.
+    pub fn expect_units(&self, units: afg_graph::Units) {
+        assert_eq!(
+            self.units, units,
+            "a batch with features in {:?} units fed to a network trained in {:?} units",
+            self.units, units
+        );
+    }
+
     /// Uploads a batch, with dense aggregation matrices where they apply.
     pub fn new(batch: &GraphBatch, device: &B::Device) -> Self {
         let mut g = Self::sparse(batch, device);
@@ -91,6 +106,7 @@ impl<B: Backend> GraphTensors<B> {
             edge_features.extend_from_slice(&batch.nu[k as usize * m..(k as usize + 1) * m]);
         }
         GraphTensors {
+            units: batch.units,
             nu: float2(&batch.nu, m, device),
             mu: float2(&batch.mu, m, device),
             degree: float2(&batch.degree, 1, device),

@@ -33,7 +33,7 @@ fn assert_parity(config: &NetworkConfig, network: &QNetwork<B>, inst: &Instance)
     let mut run = FastRollout::new(&fast, inst, &graph).unwrap();
     // The Burn side sees the state in the network's units, as the trainer builds it.
     let empty = afg_game::Assignment::unassigned(inst.num_robots(), m);
-    let mut state = AllocationState::with_units(inst, empty, config.units());
+    let mut state = AllocationState::from_assignment(inst, empty, config.units());
     let (mut q_fast, mut mask) = (vec![0.0; m], vec![false; m]);
     let mut worst = 0.0f32;
     for robot in inst.robot_ids() {

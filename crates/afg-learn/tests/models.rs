@@ -51,7 +51,7 @@ fn random_step(env: &mut Env<'_>, rng: &mut ChaCha8Rng) -> (f64, bool) {
 /// An instance after `steps` random actions, with the next robot to act.
 fn midway(inst: &Instance, steps: usize, seed: u64) -> (AllocationState<'_>, RobotId) {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut env = Env::reset(inst);
+    let mut env = Env::reset(inst, afg_graph::Units::Bounded);
     for _ in 0..steps.min(inst.num_robots() - 1) {
         random_step(&mut env, &mut rng);
     }
@@ -74,7 +74,7 @@ fn shapes_for_several_sizes_and_batches() {
             .map(|s| GeneratorConfig::paper(n, 5, s).generate().unwrap())
             .collect();
         for graphs in [1, 7] {
-            let mut batch = GraphBatch::with_task_summaries(5);
+            let mut batch = GraphBatch::with_task_summaries(5, afg_graph::Units::Bounded);
             for (g, inst) in insts.iter().take(graphs).enumerate() {
                 let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
                 let (state, actor) = midway(inst, g * n / 7, g as u64);
@@ -103,15 +103,16 @@ fn relabelling_robots_does_not_change_q_values() {
     }
     let permuted = Instance::new(robots, inst.tasks().to_vec(), inst.beta()).unwrap();
     let assignment = afg_game::Assignment::from_tasks(&permuted, tasks).unwrap();
-    let permuted_state = AllocationState::from_assignment(&permuted, assignment);
+    let permuted_state =
+        AllocationState::from_assignment(&permuted, assignment, afg_graph::Units::Bounded);
     for config in configs() {
-        let mut a = GraphBatch::with_task_summaries(5);
+        let mut a = GraphBatch::with_task_summaries(5, afg_graph::Units::Bounded);
         a.push(
             &RobotGraph::build(inst.robots(), GraphKind::default()).unwrap(),
             &state,
             actor,
         );
-        let mut b = GraphBatch::with_task_summaries(5);
+        let mut b = GraphBatch::with_task_summaries(5, afg_graph::Units::Bounded);
         b.push(
             &RobotGraph::build(permuted.robots(), GraphKind::default()).unwrap(),
             &permuted_state,
@@ -135,13 +136,13 @@ fn batched_q_values_equal_single_graph_ones() {
         .enumerate()
         .map(|(s, &n)| GeneratorConfig::paper(n, 5, s as u64).generate().unwrap())
         .collect();
-    let mut batch = GraphBatch::with_task_summaries(5);
+    let mut batch = GraphBatch::with_task_summaries(5, afg_graph::Units::Bounded);
     let mut singles = Vec::new();
     for (g, inst) in insts.iter().enumerate() {
         let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
         let (state, actor) = midway(inst, inst.num_robots() / 2, g as u64);
         batch.push(&graph, &state, actor);
-        let mut one = GraphBatch::with_task_summaries(5);
+        let mut one = GraphBatch::with_task_summaries(5, afg_graph::Units::Bounded);
         one.push(&graph, &state, actor);
         singles.push(one);
     }
@@ -164,7 +165,7 @@ fn episode_return_equals_final_welfare_on_every_dataset_instance() {
         let path =
             PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../../datasets/n{n}.jsonl"));
         for inst in read_dataset(&path).unwrap() {
-            let mut env = Env::reset(&inst);
+            let mut env = Env::reset(&inst, afg_graph::Units::Bounded);
             let mut ret = 0.0;
             let mut done = false;
             while !done {
@@ -199,7 +200,7 @@ fn full_tasks_are_refused() {
         1.0,
     )
     .unwrap();
-    let mut env = Env::reset(&inst);
+    let mut env = Env::reset(&inst, afg_graph::Units::Bounded);
     env.step(TaskId(0)).unwrap();
     assert_eq!(env.action_mask(), vec![false, true]);
     assert!(matches!(
@@ -221,7 +222,7 @@ fn one_adam_step_reduces_a_fixed_mse() {
     let device = Default::default();
     let inst = GeneratorConfig::paper(20, 5, 4).generate().unwrap();
     let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
-    let mut batch = GraphBatch::with_task_summaries(5);
+    let mut batch = GraphBatch::with_task_summaries(5, afg_graph::Units::Bounded);
     for g in 0..8 {
         let (state, actor) = midway(&inst, 2 * g, g as u64);
         batch.push(&graph, &state, actor);
@@ -400,7 +401,7 @@ fn same_seed_same_weights() {
     let device = Default::default();
     let inst = GeneratorConfig::paper(20, 5, 1).generate().unwrap();
     let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
-    let mut batch = GraphBatch::with_task_summaries(5);
+    let mut batch = GraphBatch::with_task_summaries(5, afg_graph::Units::Bounded);
     let (state, actor) = midway(&inst, 5, 0);
     batch.push(&graph, &state, actor);
     let g = GraphTensors::<B>::new(&batch, &device);
@@ -424,7 +425,7 @@ fn same_seed_same_weights() {
 #[test]
 fn dense_and_edge_list_aggregation_agree() {
     let device = Default::default();
-    let mut batch = GraphBatch::with_task_summaries(5);
+    let mut batch = GraphBatch::with_task_summaries(5, afg_graph::Units::Bounded);
     for s in 0..6u64 {
         let inst = GeneratorConfig::paper(25, 5, s).generate().unwrap();
         let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
@@ -473,12 +474,12 @@ fn an_untrained_price_head_is_nearest() {
             inst = Instance::new(inst.robots().to_vec(), tasks, inst.beta()).unwrap();
         }
         let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
-        let mut batch = GraphBatch::with_task_summaries(5);
+        let mut batch = GraphBatch::with_task_summaries(5, afg_graph::Units::Bounded);
         for k in 0..8 {
             let (state, actor) = midway(&inst, k * n / 8, k as u64);
             // In the network's units, as the trainer and the policies build states.
             let state =
-                AllocationState::with_units(&inst, state.assignment().clone(), config.units());
+                AllocationState::from_assignment(&inst, state.assignment().clone(), config.units());
             batch.push(&graph, &state, actor);
         }
         let g = GraphTensors::new(&batch, &device);
@@ -531,4 +532,35 @@ fn networks_without_a_price_head_load_from_files_that_predate_it() {
     assert_eq!(theta(&a.head.hidden), theta(&b.head.hidden));
     assert!(theta(&b.head.output).iter().all(|&w| w == 0.0));
     assert!(a.price.is_none() && b.price.is_some());
+}
+
+/// A network reads only batches in the units it was trained in.
+#[test]
+fn a_network_refuses_features_in_other_units() {
+    let inst = GeneratorConfig::paper(12, 5, 2).generate().unwrap();
+    let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
+    let device = Default::default();
+    for config in configs() {
+        let net = config.init::<B>(&device);
+        let other = [afg_graph::Units::MeanReward, afg_graph::Units::Bounded]
+            .into_iter()
+            .find(|&u| u != net.units())
+            .unwrap();
+        let state = AllocationState::new(&inst, other);
+        let mut batch = GraphBatch::new(5, other);
+        batch.push(&graph, &state, RobotId(0));
+        let tensors = GraphTensors::<B>::new(&batch, &device);
+        let refused =
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| net.forward(&tensors)));
+        assert!(refused.is_err(), "{config:?}");
+        // In its own units it answers.
+        let mut own = net.empty_batch(5);
+        own.push(
+            &graph,
+            &AllocationState::new(&inst, net.units()),
+            RobotId(0),
+        );
+        let q = net.forward(&GraphTensors::<B>::new(&own, &device));
+        assert_eq!(q.dims(), [1, 5]);
+    }
 }

@@ -380,7 +380,7 @@ fn one_shot_price_error(network: &QNetwork<InferBackend>, insts: &[Instance]) ->
         let (n, m) = (inst.num_robots(), inst.num_tasks());
         let graph = RobotGraph::build(inst.robots(), GraphKind::default()).unwrap();
         let state =
-            AllocationState::with_units(inst, Assignment::unassigned(n, m), network.units());
+            AllocationState::from_assignment(inst, Assignment::unassigned(n, m), network.units());
         let mut batch = network.empty_batch(m);
         for robot in inst.robot_ids() {
             batch.push(&graph, &state, robot);

@@ -33,7 +33,7 @@ struct Episode {
 
 impl Episode {
     fn new(instance: Arc<Instance>, units: Units, shaping: Shaping) -> Self {
-        let parts = Env::reset_in(&instance, units).into_parts();
+        let parts = Env::reset(&instance, units).into_parts();
         Episode {
             instance,
             parts: Some(parts),

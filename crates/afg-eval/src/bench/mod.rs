@@ -80,12 +80,12 @@ pub fn allocator_time(
 /// `n` = 0, or an instance that cannot be generated.
 pub fn random_batch(n: usize, size: usize) -> Result<GraphBatch, EvalError> {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(n as u64);
-    let mut batch = GraphBatch::new(M);
+    let mut batch = GraphBatch::new(M, afg_graph::Units::Bounded);
     for s in 0..size {
         let inst = GeneratorConfig::paper(n, M, s as u64).generate()?;
         let graph =
             RobotGraph::build(inst.robots(), GraphKind::default()).map_err(LearnError::from)?;
-        let mut env = Env::reset(&inst);
+        let mut env = Env::reset(&inst, afg_graph::Units::Bounded);
         for _ in 0..rng.random_range(0..n) {
             env.step(TaskId(rng.random_range(0..M as u32)))?;
         }

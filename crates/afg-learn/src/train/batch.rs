@@ -31,7 +31,7 @@ impl Trainer {
             }
             now.push(
                 &ep.graph,
-                &AllocationState::with_units(&ep.instance, a, units),
+                &AllocationState::from_assignment(&ep.instance, a, units),
                 RobotId(t as u32),
             );
         }
@@ -70,7 +70,7 @@ impl Trainer {
             let actor = RobotId(self.rng.random_range(0..n) as u32);
             prices.extend_from_slice(ep.centred_prices(units));
             let state =
-                AllocationState::with_units(&ep.instance, Assignment::unassigned(n, m), units);
+                AllocationState::from_assignment(&ep.instance, Assignment::unassigned(n, m), units);
             empty.push(&ep.graph, &state, actor);
         }
         (empty, prices)
@@ -143,7 +143,7 @@ impl Trainer {
             let mut a = ep.assignment_after(t);
             now.push(
                 &ep.graph,
-                &AllocationState::with_units(&ep.instance, a.clone(), units),
+                &AllocationState::from_assignment(&ep.instance, a.clone(), units),
                 robot,
             );
             actions.push(i64::from(task.0));
@@ -158,7 +158,7 @@ impl Trainer {
             next_row.push((end < n).then(|| {
                 next.push(
                     &ep.graph,
-                    &AllocationState::with_units(&ep.instance, a, units),
+                    &AllocationState::from_assignment(&ep.instance, a, units),
                     RobotId(end as u32),
                 );
                 next.num_graphs() - 1
@@ -300,7 +300,7 @@ mod tests {
             for ep in &t.demos {
                 let mut batch = net.empty_batch(3);
                 for step in 0..6 {
-                    let state = AllocationState::with_units(
+                    let state = AllocationState::from_assignment(
                         &ep.instance,
                         ep.assignment_after(step),
                         t.config.network.units(),

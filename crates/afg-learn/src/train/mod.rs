@@ -287,7 +287,8 @@ impl Trainer {
         let mut batch = self.online.empty_batch(m);
         for ep in &self.running {
             let t = ep.record.actions.len();
-            let state = AllocationState::with_units(&ep.instance, ep.assignment_after(t), units);
+            let state =
+                AllocationState::from_assignment(&ep.instance, ep.assignment_after(t), units);
             batch.push(&ep.graph, &state, RobotId(t as u32));
         }
         let device = Default::default();
