@@ -5,7 +5,12 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-use afg_learn::{InferBackend, PriceModel, RunDir, load_network, parameter_values};
+use afg_learn::{
+    InferBackend,
+    nets::{load_network, parameter_values},
+    price::PriceModel,
+    run::RunDir,
+};
 use anyhow::{Context, Result, bail, ensure};
 use clap::Args;
 use rand::{Rng, SeedableRng};

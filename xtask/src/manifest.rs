@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use afg_cli::train::command_line;
-use afg_learn::RunDir;
+use afg_learn::run::RunDir;
 use anyhow::Result;
 use clap::Args;
 

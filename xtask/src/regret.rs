@@ -1,5 +1,5 @@
 //! `cargo xtask regret`: where along a rollout a trained model loses welfare, measured
-//! against the exact Q* (`afg_learn::regret_trace`).
+//! against the exact Q* (`afg_learn::policy::regret_trace`).
 
 use std::path::PathBuf;
 

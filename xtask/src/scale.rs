@@ -45,7 +45,7 @@ pub fn run(args: ScaleArgs) -> Result<()> {
         return Ok(());
     }
     let plan = &args.plan;
-    if plan.tasks.contains(&5) && !afg_learn::RunDir::new(&plan.model).has_weights() {
+    if plan.tasks.contains(&5) && !afg_learn::run::RunDir::new(&plan.model).has_weights() {
         bail!(
             "{} holds no trained model (model.json); pass --model DIR",
             plan.model.display()

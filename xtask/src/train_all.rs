@@ -2,7 +2,7 @@
 //! budgets.
 
 use afg_eval::ModelSpec;
-use afg_learn::TrainSettings;
+use afg_learn::train::TrainSettings;
 use anyhow::Result;
 use clap::Args;
 

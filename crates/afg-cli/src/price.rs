@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use afg_learn::{PriceModel, PriceTrainConfig, PriceTrainer};
+use afg_learn::price::{PriceModel, PriceTrainConfig, PriceTrainer};
 use anyhow::{Result, bail};
 use clap::Args;
 use serde::Serialize;
@@ -102,7 +102,9 @@ mod tests {
             "ablations/price_n60_qstar",
         ] {
             let dir = crate::repo_root().join("models").join(run);
-            let command = afg_learn::PriceRunSummary::load(&dir).unwrap().command;
+            let command = afg_learn::price::PriceRunSummary::load(&dir)
+                .unwrap()
+                .command;
             let Ok(crate::Command::TrainPrice(args)) =
                 crate::parse(command.strip_prefix("afg ").unwrap())
             else {

@@ -3,7 +3,10 @@
 use std::path::PathBuf;
 use std::time::Duration;
 
-use afg_learn::{RunDir, Session, TrainConfig, TrainSettings};
+use afg_learn::{
+    run::RunDir,
+    train::{Session, TrainConfig, TrainSettings},
+};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 
@@ -221,7 +224,7 @@ mod tests {
         ))
         .unwrap();
         // What the run directory holds is tested in afg-learn (Session).
-        afg_learn::LearnedPolicy::load(&run_dir.join("model")).unwrap();
+        afg_learn::policy::LearnedPolicy::load(&run_dir.join("model")).unwrap();
         assert!(run_dir.join("checkpoint/state.json").exists());
 
         let svg = dir.join("curves.svg");

@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use afg_learn::{Algo, Net, RunDir};
+use afg_learn::{nets::Net, run::RunDir, train::Algo};
 
 /// What a model adds to the paper's method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -26,10 +26,10 @@ pub enum Variant {
     /// and a large-margin loss (`--demos`, as in Deep Q-learning from Demonstrations).
     PriceHeadDemos,
     /// Ours: [`Variant::PriceHead`] whose one-shot scores are also fitted to the exact
-    /// task prices (`--price-loss`, [`afg_learn::TrainConfig::price_loss`]).
+    /// task prices (`--price-loss`, [`afg_learn::train::TrainConfig::price_loss`]).
     PriceHeadPriceLoss,
     /// Ours: the paper's network and algorithm with the reward shaped by the optimal
-    /// completion (`--shaping optimal`, [`afg_learn::Shaping::Optimal`]): the optimal
+    /// completion (`--shaping optimal`, [`afg_learn::env::Shaping::Optimal`]): the optimal
     /// policy is unchanged, but the rewards carry the exact optimum's values.
     OptimalShaping,
     /// Ours: [`Variant::OptimalShaping`] trained starting from the weights of the same
@@ -45,7 +45,7 @@ pub enum Variant {
 /// # Examples
 /// ```
 /// use afg_eval::{ModelSpec, Variant};
-/// use afg_learn::{Algo, Net};
+/// use afg_learn::{nets::Net, train::Algo};
 /// let m = ModelSpec::new(Net::AfgNet, Algo::Ddqn, Variant::Paper, 60);
 /// assert_eq!(m.dir_name(), "afgnet_ddqn_n60");
 /// assert_eq!(m.label(), "AFGNet_DDQN");
@@ -282,14 +282,14 @@ impl ModelSpec {
     }
 }
 
-/// The price-structured model (ours, [`afg_learn::PricePolicy`]) trained at one N, in
+/// The price-structured model (ours, [`afg_learn::price::PricePolicy`]) trained at one N, in
 /// one of its two modes, with prices recomputed every `block` robots in the sequential
 /// mode.
 ///
 /// # Examples
 /// ```
 /// use afg_eval::PriceSpec;
-/// use afg_learn::PriceMode;
+/// use afg_learn::price::PriceMode;
 /// let s = PriceSpec::new(60, PriceMode::OneShot);
 /// assert_eq!(s.dir_name(), "price_n60");
 /// assert_eq!(s.label(), "Price model, one-shot, trained at N = 60 (ours)");
@@ -301,7 +301,7 @@ pub struct PriceSpec {
     /// Robots per training instance.
     pub trained_at: usize,
     /// Sequential or one-shot.
-    pub mode: afg_learn::PriceMode,
+    pub mode: afg_learn::price::PriceMode,
     /// Robots per price evaluation in the sequential mode (1: every step).
     pub block: usize,
 }
@@ -311,7 +311,7 @@ impl PriceSpec {
     pub const TRAINED_AT: usize = 60;
 
     /// A model, prices at every step.
-    pub const fn new(trained_at: usize, mode: afg_learn::PriceMode) -> Self {
+    pub const fn new(trained_at: usize, mode: afg_learn::price::PriceMode) -> Self {
         PriceSpec {
             trained_at,
             mode,
@@ -327,8 +327,8 @@ impl PriceSpec {
     /// Both modes of the committed model, sequential first.
     pub fn committed() -> [PriceSpec; 2] {
         [
-            Self::new(Self::TRAINED_AT, afg_learn::PriceMode::Sequential),
-            Self::new(Self::TRAINED_AT, afg_learn::PriceMode::OneShot),
+            Self::new(Self::TRAINED_AT, afg_learn::price::PriceMode::Sequential),
+            Self::new(Self::TRAINED_AT, afg_learn::price::PriceMode::OneShot),
         ]
     }
 
@@ -341,7 +341,7 @@ impl PriceSpec {
     pub fn model_path(&self, root: &Path) -> std::path::PathBuf {
         root.join("models")
             .join(self.dir_name())
-            .join(afg_learn::PriceModel::FILE_NAME)
+            .join(afg_learn::price::PriceModel::FILE_NAME)
     }
 
     /// The row label; ends in "(ours)".
@@ -361,8 +361,12 @@ impl PriceSpec {
     /// The policy of the committed weights under `root`.
     ///
     /// # Errors
-    /// See [`afg_learn::PriceModel::load`]; a block of 0.
-    pub fn load(&self, root: &Path) -> Result<afg_learn::PricePolicy, afg_learn::LearnError> {
-        afg_learn::PricePolicy::load(&self.model_path(root), self.mode)?.with_block(self.block)
+    /// See [`afg_learn::price::PriceModel::load`]; a block of 0.
+    pub fn load(
+        &self,
+        root: &Path,
+    ) -> Result<afg_learn::price::PricePolicy, afg_learn::LearnError> {
+        afg_learn::price::PricePolicy::load(&self.model_path(root), self.mode)?
+            .with_block(self.block)
     }
 }

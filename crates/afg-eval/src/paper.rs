@@ -1,6 +1,6 @@
 //! The numbers the paper reports, to print beside ours.
 
-use afg_learn::{Algo, Net};
+use afg_learn::{nets::Net, train::Algo};
 
 use crate::{ModelSpec, Variant};
 

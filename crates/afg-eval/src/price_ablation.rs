@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use afg_baseline::{Allocator, Method};
-use afg_learn::{PriceMode, PriceModel, PricePolicy, PriceRunSummary};
+use afg_learn::price::{PriceMode, PriceModel, PricePolicy, PriceRunSummary};
 use serde::Serialize;
 
 use crate::{EvalError, dataset, evaluate};

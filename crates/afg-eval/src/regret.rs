@@ -1,5 +1,5 @@
 //! The regret diagnosis: where along its greedy rollout a trained model loses welfare,
-//! measured against the exact Q\* of every step ([`afg_learn::regret_trace`]).
+//! measured against the exact Q\* of every step ([`afg_learn::policy::regret_trace`]).
 //!
 //! A policy's shortfall telescopes: `OPT − W(final) = Σ_t [max_a Q*(s_t, a) − Q*(s_t,
 //! a_t)]`, so each step's regret is its share of the loss.
@@ -9,7 +9,7 @@ use std::path::Path;
 use afg_baseline::{Allocator, Optimum};
 use afg_game::Instance;
 use afg_graph::{GraphKind, RobotGraph};
-use afg_learn::{FastPolicy, LearnError, RunDir, regret_trace};
+use afg_learn::{LearnError, fast::FastPolicy, policy::regret_trace, run::RunDir};
 use serde::Serialize;
 
 use crate::EvalError;

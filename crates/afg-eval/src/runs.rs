@@ -7,7 +7,10 @@ use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
 use afg_baseline::Method;
-use afg_learn::{LogEvent, RunDir, TrainConfig, ValidationLine};
+use afg_learn::{
+    run::{LogEvent, RunDir, ValidationLine},
+    train::TrainConfig,
+};
 
 use crate::EvalError;
 

@@ -7,7 +7,12 @@ use std::time::{Duration, Instant};
 
 use afg_baseline::{Allocator, Method};
 use afg_game::{GeneratorConfig, Instance};
-use afg_learn::{LearnedPolicy, NetworkConfig, PriceMode, PriceModel, PricePolicy, RunDir};
+use afg_learn::{
+    nets::NetworkConfig,
+    policy::LearnedPolicy,
+    price::{PriceMode, PriceModel, PricePolicy},
+    run::RunDir,
+};
 use serde::{Deserialize, Serialize};
 
 use crate::EvalError;

@@ -6,7 +6,11 @@ use std::path::Path;
 
 use afg_baseline::{AllocStats, Allocator};
 use afg_game::{Assignment, Instance, Preference};
-use afg_learn::{LearnedPolicy, PriceMode, PriceModel, PricePolicy, RunDir};
+use afg_learn::{
+    policy::LearnedPolicy,
+    price::{PriceMode, PriceModel, PricePolicy},
+    run::RunDir,
+};
 use serde::Serialize;
 
 use crate::{EvalError, Score, optimum_welfare};

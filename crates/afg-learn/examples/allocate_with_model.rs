@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use afg_baseline::{Allocator, Greedy, Optimum};
 use afg_game::GeneratorConfig;
-use afg_learn::{LearnedPolicy, RunDir};
+use afg_learn::{policy::LearnedPolicy, run::RunDir};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);

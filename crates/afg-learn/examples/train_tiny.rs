@@ -4,7 +4,11 @@
 //! `cargo run --release -p afg-learn --example train_tiny`
 
 use afg_graph::Units;
-use afg_learn::{Algo, NetworkConfig, Shaping, TrainConfig, Trainer};
+use afg_learn::{
+    env::Shaping,
+    nets::NetworkConfig,
+    train::{Algo, TrainConfig, Trainer},
+};
 
 fn main() -> Result<(), afg_learn::LearnError> {
     let network = NetworkConfig::afgnet(3, 0).with_units(Units::ScaleFree);
@@ -25,7 +29,7 @@ fn main() -> Result<(), afg_learn::LearnError> {
         }
     }
     let stem = std::env::temp_dir().join("afg_tiny_model");
-    afg_learn::save_network(trainer.network(), &trainer.config().network, &stem)?;
+    afg_learn::nets::save_network(trainer.network(), &trainer.config().network, &stem)?;
     println!(
         "weights in {}.mpk; load them with LearnedPolicy::load",
         stem.display()

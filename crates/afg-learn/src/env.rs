@@ -13,7 +13,7 @@ use crate::LearnError;
 /// # Examples
 /// ```
 /// use afg_game::{GeneratorConfig, TaskId};
-/// use afg_learn::Env;
+/// use afg_learn::env::Env;
 /// let inst = GeneratorConfig::paper(6, 2, 1).generate()?;
 /// let mut env = Env::reset(&inst, afg_graph::Units::Bounded);
 /// let mut ret = 0.0;
@@ -52,7 +52,7 @@ impl<'a> Env<'a> {
     /// ```
     /// use afg_game::{Assignment, GeneratorConfig, RobotId, TaskId};
     /// use afg_graph::Units;
-    /// use afg_learn::Env;
+    /// use afg_learn::env::Env;
     /// let inst = GeneratorConfig::paper(4, 2, 1).generate()?;
     /// let mut env = Env::reset(&inst, Units::Bounded);
     /// env.step(TaskId(1))?;
@@ -87,7 +87,7 @@ impl<'a> Env<'a> {
     /// ```
     /// use afg_game::{GeneratorConfig, TaskId};
     /// use afg_graph::Units;
-    /// use afg_learn::Env;
+    /// use afg_learn::env::Env;
     /// let inst = GeneratorConfig::paper(4, 2, 1).generate()?;
     /// let mut env = Env::reset(&inst, Units::Bounded);
     /// env.step(TaskId(1))?;
@@ -245,7 +245,7 @@ impl Shaping {
 /// ```
 /// use afg_baseline::{Allocator, Greedy, Optimum};
 /// use afg_game::{Assignment, GeneratorConfig, TaskId};
-/// use afg_learn::{Shaping, n_step_reward};
+/// use afg_learn::env::{Shaping, n_step_reward};
 /// let inst = GeneratorConfig::paper(6, 2, 1).generate()?;
 /// let actions = [TaskId(0), TaskId(1), TaskId(1), TaskId(0), TaskId(0), TaskId(1)];
 /// let mut a = Assignment::unassigned(6, 2);

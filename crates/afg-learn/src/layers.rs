@@ -37,7 +37,7 @@ impl Activation {
     ///
     /// # Examples
     /// ```
-    /// use afg_learn::Activation;
+    /// use afg_learn::nets::Activation;
     /// assert_eq!(Activation::Relu.scalar(-2.0), 0.0);
     /// assert_eq!(Activation::LeakyRelu.scalar(-2.0), -0.02);
     /// assert_eq!(Activation::Tanh.scalar(0.0), 0.0);
@@ -104,7 +104,7 @@ pub fn zero_linear<B: Backend>(d_in: usize, d_out: usize, device: &B::Device) ->
 ///
 /// # Examples
 /// ```
-/// use afg_learn::{InferBackend, linear_of_concat};
+/// use afg_learn::{InferBackend, nets::linear_of_concat};
 /// use burn::nn::LinearConfig;
 /// use burn::tensor::{Tensor, Tolerance};
 ///

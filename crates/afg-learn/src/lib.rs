@@ -5,48 +5,70 @@
 //! Model code is generic over the Burn [`Backend`](burn::tensor::backend::Backend):
 //! [`TrainBackend`] (autodiff over ndarray) trains, [`InferBackend`] (ndarray)
 //! evaluates, and a user with a GPU back end can swap one in.
+//!
+//! | module | what it holds |
+//! |---|---|
+//! | [`nets`] | AFGNet and S2V (Burn), `NetworkConfig`, `QNetwork`, batches as tensors, weight files |
+//! | [`env`](mod@env) | the sequential allocation MDP (`Env`) and reward shaping |
+//! | [`train`] | DQN / Double DQN: `TrainConfig`, `TrainSettings`, `Trainer`, `Session`, the targets |
+//! | [`run`] | a training run's directory: `RunDir`, its log, manifest and lock |
+//! | [`policy`] | a trained network as an allocator (`LearnedPolicy`), rollouts, regret against Q* |
+//! | [`fast`] | the trained network exported to faer for fast exact rollouts (`FastPolicy`) |
+//! | [`price`] | the price model (ours): `PriceNet`, `PriceTrainer`, `PricePolicy` |
 
 mod afgnet;
 mod dense;
-mod env;
+pub mod env;
 mod error;
-mod fast;
+pub mod fast;
 mod layers;
 mod log_float;
 mod network;
-mod policy;
-mod price;
+pub mod policy;
+pub mod price;
 mod regret;
 mod rollout;
 mod run_dir;
 mod s2v;
 mod targets;
 mod tensors;
-mod train;
+pub mod train;
 mod weights;
 
-pub use afgnet::{AfgLayer, AfgNet, AfgNetConfig, PriceHead};
-pub use env::{Env, Shaping, n_step_reward};
+/// The Q networks (AFGNet, S2V) generic over the Burn back end, their batches as
+/// tensors, their configurations and weight files.
+pub mod nets {
+    pub use crate::afgnet::{AfgLayer, AfgNet, AfgNetConfig, PriceHead};
+    pub use crate::layers::{Activation, QHead, linear_of_concat};
+    pub use crate::network::{NETWORK_LIMITS, Net, NetworkConfig, NetworkLimits, QNetwork};
+    pub use crate::s2v::{S2v, S2vConfig};
+    pub use crate::tensors::{DENSE_MAX_NODES, DenseAdjacency, GraphTensors};
+    pub use crate::weights::{load_network, parameter_values, save_network};
+}
+
+/// A training run's directory: its files, typed log, manifest and lock.
+pub mod run {
+    pub use crate::run_dir::{LogEvent, RunDir, RunLock, RunManifest, ValidationLine};
+}
+
 pub use error::LearnError;
-pub use fast::{FastPolicy, FastRollout, FastRolloutOutcome};
-pub use layers::{Activation, QHead, linear_of_concat};
-pub use network::{NETWORK_LIMITS, Net, NetworkConfig, NetworkLimits, QNetwork};
-pub use policy::{LearnedPolicy, LearnedRun};
-pub use price::{
-    PRICE_INPUTS, PriceMlp, PriceMode, PriceModel, PriceNet, PriceNetConfig, PricePolicy,
-    PriceRound, PriceRunSummary, PriceTrainConfig, PriceTrainer,
+
+// Every module reaches the others' items from the crate root.
+pub(crate) use afgnet::AfgNetConfig;
+pub(crate) use env::{Env, Shaping, n_step_reward};
+pub(crate) use fast::{FastPolicy, FastRollout};
+pub(crate) use layers::Activation;
+pub(crate) use network::{Net, NetworkConfig, QNetwork};
+pub(crate) use price::PRICE_INPUTS;
+pub(crate) use regret::q_star;
+pub(crate) use rollout::greedy_rollouts;
+pub(crate) use run_dir::{LogEvent, RunDir, RunLock, ValidationLine};
+pub(crate) use targets::{double_dqn_target, dqn_target, masked_argmax};
+pub(crate) use tensors::GraphTensors;
+pub(crate) use train::{
+    Algo, Demonstrations, Preset, TrainConfig, Validation, checkpoint_dir, training_instance_seed,
 };
-pub use regret::{RegretStep, q_star, regret_trace};
-pub use rollout::greedy_rollouts;
-pub use run_dir::{LogEvent, RunDir, RunLock, RunManifest, ValidationLine};
-pub use s2v::{S2v, S2vConfig};
-pub use targets::{double_dqn_target, dqn_target, masked_argmax};
-pub use tensors::{DENSE_MAX_NODES, DenseAdjacency, GraphTensors};
-pub use train::{
-    Algo, Demonstrations, Preset, Session, StepReport, TrainConfig, TrainSettings, Trainer,
-    Validation, checkpoint_dir, training_instance_seed, validation_instances,
-};
-pub use weights::{load_network, parameter_values, save_network};
+pub(crate) use weights::{load_network, save_network};
 
 /// The CPU inference back end.
 pub type InferBackend = burn::backend::NdArray<f32>;

@@ -167,7 +167,7 @@ impl NetworkConfig {
     ///
     /// # Examples
     /// ```
-    /// use afg_learn::{AfgNetConfig, NetworkConfig};
+    /// use afg_learn::nets::{AfgNetConfig, NetworkConfig};
     /// assert!(NetworkConfig::afgnet(5, 0).check().is_ok());
     /// let wide = NetworkConfig::AfgNet(AfgNetConfig::new(5).with_hidden(0));
     /// assert!(wide.check().unwrap_err().contains("hidden"));

@@ -9,6 +9,9 @@ use afg_graph::{GraphKind, RobotGraph};
 
 use crate::{FastPolicy, InferBackend, LearnError, NetworkConfig, QNetwork, load_network};
 
+pub use crate::regret::{RegretStep, q_star, regret_trace};
+pub use crate::rollout::greedy_rollouts;
+
 /// A trained network used greedily: each robot in index order takes the task with the
 /// highest Q value among those with room.
 ///
@@ -23,7 +26,7 @@ use crate::{FastPolicy, InferBackend, LearnError, NetworkConfig, QNetwork, load_
 /// ```
 /// use afg_baseline::Allocator;
 /// use afg_game::{GeneratorConfig, Preference};
-/// use afg_learn::{LearnedPolicy, NetworkConfig};
+/// use afg_learn::{nets::NetworkConfig, policy::LearnedPolicy};
 /// let inst = GeneratorConfig::paper(20, 5, 1).generate()?;
 /// let policy = LearnedPolicy::new(NetworkConfig::afgnet(5, 0)); // untrained weights
 /// let out = policy.allocate(&inst)?;

@@ -26,7 +26,7 @@ use crate::{FastPolicy, FastRollout, LearnError, masked_argmax};
 /// ```
 /// use afg_baseline::{Allocator, Optimum};
 /// use afg_game::{Assignment, GeneratorConfig, RobotId};
-/// use afg_learn::q_star;
+/// use afg_learn::policy::q_star;
 /// let inst = GeneratorConfig::paper(12, 3, 1).generate()?;
 /// let empty = Assignment::unassigned(12, 3);
 /// let q = q_star(&inst, &empty, RobotId(0))?;
@@ -90,7 +90,7 @@ pub struct RegretStep {
 /// use afg_baseline::{Allocator, Optimum};
 /// use afg_game::GeneratorConfig;
 /// use afg_graph::{GraphKind, RobotGraph};
-/// use afg_learn::{FastPolicy, NetworkConfig, regret_trace};
+/// use afg_learn::{fast::FastPolicy, nets::NetworkConfig, policy::regret_trace};
 /// let config = NetworkConfig::afgnet(5, 0);
 /// let fast = FastPolicy::from_network(&config, &config.init::<afg_learn::InferBackend>(&Default::default()));
 /// let inst = GeneratorConfig::paper(20, 5, 3).generate()?;

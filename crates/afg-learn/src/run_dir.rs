@@ -146,7 +146,7 @@ type LogLines = (Vec<(String, LogEvent)>, Option<usize>);
 ///
 /// # Examples
 /// ```
-/// use afg_learn::{Algo, LogEvent, NetworkConfig, RunDir, TrainConfig};
+/// use afg_learn::{nets::NetworkConfig, run::{LogEvent, RunDir}, train::{Algo, TrainConfig}};
 ///
 /// let path = std::env::temp_dir().join(format!("afg-doc-run-{}", std::process::id()));
 /// # let _ = std::fs::remove_dir_all(&path);

@@ -8,7 +8,7 @@
 ///
 /// # Examples
 /// ```
-/// use afg_learn::dqn_target;
+/// use afg_learn::train::dqn_target;
 /// assert_eq!(dqn_target(1.0, &[3.0, 5.0], &[true, true], false), 6.0);
 /// assert_eq!(dqn_target(1.0, &[3.0, 5.0], &[true, false], false), 4.0);
 /// assert_eq!(dqn_target(1.0, &[3.0, 5.0], &[true, true], true), 1.0);
@@ -25,7 +25,7 @@ pub fn dqn_target(reward: f32, next_q_target: &[f32], mask: &[bool], terminal: b
 ///
 /// # Examples
 /// ```
-/// use afg_learn::double_dqn_target;
+/// use afg_learn::train::double_dqn_target;
 /// // The online net prefers action 0, which the target net values at 3.
 /// assert_eq!(double_dqn_target(1.0, &[9.0, 2.0], &[3.0, 5.0], &[true, true], false), 4.0);
 /// ```
@@ -46,7 +46,7 @@ pub fn double_dqn_target(
 ///
 /// # Examples
 /// ```
-/// use afg_learn::masked_argmax;
+/// use afg_learn::train::masked_argmax;
 /// assert_eq!(masked_argmax(&[1.0, 7.0, 7.0], &[true, true, true]), Some(1));
 /// assert_eq!(masked_argmax(&[1.0, 7.0], &[true, false]), Some(0));
 /// assert_eq!(masked_argmax(&[1.0], &[false]), None);

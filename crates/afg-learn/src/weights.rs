@@ -116,7 +116,7 @@ impl<B: Backend> ModuleVisitor<B> for Values {
 ///
 /// # Examples
 /// ```
-/// use afg_learn::{InferBackend, NetworkConfig, parameter_values};
+/// use afg_learn::{InferBackend, nets::{NetworkConfig, parameter_values}};
 /// let config = NetworkConfig::afgnet(5, 7);
 /// let a = config.init::<InferBackend>(&Default::default());
 /// let b = config.init::<InferBackend>(&Default::default());

@@ -6,8 +6,11 @@ use afg_game::io::read_dataset;
 use afg_game::{GeneratorConfig, Instance, TaskId};
 use afg_graph::{AllocationState, GraphKind, RobotGraph};
 use afg_learn::{
-    Activation, FastPolicy, FastRollout, GraphTensors, InferBackend, LearnError, NetworkConfig,
-    QNetwork, greedy_rollouts, load_network, masked_argmax,
+    InferBackend, LearnError,
+    fast::{FastPolicy, FastRollout},
+    nets::{Activation, GraphTensors, NetworkConfig, QNetwork, load_network},
+    policy::greedy_rollouts,
+    train::masked_argmax,
 };
 
 type B = InferBackend;
@@ -77,14 +80,14 @@ fn fast_path_matches_burn_with_random_weights_on_the_datasets() {
         NetworkConfig::s2v(5, 11),
         // Other activations and depths go through the same code.
         NetworkConfig::AfgNet(
-            afg_learn::AfgNetConfig::new(5)
+            afg_learn::nets::AfgNetConfig::new(5)
                 .with_activation(Activation::Tanh)
                 .with_layers(2)
                 .with_hidden(16)
                 .with_seed(4),
         ),
         NetworkConfig::AfgNet(
-            afg_learn::AfgNetConfig::new(5)
+            afg_learn::nets::AfgNetConfig::new(5)
                 .with_gain_residual(Some(true))
                 .with_seed(6),
         ),
@@ -93,7 +96,7 @@ fn fast_path_matches_burn_with_random_weights_on_the_datasets() {
         NetworkConfig::s2v(5, 12).with_units(afg_graph::Units::ScaleFree),
         NetworkConfig::afgnet(5, 13).with_units(afg_graph::Units::Bounded),
         NetworkConfig::AfgNet(
-            afg_learn::AfgNetConfig::new(5)
+            afg_learn::nets::AfgNetConfig::new(5)
                 .with_gain_residual(Some(true))
                 .with_seed(7),
         )
@@ -126,7 +129,7 @@ fn price_headed(seed: u64, units: afg_graph::Units) -> (NetworkConfig, QNetwork<
     use rand::{Rng, SeedableRng};
     let device = Default::default();
     let config = NetworkConfig::AfgNet(
-        afg_learn::AfgNetConfig::new(5)
+        afg_learn::nets::AfgNetConfig::new(5)
             .with_price_head(Some(true))
             .with_seed(seed),
     )
@@ -267,7 +270,7 @@ fn bad_rollout_inputs_are_errors() {
 fn repair_ends_balanced_stable_and_never_lowers_welfare() {
     use afg_baseline::Allocator;
     use afg_game::Preference;
-    use afg_learn::LearnedPolicy;
+    use afg_learn::policy::LearnedPolicy;
     for (seed, net) in [NetworkConfig::afgnet(5, 5), NetworkConfig::s2v(5, 5)]
         .into_iter()
         .enumerate()

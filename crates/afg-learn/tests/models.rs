@@ -7,8 +7,10 @@ use afg_game::io::read_dataset;
 use afg_game::{GeneratorConfig, Instance, Point, RobotId, Task, TaskId};
 use afg_graph::{AllocationState, GraphBatch, GraphKind, RobotGraph};
 use afg_learn::{
-    Env, GraphTensors, InferBackend, LearnError, LearnedPolicy, NetworkConfig, TrainBackend,
-    load_network, save_network,
+    InferBackend, LearnError, TrainBackend,
+    env::Env,
+    nets::{GraphTensors, NetworkConfig, load_network, save_network},
+    policy::LearnedPolicy,
 };
 use burn::module::{AutodiffModule, Module, ModuleMapper, Param};
 use burn::optim::{AdamConfig, GradientsParams, Optimizer};
@@ -20,7 +22,7 @@ type B = InferBackend;
 
 fn price_headed(seed: u64) -> NetworkConfig {
     NetworkConfig::AfgNet(
-        afg_learn::AfgNetConfig::new(5)
+        afg_learn::nets::AfgNetConfig::new(5)
             .with_price_head(Some(true))
             .with_seed(seed),
     )
@@ -231,7 +233,7 @@ fn one_adam_step_reduces_a_fixed_mse() {
     for config in configs() {
         let mut net = config.init::<TrainBackend>(&device);
         let g = GraphTensors::new(&batch, &device);
-        let loss = |net: &afg_learn::QNetwork<TrainBackend>| {
+        let loss = |net: &afg_learn::nets::QNetwork<TrainBackend>| {
             (net.forward(&g) - target.clone()).powi_scalar(2).mean()
         };
         let before = loss(&net);
@@ -484,7 +486,7 @@ fn an_untrained_price_head_is_nearest() {
         }
         let g = GraphTensors::new(&batch, &device);
         let q: Vec<f32> = net.forward(&g).into_data().to_vec().unwrap();
-        let afg_learn::QNetwork::AfgNet(afgnet) = &net else {
+        let afg_learn::nets::QNetwork::AfgNet(afgnet) = &net else {
             unreachable!()
         };
         let prices: Vec<f32> = afgnet.prices(&g).unwrap().into_data().to_vec().unwrap();
@@ -504,7 +506,7 @@ fn an_untrained_price_head_is_nearest() {
                         .total_cmp(&inst.distance(actor, TaskId(b as u32)))
                 })
                 .unwrap();
-            assert_eq!(afg_learn::masked_argmax(row, mask), Some(nearest));
+            assert_eq!(afg_learn::train::masked_argmax(row, mask), Some(nearest));
         }
     }
 }
@@ -524,7 +526,9 @@ fn networks_without_a_price_head_load_from_files_that_predate_it() {
         config.init::<B>(&device),
         price_headed(0).init::<B>(&device),
     );
-    let (afg_learn::QNetwork::AfgNet(a), afg_learn::QNetwork::AfgNet(b)) = (&plain, &headed) else {
+    let (afg_learn::nets::QNetwork::AfgNet(a), afg_learn::nets::QNetwork::AfgNet(b)) =
+        (&plain, &headed)
+    else {
         unreachable!()
     };
     let theta = |l: &burn::nn::Linear<B>| l.weight.val().into_data().to_vec::<f32>().unwrap();

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 use afg_game::io::{PreviousAssignment, parse_dataset, parse_instances};
 use afg_game::{Assignment, Instance};
-use afg_learn::{RunDir, Trainer, load_network};
+use afg_learn::{nets::load_network, run::RunDir, train::Trainer};
 use proptest::prelude::*;
 
 fn repo() -> PathBuf {
@@ -240,15 +240,18 @@ proptest! {
         let text = v.to_string();
         let _ = Instance::from_json(&text);
         let _ = PreviousAssignment::from_json(&text);
-        let _ = serde_json::from_str::<afg_learn::NetworkConfig>(&text);
-        let _ = serde_json::from_str::<afg_learn::TrainConfig>(&text);
+        let _ = serde_json::from_str::<afg_learn::nets::NetworkConfig>(&text);
+        let _ = serde_json::from_str::<afg_learn::train::TrainConfig>(&text);
     }
 }
 
 /// Checkpoint states: a resume builds networks and a validation set, so fewer cases.
 #[test]
 fn checkpoint_states_never_panic() {
-    use afg_learn::{Algo, NetworkConfig, TrainConfig};
+    use afg_learn::{
+        nets::NetworkConfig,
+        train::{Algo, TrainConfig},
+    };
     let dir = std::env::temp_dir().join(format!("afg-readers-ckpt-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let mut config = TrainConfig::new(10, Algo::Dqn, NetworkConfig::s2v(3, 0), 20, 1);

@@ -4,8 +4,10 @@
 use std::path::{Path, PathBuf};
 
 use afg_learn::{
-    Algo, LearnError, LogEvent, NetworkConfig, Preset, RunDir, RunManifest, TrainConfig,
-    Validation, ValidationLine,
+    LearnError,
+    nets::NetworkConfig,
+    run::{LogEvent, RunDir, RunManifest, ValidationLine},
+    train::{Algo, Preset, TrainConfig, Validation},
 };
 
 fn fresh(name: &str) -> PathBuf {

@@ -6,9 +6,12 @@ use afg_baseline::{Allocator, Greedy, Optimum};
 use afg_game::{Assignment, GeneratorConfig, Instance, TaskId};
 use afg_graph::{AllocationState, GraphKind, RobotGraph, Units};
 use afg_learn::{
-    AfgNetConfig, Algo, GraphTensors, InferBackend, LearnError, LearnedPolicy, LogEvent,
-    NetworkConfig, QNetwork, RunDir, Session, Shaping, TrainConfig, Trainer, double_dqn_target,
-    dqn_target, n_step_reward, parameter_values,
+    InferBackend, LearnError,
+    env::{Shaping, n_step_reward},
+    nets::{AfgNetConfig, GraphTensors, NetworkConfig, QNetwork, parameter_values},
+    policy::LearnedPolicy,
+    run::{LogEvent, RunDir},
+    train::{Algo, Session, TrainConfig, Trainer, double_dqn_target, dqn_target},
 };
 use proptest::prelude::*;
 
@@ -497,7 +500,8 @@ fn scale_free_and_shaped_runs_train() {
 
 #[test]
 fn the_gain_residual_refuses_shaping() {
-    let net = NetworkConfig::AfgNet(afg_learn::AfgNetConfig::new(5).with_gain_residual(Some(true)));
+    let net =
+        NetworkConfig::AfgNet(afg_learn::nets::AfgNetConfig::new(5).with_gain_residual(Some(true)));
     let mut c = tiny(Algo::Ddqn, net, 10);
     for shaping in [Shaping::Greedy, Shaping::Optimal] {
         c.shaping = shaping;

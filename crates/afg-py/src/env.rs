@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use afg_game::{Assignment, Instance, TaskId};
 use afg_graph::{StateParts, Units};
-use afg_learn::{Env, Shaping};
+use afg_learn::env::{Env, Shaping};
 use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3};
 use pyo3::exceptions::PyValueError;

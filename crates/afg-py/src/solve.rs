@@ -286,11 +286,11 @@ pub(crate) fn q_star_of(
     tasks.resize(n.max(tasks.len()), -1);
     let assignment = instance.assignment(&IntVector::List(tasks))?;
     let inst = instance.inner.clone();
-    let env = afg_learn::Env::resume_at(&inst, assignment, afg_graph::Units::Bounded)
+    let env = afg_learn::env::Env::resume_at(&inst, assignment, afg_graph::Units::Bounded)
         .map_err(value_error)?;
     let actor = env.actor().expect("checked: a robot is left to act");
     let values = py
-        .detach(|| afg_learn::q_star(&inst, env.state().assignment(), actor))
+        .detach(|| afg_learn::policy::q_star(&inst, env.state().assignment(), actor))
         .map_err(value_error)?;
     Ok(values
         .into_iter()

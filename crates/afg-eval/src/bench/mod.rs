@@ -14,8 +14,10 @@ use afg_baseline::{Allocator, Method, Optimum};
 use afg_game::{GeneratorConfig, Instance, TaskId};
 use afg_graph::{GraphBatch, GraphKind, RobotGraph};
 use afg_learn::{
-    Activation, Env, GraphTensors, InferBackend, LearnError, LearnedPolicy, NetworkConfig,
-    QNetwork, TrainBackend,
+    InferBackend, LearnError, TrainBackend,
+    env::Env,
+    nets::{Activation, GraphTensors, NetworkConfig, QNetwork},
+    policy::LearnedPolicy,
 };
 use burn::optim::{AdamConfig, GradientsParams, Optimizer};
 use burn::tensor::Tensor;

@@ -5,7 +5,7 @@
 //! [`AfgNet`] and computes the same Q values (tested below).
 
 use afg_graph::GraphBatch;
-use afg_learn::{Activation, AfgNet, GraphTensors};
+use afg_learn::nets::{Activation, AfgNet, GraphTensors};
 use burn::tensor::backend::Backend;
 use burn::tensor::{Int, Tensor, TensorData};
 
@@ -93,7 +93,10 @@ pub fn forward<B: Backend>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use afg_learn::{InferBackend, NetworkConfig, QNetwork};
+    use afg_learn::{
+        InferBackend,
+        nets::{NetworkConfig, QNetwork},
+    };
 
     #[test]
     fn the_plain_model_computes_our_q_values() {

@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use afg_baseline::{Allocator, Method, Optimum};
-use afg_learn::LearnedPolicy;
+use afg_learn::policy::LearnedPolicy;
 
 use super::{Tables, headline, models_table};
 use crate::{EvalError, ModelSpec, dataset, figures};

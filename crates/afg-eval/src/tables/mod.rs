@@ -9,7 +9,7 @@ mod rows;
 use std::fmt::Write as _;
 use std::path::Path;
 
-use afg_learn::LearnedPolicy;
+use afg_learn::policy::LearnedPolicy;
 use serde::Serialize;
 
 pub use document::{BEGIN, END, RunInfo, assignment_map_svg, block, results_document, with_block};

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use afg_baseline::Method;
 use afg_game::Instance;
-use afg_learn::{Algo, LearnedPolicy};
+use afg_learn::{policy::LearnedPolicy, train::Algo};
 
 use super::Row;
 use crate::{EvalError, ModelSpec, PriceSpec, evaluate};

@@ -55,7 +55,7 @@ use crate::{LearnError, NetworkConfig, QNetwork, masked_argmax};
 /// ```
 /// use afg_game::GeneratorConfig;
 /// use afg_graph::{GraphKind, RobotGraph};
-/// use afg_learn::{FastPolicy, NetworkConfig};
+/// use afg_learn::{fast::FastPolicy, nets::NetworkConfig};
 /// let config = NetworkConfig::afgnet(5, 0);
 /// let network = config.init::<afg_learn::InferBackend>(&Default::default());
 /// let fast = FastPolicy::from_network(&config, &network);

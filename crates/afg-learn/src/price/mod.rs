@@ -130,7 +130,7 @@ impl PriceModel {
 ///
 /// # Examples
 /// ```
-/// use afg_learn::{PriceRound, PriceRunSummary};
+/// use afg_learn::price::{PriceRound, PriceRunSummary};
 /// let dir = std::env::temp_dir().join(format!("afg_price_summary_doc_{}", std::process::id()));
 /// std::fs::create_dir_all(&dir)?;
 /// let summary = PriceRunSummary {
@@ -236,7 +236,7 @@ impl PriceTrainer {
 /// ```
 /// use afg_baseline::{Allocator, Nearest};
 /// use afg_game::GeneratorConfig;
-/// use afg_learn::{PriceMlp, PriceMode, PriceNetConfig, PricePolicy};
+/// use afg_learn::price::{PriceMlp, PriceMode, PriceNetConfig, PricePolicy};
 /// // An untrained model has every price at 0: it is Nearest.
 /// let net = PriceNetConfig { hidden: 16, seed: 0 }.init::<afg_learn::InferBackend>(&Default::default());
 /// let policy = PricePolicy::new(PriceMlp::from_burn(&net), PriceMode::Sequential);

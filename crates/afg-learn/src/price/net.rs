@@ -71,7 +71,7 @@ impl<B: Backend> PriceNet<B> {
 /// # Examples
 /// ```
 /// use afg_graph::TASK_FEATURES;
-/// use afg_learn::{PriceMlp, PriceNetConfig};
+/// use afg_learn::price::{PriceMlp, PriceNetConfig};
 /// let config = PriceNetConfig { hidden: 16, seed: 0 };
 /// let mlp = PriceMlp::from_burn(&config.init::<afg_learn::InferBackend>(&Default::default()));
 /// let mut prices = vec![1.0; 5];

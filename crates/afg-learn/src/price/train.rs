@@ -187,7 +187,7 @@ type Optim = OptimizerAdaptor<Adam, PriceNet<TrainBackend>, TrainBackend>;
 ///
 /// # Examples
 /// ```
-/// use afg_learn::{PriceTrainConfig, PriceTrainer};
+/// use afg_learn::price::{PriceTrainConfig, PriceTrainer};
 /// let mut config = PriceTrainConfig::new(12, 3, 0);
 /// (config.rounds, config.episodes_per_round, config.steps_per_round) = (2, 2, 3);
 /// config.validation_instances = 2;
@@ -513,9 +513,9 @@ mod tests {
         let inst = GeneratorConfig::paper(12, 3, 77).generate().unwrap();
         let mlp = PriceMlp::from_burn(&t.net);
         t.collect(&inst, &mlp, 1.0).unwrap();
-        let before = crate::parameter_values(&t.net);
+        let before = crate::nets::parameter_values(&t.net);
         let err = t.step().unwrap_err();
         assert!(matches!(err, LearnError::NonFiniteWeights { .. }), "{err}");
-        assert_eq!(crate::parameter_values(&t.net), before);
+        assert_eq!(crate::nets::parameter_values(&t.net), before);
     }
 }

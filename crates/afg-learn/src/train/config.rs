@@ -229,7 +229,7 @@ impl TrainConfig {
     ///
     /// # Examples
     /// ```
-    /// use afg_learn::{Algo, NetworkConfig, Preset, TrainConfig};
+    /// use afg_learn::{nets::NetworkConfig, train::{Algo, Preset, TrainConfig}};
     ///
     /// let c = TrainConfig::paper(20, Algo::Ddqn, NetworkConfig::afgnet(5, 0), 100, 0);
     /// assert_eq!((c.preset, c.lr, c.target_sync, c.huber), (Preset::Paper, 1e-4, 1000, false));
@@ -269,7 +269,7 @@ impl TrainConfig {
     ///
     /// # Examples
     /// ```
-    /// use afg_learn::TrainConfig;
+    /// use afg_learn::train::TrainConfig;
     /// assert_eq!(TrainConfig::default_steps(60), Some(2_500));
     /// assert_eq!(TrainConfig::default_steps(33), None);
     /// ```
@@ -397,7 +397,7 @@ impl TrainConfig {
     ///
     /// # Examples
     /// ```
-    /// use afg_learn::{Algo, NetworkConfig, TrainConfig};
+    /// use afg_learn::{nets::NetworkConfig, train::{Algo, TrainConfig}};
     ///
     /// let mut c = TrainConfig::new(20, Algo::Ddqn, NetworkConfig::afgnet(5, 0), 101, 0);
     /// c.lr = 1e-3;

@@ -34,6 +34,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
+pub use crate::targets::{double_dqn_target, dqn_target, masked_argmax};
 pub use checkpoint::checkpoint_dir;
 pub(crate) use config::validation_set;
 pub use config::{
@@ -43,9 +44,7 @@ use replay::{Episode, EpisodeRecord};
 pub use session::Session;
 pub use settings::TrainSettings;
 
-use crate::{
-    GraphTensors, InferBackend, LearnError, QNetwork, TrainBackend, greedy_rollouts, masked_argmax,
-};
+use crate::{GraphTensors, InferBackend, LearnError, QNetwork, TrainBackend, greedy_rollouts};
 
 /// What one call of [`Trainer::step`] did.
 #[derive(Clone, Copy, Debug, PartialEq)]

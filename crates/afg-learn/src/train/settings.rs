@@ -19,7 +19,7 @@ use crate::{
 ///
 /// # Examples
 /// ```
-/// use afg_learn::{Algo, Net, Preset, TrainSettings};
+/// use afg_learn::{nets::Net, train::{Algo, Preset, TrainSettings}};
 ///
 /// let asked = TrainSettings { scale: Some(60), lr: Some(3e-4), ..TrainSettings::default() };
 /// let config = asked.to_config()?;
