@@ -8,7 +8,8 @@ use std::time::{Duration, Instant};
 
 use afg_baseline::{Allocator, Greedy, Nearest, Optimum, verify_optimal};
 use afg_eval::tables::duration;
-use afg_game::io::{dataset_to_jsonl, read_dataset, write_atomic};
+use afg_game::fs::write_atomic;
+use afg_game::io::{dataset_to_jsonl, read_dataset};
 use afg_game::{Assignment, GeneratorConfig, Instance, TaskId};
 use anyhow::{Context, Result, bail, ensure};
 use clap::Args;

@@ -38,7 +38,7 @@ pub fn run(args: RegretArgs) -> Result<()> {
         .collect::<Result<Vec<_>, _>>()?;
     print!("{}", markdown(&rows));
     if let Some(path) = &args.json {
-        afg_game::io::write_atomic(path, serde_json::to_string_pretty(&rows)?.as_bytes())?;
+        afg_game::fs::write_atomic(path, serde_json::to_string_pretty(&rows)?.as_bytes())?;
     }
     Ok(())
 }

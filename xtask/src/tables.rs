@@ -107,12 +107,12 @@ fn write_outputs(root: &Path, res: &Tables, tables: &str, quick: bool, minutes: 
         threads,
     };
     let md = results_document(res, tables, info, root)?;
-    afg_game::io::write_atomic(&root.join("docs/RESULTS.md"), md.as_bytes())?;
+    afg_game::fs::write_atomic(&root.join("docs/RESULTS.md"), md.as_bytes())?;
     let readme = root.join("README.md");
     if readme.exists()
         && let Some(new) = with_block(&std::fs::read_to_string(&readme)?, tables)
     {
-        afg_game::io::write_atomic(&readme, new.as_bytes())?;
+        afg_game::fs::write_atomic(&readme, new.as_bytes())?;
     }
     Ok(())
 }

@@ -27,6 +27,7 @@
 //! those; the partitions, rounds and messages equal the plain simulation's (tested
 //! against it).
 
+use afg_game::realloc::PreviousAssignment;
 use afg_game::{Assignment, Instance, Preference, RobotId};
 use afg_graph::GraphKind;
 
@@ -75,6 +76,40 @@ impl CentralisedDa {
             }
             None => false,
         }
+    }
+
+    /// A warm start after robots or tasks changed: `previous` carried over to
+    /// `instance` (survivors keep their task), then [`CentralisedDa::improve`] places
+    /// the others by best response and sweeps to a stable assignment. Returns the
+    /// carried-over start and the result.
+    ///
+    /// # Errors
+    /// [`AllocError::Game`] if `previous` does not fit `instance`
+    /// ([`PreviousAssignment::carry_over`]).
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::CentralisedDa;
+    /// use afg_game::realloc::PreviousAssignment;
+    /// use afg_game::{GeneratorConfig, Preference};
+    /// // Three robots on tasks 1, 0, 1; robot 1 left and two robots joined.
+    /// let old = r#"{"format":"afg-assignment","version":1,"tasks":[1,0,1],"left_robots":[1]}"#;
+    /// let now = GeneratorConfig::paper(4, 2, 7).generate()?;
+    /// let previous = PreviousAssignment::from_json(old)?;
+    /// let (start, result) = CentralisedDa::new(Preference::Balanced).warm_start(&now, &previous)?;
+    /// assert_eq!(start.tasks()[2..], [None, None]);
+    /// assert!(now.is_stable(&result, Preference::Balanced));
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn warm_start(
+        &self,
+        instance: &Instance,
+        previous: &PreviousAssignment,
+    ) -> Result<(Assignment, Assignment), AllocError> {
+        let start = previous.carry_over(instance)?;
+        let mut assignment = start.clone();
+        self.improve(instance, &mut assignment);
+        Ok((start, assignment))
     }
 
     /// Index-order sweeps from `assignment` (complete or partial) until a sweep makes

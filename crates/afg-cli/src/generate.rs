@@ -5,7 +5,8 @@ use std::path::PathBuf;
 use afg_eval::dataset;
 use afg_game::GeneratorConfig;
 use afg_game::Instance;
-use afg_game::io::{dataset_to_jsonl, write_atomic};
+use afg_game::fs::write_atomic;
+use afg_game::io::dataset_to_jsonl;
 use anyhow::{Result, bail};
 use clap::Args;
 

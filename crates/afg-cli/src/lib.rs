@@ -202,6 +202,6 @@ pub fn write_svg(out: &Path, svg: &str) -> Result<()> {
     if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(parent)?;
     }
-    afg_game::io::write_atomic(out, svg.as_bytes())?;
+    afg_game::fs::write_atomic(out, svg.as_bytes())?;
     Ok(())
 }

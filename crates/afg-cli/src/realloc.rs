@@ -4,7 +4,7 @@ use std::path::Path;
 
 use afg_baseline::{Allocator, Method, Optimum};
 use afg_eval::realloc::{after_removal, dynamics_after, reallocate, study_markdown};
-use afg_game::io::PreviousAssignment;
+use afg_game::realloc::PreviousAssignment;
 use afg_game::{Instance, Preference};
 use anyhow::{Context, Result, bail};
 
@@ -45,7 +45,7 @@ pub fn run(args: &SolveArgs, from: &Path, instances: &[Instance]) -> Result<()> 
         let line = r
             .assignment
             .to_json_with_summary(Some(serde_json::to_value(&r)?));
-        afg_game::io::write_atomic(out, format!("{line}\n").as_bytes())?;
+        afg_game::fs::write_atomic(out, format!("{line}\n").as_bytes())?;
     }
     if let Some(svg) = &args.svg {
         let opt = Optimum.allocate(instance)?.assignment;

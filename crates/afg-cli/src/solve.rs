@@ -188,7 +188,7 @@ fn write_outputs(
             text += &row.assignment_line(name, inst, a);
             text.push('\n');
         }
-        afg_game::io::write_atomic(out, text.as_bytes())?;
+        afg_game::fs::write_atomic(out, text.as_bytes())?;
     }
     if let Some(svg) = &args.svg {
         let opt = Optimum.allocate(&instances[0])?.assignment;

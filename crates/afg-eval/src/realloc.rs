@@ -4,7 +4,7 @@
 use std::time::Instant;
 
 use afg_baseline::{Allocator, CentralisedDa, Method, Optimum};
-use afg_game::io::PreviousAssignment;
+use afg_game::realloc::PreviousAssignment;
 use afg_game::{Assignment, GeneratorConfig, Instance, Preference, RobotId};
 use serde::Serialize;
 
@@ -63,9 +63,7 @@ pub fn reallocate(
     preference: Preference,
 ) -> Result<Reallocation, EvalError> {
     let start = Instant::now();
-    let carried = previous.carry_over(instance)?;
-    let mut assignment = carried.clone();
-    CentralisedDa::new(preference).improve(instance, &mut assignment);
+    let (carried, assignment) = CentralisedDa::new(preference).warm_start(instance, previous)?;
     let seconds = start.elapsed().as_secs_f64();
     let opt = Optimum.allocate(instance)?.assignment;
     let survivors = previous.survivors();

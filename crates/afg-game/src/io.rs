@@ -1,4 +1,5 @@
-//! JSON formats (versioned), JSON Lines datasets and atomic file writes.
+//! JSON formats (versioned) and JSON Lines datasets (files are written through
+//! [`crate::fs`]).
 //!
 //! An instance file is one JSON object:
 //! `{"format": "afg-instance", "version": 1, "beta": 1.0, "robots": [{"x":..,"y":..}, ..],
@@ -9,10 +10,9 @@
 //! with three optional fields: `summary` (any JSON object: what the solver reports
 //! beside it, ignored when read), and `left_robots` / `left_tasks` (robot and task
 //! indices of this assignment that are gone, for a warm start on a changed instance:
-//! [`PreviousAssignment`]).
+//! [`PreviousAssignment`](crate::realloc::PreviousAssignment)).
 
 use std::fs;
-use std::io::Write;
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
@@ -83,20 +83,20 @@ impl From<Instance> for InstanceFile {
 
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct AssignmentFile {
+pub(crate) struct AssignmentFile {
     format: String,
     version: u32,
-    tasks: Vec<Option<TaskId>>,
+    pub(crate) tasks: Vec<Option<TaskId>>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    left_robots: Vec<RobotId>,
+    pub(crate) left_robots: Vec<RobotId>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    left_tasks: Vec<TaskId>,
+    pub(crate) left_tasks: Vec<TaskId>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     summary: Option<serde_json::Value>,
 }
 
 impl AssignmentFile {
-    fn parse(text: &str, line: Option<usize>) -> Result<Self, GameError> {
+    pub(crate) fn parse(text: &str, line: Option<usize>) -> Result<Self, GameError> {
         let file: AssignmentFile =
             serde_json::from_str(strip_bom(text)).map_err(json_error(line))?;
         check_header(&file.format, file.version, ASSIGNMENT_FORMAT)?;
@@ -154,7 +154,7 @@ impl Instance {
     /// # Errors
     /// [`GameError::Io`] if the file cannot be written.
     pub fn write(&self, path: &Path) -> Result<(), GameError> {
-        write_atomic(path, self.to_json().as_bytes())
+        crate::fs::write_atomic(path, self.to_json().as_bytes())
     }
 }
 
@@ -213,128 +213,6 @@ impl Assignment {
             ));
         }
         Assignment::from_tasks(instance, file.tasks)
-    }
-}
-
-/// An assignment of an earlier instance, with the robots and tasks that have left
-/// since, to be carried over to the instance as it is now.
-///
-/// The new instance keeps the surviving robots in their old order, followed by any
-/// robots that joined, and likewise the surviving tasks followed by new ones. Carried
-/// over, survivors keep their task (with its new index); robots that joined, or whose
-/// task left, are unassigned.
-///
-/// # Examples
-/// ```
-/// use afg_game::io::PreviousAssignment;
-/// use afg_game::{GeneratorConfig, RobotId, TaskId};
-/// // Three robots on tasks 1, 0, 1; robot 1 left and two robots joined.
-/// let old = r#"{"format":"afg-assignment","version":1,"tasks":[1,0,1],"left_robots":[1]}"#;
-/// let now = GeneratorConfig::paper(4, 2, 7).generate()?;
-/// let start = PreviousAssignment::from_json(old)?.carry_over(&now)?;
-/// assert_eq!(start.tasks(), &[Some(TaskId(1)), Some(TaskId(1)), None, None]);
-/// # Ok::<(), afg_game::GameError>(())
-/// ```
-#[derive(Clone, Debug, PartialEq)]
-pub struct PreviousAssignment {
-    /// The old assignment, indexed by the old robot ids.
-    pub tasks: Vec<Option<TaskId>>,
-    /// Old robot ids that left.
-    pub left_robots: Vec<RobotId>,
-    /// Old task ids that left.
-    pub left_tasks: Vec<TaskId>,
-}
-
-impl PreviousAssignment {
-    /// Parses an assignment document (`left_robots` and `left_tasks` optional).
-    ///
-    /// # Errors
-    /// [`GameError::Json`], [`GameError::WrongFormat`], [`GameError::UnsupportedVersion`].
-    pub fn from_json(text: &str) -> Result<Self, GameError> {
-        let file = AssignmentFile::parse(text, None)?;
-        Ok(PreviousAssignment {
-            tasks: file.tasks,
-            left_robots: file.left_robots,
-            left_tasks: file.left_tasks,
-        })
-    }
-
-    /// Robots of the old assignment that are still there.
-    pub fn survivors(&self) -> usize {
-        self.tasks.len() - self.left_robots.len()
-    }
-
-    /// The starting assignment on `instance` (see the type's docs).
-    ///
-    /// # Errors
-    /// [`GameError::Reallocation`] if a task index is beyond the tasks the old
-    /// instance can have had, a left robot is out of range, a robot or task is named
-    /// twice, or the instance has fewer robots or tasks than survived; the errors of
-    /// [`Assignment::from_tasks`] if the survivors overfill a task.
-    pub fn carry_over(&self, instance: &Instance) -> Result<Assignment, GameError> {
-        let bad = |what: String| Err(GameError::Reallocation(what));
-        // The old instance had the surviving tasks (at most the new M) and the left ones.
-        let most_tasks = instance.num_tasks() + self.left_tasks.len();
-        let old_tasks = self
-            .tasks
-            .iter()
-            .flatten()
-            .chain(&self.left_tasks)
-            .map(|j| j.index() + 1)
-            .max()
-            .unwrap_or(0);
-        if old_tasks > most_tasks {
-            return bad(format!(
-                "task {} is out of range: the instance has {} tasks and {} left, so the \
-                 old one had at most {most_tasks}",
-                old_tasks - 1,
-                instance.num_tasks(),
-                self.left_tasks.len()
-            ));
-        }
-        let mut robot_gone = vec![false; self.tasks.len()];
-        for &r in &self.left_robots {
-            match robot_gone.get_mut(r.index()) {
-                Some(g) if !*g => *g = true,
-                Some(_) => return bad(format!("robot {r} is named twice in left_robots")),
-                None => {
-                    return bad(format!(
-                        "left robot {r} is out of range (the assignment has {} robots)",
-                        self.tasks.len()
-                    ));
-                }
-            }
-        }
-        // New index of each old task, None if it left.
-        let mut task_map: Vec<Option<u32>> = vec![Some(0); old_tasks];
-        for &j in &self.left_tasks {
-            if task_map[j.index()].is_none() {
-                return bad(format!("task {j} is named twice in left_tasks"));
-            }
-            task_map[j.index()] = None;
-        }
-        let mut next = 0;
-        for slot in task_map.iter_mut().flatten() {
-            *slot = next;
-            next += 1;
-        }
-        if (next as usize) > instance.num_tasks() || self.survivors() > instance.num_robots() {
-            return bad(format!(
-                "{} robots and {next} tasks survived, but the instance has only {} and {}",
-                self.survivors(),
-                instance.num_robots(),
-                instance.num_tasks()
-            ));
-        }
-        let mut tasks: Vec<Option<TaskId>> = self
-            .tasks
-            .iter()
-            .zip(&robot_gone)
-            .filter(|(_, gone)| !**gone)
-            .map(|(t, _)| t.and_then(|j| task_map[j.index()]).map(TaskId))
-            .collect();
-        tasks.resize(instance.num_robots(), None);
-        Assignment::from_tasks(instance, tasks)
     }
 }
 
@@ -401,88 +279,6 @@ pub fn dataset_to_jsonl(instances: &[Instance]) -> String {
         out.push('\n');
     }
     out
-}
-
-/// Writes `bytes` to `path` atomically and durably: to a new temporary file beside it
-/// (an unpredictable name, opened with `create_new`, so no existing file or symlink is
-/// followed), flushed and synced, renamed over the target, and the directory synced,
-/// so that neither a crash nor a full disk ever leaves a truncated file in its place.
-///
-/// # Errors
-/// [`GameError::Io`] if any step fails; the target is then untouched.
-///
-/// # Examples
-/// ```
-/// let path = std::env::temp_dir().join(format!("afg-doc-atomic-{}", std::process::id()));
-/// afg_game::io::write_atomic(&path, b"one")?;
-/// afg_game::io::write_atomic(&path, b"two")?;
-/// assert_eq!(std::fs::read(&path)?, b"two");
-/// # std::fs::remove_file(&path)?;
-/// # Ok::<(), Box<dyn std::error::Error>>(())
-/// ```
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), GameError> {
-    write_atomic_with(path, |f| f.write_all(bytes))
-}
-
-/// [`write_atomic`] with the contents written by `write` into the temporary file (for
-/// writers that stream, such as a model recorder).
-///
-/// # Errors
-/// As [`write_atomic`], and `write`'s error.
-pub fn write_atomic_with(
-    path: &Path,
-    write: impl FnOnce(&mut fs::File) -> std::io::Result<()>,
-) -> Result<(), GameError> {
-    use std::hash::{BuildHasher, Hasher};
-    let io_err = |source| GameError::Io {
-        path: path.display().to_string(),
-        source,
-    };
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let name = path
-        .file_name()
-        .ok_or_else(|| io_err(std::io::Error::other("not a file path")))?;
-    let (tmp, mut file) = loop {
-        // A fresh random key per try (std's hasher seeds are random per process).
-        let key = std::collections::hash_map::RandomState::new()
-            .build_hasher()
-            .finish();
-        let tmp = dir.join(format!(".{}.{key:016x}.tmp", name.to_string_lossy()));
-        match fs::OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(&tmp)
-        {
-            Ok(f) => break (tmp, f),
-            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
-            Err(e) => return Err(io_err(e)),
-        }
-    };
-    let result = (|| {
-        write(&mut file)?;
-        file.flush()?;
-        file.sync_all()?;
-        drop(file);
-        fs::rename(&tmp, path)?;
-        sync_dir(dir)
-    })();
-    if result.is_err() {
-        let _ = fs::remove_file(&tmp);
-    }
-    result.map_err(io_err)
-}
-
-/// Syncs a directory, so that a rename in it survives a crash (a no-op where
-/// directories cannot be opened, as on Windows).
-pub fn sync_dir(dir: &Path) -> std::io::Result<()> {
-    #[cfg(unix)]
-    fs::File::open(dir)?.sync_all()?;
-    #[cfg(not(unix))]
-    let _ = dir;
-    Ok(())
 }
 
 fn read_to_string(path: &Path) -> Result<String, GameError> {

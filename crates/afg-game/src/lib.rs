@@ -27,10 +27,12 @@
 
 mod assignment;
 mod error;
+pub mod fs;
 mod generate;
 mod ids;
 mod instance;
 pub mod io;
+pub mod realloc;
 mod stability;
 
 pub use assignment::Assignment;

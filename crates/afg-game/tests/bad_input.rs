@@ -1,7 +1,8 @@
 //! Inputs a user can hand the readers: misspelled fields, overflowing numbers, CRLF
 //! line ends and byte order marks, assignments that name tasks no instance has.
 
-use afg_game::io::{self, PreviousAssignment};
+use afg_game::io;
+use afg_game::realloc::PreviousAssignment;
 use afg_game::{GameError, GeneratorConfig, Instance, MAX_VALUE, TaskId};
 
 fn instance() -> Instance {
@@ -109,8 +110,8 @@ fn atomic_writes_replace_whole_files_and_leave_no_temporary_behind() {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("out.json");
-    io::write_atomic(&path, b"first").unwrap();
-    io::write_atomic(&path, b"second").unwrap();
+    afg_game::fs::write_atomic(&path, b"first").unwrap();
+    afg_game::fs::write_atomic(&path, b"second").unwrap();
     assert_eq!(std::fs::read(&path).unwrap(), b"second");
     let names: Vec<_> = std::fs::read_dir(&dir)
         .unwrap()
@@ -118,7 +119,7 @@ fn atomic_writes_replace_whole_files_and_leave_no_temporary_behind() {
         .collect();
     assert_eq!(names, vec![std::ffi::OsString::from("out.json")]);
     // A failed write leaves the old file as it was.
-    let err = io::write_atomic_with(&path, |_| Err(std::io::Error::other("disk full")));
+    let err = afg_game::fs::write_atomic_with(&path, |_| Err(std::io::Error::other("disk full")));
     assert!(err.unwrap_err().to_string().contains("disk full"));
     assert_eq!(std::fs::read(&path).unwrap(), b"second");
     let names: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();

@@ -215,7 +215,7 @@ impl RunDir {
             });
         }
         let json = serde_json::to_string_pretty(config).expect("a configuration serialises");
-        afg_game::io::write_atomic(&config_path, json.as_bytes())?;
+        afg_game::fs::write_atomic(&config_path, json.as_bytes())?;
         Ok((run, lock))
     }
 
@@ -415,7 +415,7 @@ impl RunDir {
             kept.push_str(&line);
             kept.push('\n');
         }
-        afg_game::io::write_atomic(&self.file("log.jsonl"), kept.as_bytes())?;
+        afg_game::fs::write_atomic(&self.file("log.jsonl"), kept.as_bytes())?;
         Ok(elapsed)
     }
 
@@ -458,7 +458,7 @@ impl RunDir {
     /// [`LearnError::Io`] if it cannot be written.
     pub fn write_manifest(&self, manifest: &RunManifest) -> Result<(), LearnError> {
         let json = serde_json::to_string_pretty(manifest).expect("a manifest serialises");
-        afg_game::io::write_atomic(&self.file("manifest.json"), json.as_bytes())?;
+        afg_game::fs::write_atomic(&self.file("manifest.json"), json.as_bytes())?;
         Ok(())
     }
 }

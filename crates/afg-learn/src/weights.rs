@@ -45,7 +45,7 @@ fn with_extension(stem: &Path, ext: &str) -> PathBuf {
 
 /// Writes a Burn record to `path` as named MessagePack in full precision (the format
 /// of Burn's `NamedMpkFileRecorder`), atomically and durably
-/// ([`afg_game::io::write_atomic`]).
+/// ([`afg_game::fs::write_atomic`]).
 ///
 /// # Errors
 /// [`LearnError::Weights`] if the record cannot be encoded or the file written.
@@ -59,7 +59,7 @@ pub(crate) fn write_record<B: Backend, R: Record<B>>(
         (),
     )
     .map_err(|e| weights_error(path, e.to_string()))?;
-    afg_game::io::write_atomic(path, &bytes).map_err(|e| weights_error(path, e.to_string()))
+    afg_game::fs::write_atomic(path, &bytes).map_err(|e| weights_error(path, e.to_string()))
 }
 
 /// Saves `network` (built from `config`) as `stem.mpk` + `stem.json`, each written
@@ -79,7 +79,7 @@ pub fn save_network<B: Backend>(
         network: config.clone(),
     };
     let json = serde_json::to_string_pretty(&header).expect("a header always serialises");
-    afg_game::io::write_atomic(&with_extension(stem, "json"), json.as_bytes())?;
+    afg_game::fs::write_atomic(&with_extension(stem, "json"), json.as_bytes())?;
     Ok(())
 }
 

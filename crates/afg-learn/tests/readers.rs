@@ -9,7 +9,8 @@
 
 use std::path::{Path, PathBuf};
 
-use afg_game::io::{PreviousAssignment, parse_dataset, parse_instances};
+use afg_game::io::{parse_dataset, parse_instances};
+use afg_game::realloc::PreviousAssignment;
 use afg_game::{Assignment, Instance};
 use afg_learn::{nets::load_network, run::RunDir, train::Trainer};
 use proptest::prelude::*;

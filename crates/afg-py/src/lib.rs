@@ -325,7 +325,7 @@ fn read_jsonl(path: PathBuf) -> PyResult<Vec<PyInstance>> {
 #[pyfunction]
 fn write_jsonl(path: PathBuf, instances: Vec<PyRef<'_, PyInstance>>) -> PyResult<()> {
     let insts: Vec<Instance> = instances.iter().map(|i| (*i.inner).clone()).collect();
-    afg_game::io::write_atomic(&path, afg_game::io::dataset_to_jsonl(&insts).as_bytes())
+    afg_game::fs::write_atomic(&path, afg_game::io::dataset_to_jsonl(&insts).as_bytes())
         .map_err(game_error)
 }
 

@@ -7,7 +7,7 @@ use std::time::Instant;
 use afg_baseline::{AllocStats, Allocator, Method};
 use afg_eval::Score;
 use afg_eval::solve::{ModelOptions, Row, load_model as load_dir};
-use afg_game::io::PreviousAssignment;
+use afg_game::realloc::PreviousAssignment;
 use afg_game::{RobotId, TaskId};
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::exceptions::{PyFileNotFoundError, PyValueError};

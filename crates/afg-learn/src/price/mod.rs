@@ -91,7 +91,7 @@ impl PriceModel {
     /// [`LearnError::Weights`] if the file cannot be written.
     pub fn save(&self, path: &Path) -> Result<(), LearnError> {
         let json = serde_json::to_string(self).expect("a price model always serialises");
-        afg_game::io::write_atomic(path, json.as_bytes())?;
+        afg_game::fs::write_atomic(path, json.as_bytes())?;
         Ok(())
     }
 
@@ -165,7 +165,7 @@ impl PriceRunSummary {
     /// [`LearnError::Weights`] if the file cannot be written.
     pub fn save(&self, dir: &Path) -> Result<(), LearnError> {
         let json = serde_json::to_string_pretty(self).expect("a summary always serialises");
-        afg_game::io::write_atomic(&dir.join(Self::FILE_NAME), json.as_bytes())?;
+        afg_game::fs::write_atomic(&dir.join(Self::FILE_NAME), json.as_bytes())?;
         Ok(())
     }
 
@@ -214,7 +214,7 @@ impl PriceTrainer {
             let round = self.round()?;
             log += &serde_json::to_string(&round).expect("a round always serialises");
             log.push('\n');
-            afg_game::io::write_atomic(&dir.join(PriceRunSummary::LOG_FILE_NAME), log.as_bytes())?;
+            afg_game::fs::write_atomic(&dir.join(PriceRunSummary::LOG_FILE_NAME), log.as_bytes())?;
             on_round(&round);
             last = Some(round);
         }

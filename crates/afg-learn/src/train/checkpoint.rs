@@ -94,7 +94,7 @@ impl Trainer {
             running: self.running.iter().map(|e| e.record.clone()).collect(),
         };
         let json = serde_json::to_string(&state).expect("state serialises");
-        afg_game::io::write_atomic(&fresh.join("state.json"), json.as_bytes())?;
+        afg_game::fs::write_atomic(&fresh.join("state.json"), json.as_bytes())?;
         // The previous checkpoint is kept as checkpoint.old until the next save, so
         // that a crash at any moment leaves one complete checkpoint to resume from.
         let current = checkpoint_dir(dir);
@@ -106,7 +106,7 @@ impl Trainer {
             std::fs::rename(&current, &old).map_err(io(&current))?;
         }
         std::fs::rename(&fresh, &current).map_err(io(&fresh))?;
-        afg_game::io::sync_dir(dir).map_err(io(dir))?;
+        afg_game::fs::sync_dir(dir).map_err(io(dir))?;
         Ok(())
     }
 
