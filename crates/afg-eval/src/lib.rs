@@ -24,5 +24,5 @@ pub mod tables;
 
 pub use afg_baseline::percent_of_opt;
 pub use error::EvalError;
-pub use model::{ModelSpec, PriceSpec, Variant};
+pub use model::{Head, ModelSpec, PriceSpec, PriceTraining};
 pub use score::{Score, Summary, evaluate, optima, optimum_welfare};

@@ -4,52 +4,30 @@ use std::path::Path;
 
 use afg_learn::{nets::Net, run::RunDir, train::Algo};
 
-/// What a model adds to the paper's method.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Variant {
-    /// Nothing: the paper's network, trained by `algo` (the paper's algorithm unless it
-    /// is [`Algo::QStar`]; training departures are in its command).
-    Paper,
-    /// Ours: AFGNet with the action's immediate reward added to its Q values.
+/// The output head a model adds to the paper's network.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Head {
+    /// The paper's Q head.
+    #[default]
+    Plain,
+    /// Ours: the action's immediate reward added to the Q values.
     GainResidual,
-    /// The paper's network and algorithm, trained starting from the weights of the same
-    /// kind of model trained at N = `from` (a warm start; not in the paper, named in the
-    /// row).
-    WarmStart {
-        /// The N of the model whose weights the run starts from.
-        from: usize,
-    },
-    /// Ours: AFGNet with a price head (`--price-head`):
-    /// `Q(s, a) = π_a(s) − β d(t, a) + c_a(s)`, Nearest before training.
-    PriceHead,
-    /// Ours: [`Variant::PriceHead`] trained with demonstrations from the exact optimum
-    /// and a large-margin loss (`--demos`, as in Deep Q-learning from Demonstrations).
-    PriceHeadDemos,
-    /// Ours: [`Variant::PriceHead`] whose one-shot scores are also fitted to the exact
-    /// task prices (`--price-loss`, [`afg_learn::train::TrainConfig::price_loss`]).
-    PriceHeadPriceLoss,
-    /// Ours: the paper's network and algorithm with the reward shaped by the optimal
-    /// completion (`--shaping optimal`, [`afg_learn::env::Shaping::Optimal`]): the optimal
-    /// policy is unchanged, but the rewards carry the exact optimum's values.
-    OptimalShaping,
-    /// Ours: [`Variant::OptimalShaping`] trained starting from the weights of the same
-    /// kind of model trained at N = `from`.
-    OptimalShapingWarmStart {
-        /// The N of the model whose weights the run starts from.
-        from: usize,
-    },
+    /// Ours: a price head, `Q(s, a) = π_a(s) − β d(t, a) + c_a(s)`, Nearest before
+    /// training.
+    Price,
 }
 
-/// One trained model: network, algorithm, variant and the N it was trained at.
+/// One trained model, as data: network, algorithm, head, how it was trained, and the N
+/// it was trained at. Directory names and row labels are made from these fields.
 ///
 /// # Examples
 /// ```
-/// use afg_eval::{ModelSpec, Variant};
+/// use afg_eval::{Head, ModelSpec};
 /// use afg_learn::{nets::Net, train::Algo};
-/// let m = ModelSpec::new(Net::AfgNet, Algo::Ddqn, Variant::Paper, 60);
+/// let m = ModelSpec::new(Net::AfgNet, Algo::Ddqn, 60);
 /// assert_eq!(m.dir_name(), "afgnet_ddqn_n60");
 /// assert_eq!(m.label(), "AFGNet_DDQN");
-/// let ours = ModelSpec { variant: Variant::GainResidual, ..m };
+/// let ours = m.with_head(Head::GainResidual);
 /// assert!(ours.is_ours() && ours.label().ends_with("(ours)"));
 /// assert_eq!(ModelSpec::table1(20).len(), 5);
 /// let exact = ModelSpec::TRANSFERRED[1];
@@ -62,7 +40,7 @@ pub enum Variant {
 /// let warm = ModelSpec::WARM_STARTS[2];
 /// assert_eq!(warm.dir_name(), "s2v_ddqn_warm_n60");
 /// assert_eq!(warm.label(), "S2V_DDQN, warm start from the N = 20 model");
-/// assert!(!warm.is_ours());
+/// assert!(!warm.is_ours() && !warm.is_paper_method());
 /// let shaped_warm = ModelSpec::WARM_STARTS[1];
 /// assert_eq!(shaped_warm.dir_name(), "afgnet_ddqn_optshape_warm_n100");
 /// assert_eq!(
@@ -92,8 +70,21 @@ pub struct ModelSpec {
     pub net: Net,
     /// The bootstrap rule (or exact Q* regression).
     pub algo: Algo,
-    /// The variant.
-    pub variant: Variant,
+    /// The output head.
+    pub head: Head,
+    /// Ours: the reward shaped by the optimal completion (`--shaping optimal`,
+    /// [`afg_learn::env::Shaping::Optimal`]): the optimal policy is unchanged, but the
+    /// rewards carry the exact optimum's values.
+    pub optimal_shaping: bool,
+    /// Ours: demonstrations from the exact optimum with a large-margin loss
+    /// (`--demos`, as in Deep Q-learning from Demonstrations).
+    pub demonstrations: bool,
+    /// Ours: the one-shot scores also fitted to the exact task prices (`--price-loss`,
+    /// [`afg_learn::train::TrainConfig::price_loss`]).
+    pub price_loss: bool,
+    /// The N of the same kind of model whose weights the run starts from (a warm
+    /// start; not in the paper, named in the row).
+    pub warm_start_from: Option<usize>,
     /// Robots per training instance.
     pub trained_at: usize,
 }
@@ -102,37 +93,73 @@ impl ModelSpec {
     /// The training scale of the model the paper transfers to other N ("Pretrain_60").
     pub const PRETRAINED_AT: usize = 60;
 
-    /// The learned rows of Table I at one scale, in table order: the paper's three
-    /// models, then ours.
-    pub const TABLE1_KINDS: [(Net, Algo, Variant); 5] = [
-        (Net::S2v, Algo::Ddqn, Variant::Paper),
-        (Net::AfgNet, Algo::Dqn, Variant::Paper),
-        (Net::AfgNet, Algo::Ddqn, Variant::Paper),
-        (Net::AfgNet, Algo::Ddqn, Variant::GainResidual),
-        (Net::AfgNet, Algo::QStar, Variant::Paper),
-    ];
-
-    /// A model.
-    pub const fn new(net: Net, algo: Algo, variant: Variant, trained_at: usize) -> Self {
+    /// The paper's `net` trained by `algo` at `trained_at` robots (the paper's method
+    /// unless `algo` is [`Algo::QStar`]; training departures are in its command).
+    pub const fn new(net: Net, algo: Algo, trained_at: usize) -> Self {
         ModelSpec {
             net,
             algo,
-            variant,
+            head: Head::Plain,
+            optimal_shaping: false,
+            demonstrations: false,
+            price_loss: false,
+            warm_start_from: None,
             trained_at,
         }
     }
 
-    /// The learned rows of Table I trained at `robots`.
-    pub fn table1(robots: usize) -> Vec<ModelSpec> {
-        Self::TABLE1_KINDS
-            .iter()
-            .map(|&(net, algo, variant)| Self::new(net, algo, variant, robots))
-            .collect()
+    /// The same with another output head.
+    pub const fn with_head(self, head: Head) -> Self {
+        ModelSpec { head, ..self }
+    }
+
+    /// The same with the reward shaped by the optimal completion.
+    pub const fn with_optimal_shaping(self) -> Self {
+        ModelSpec {
+            optimal_shaping: true,
+            ..self
+        }
+    }
+
+    /// The same trained with demonstrations.
+    pub const fn with_demonstrations(self) -> Self {
+        ModelSpec {
+            demonstrations: true,
+            ..self
+        }
+    }
+
+    /// The same with the price loss.
+    pub const fn with_price_loss(self) -> Self {
+        ModelSpec {
+            price_loss: true,
+            ..self
+        }
+    }
+
+    /// The same started from the weights of the model trained at N = `from`.
+    pub const fn warm_started_from(self, from: usize) -> Self {
+        ModelSpec {
+            warm_start_from: Some(from),
+            ..self
+        }
+    }
+
+    /// The learned rows of Table I trained at `robots`, in table order: the paper's
+    /// three models, then ours.
+    pub const fn table1(robots: usize) -> [ModelSpec; 5] {
+        [
+            Self::new(Net::S2v, Algo::Ddqn, robots),
+            Self::new(Net::AfgNet, Algo::Dqn, robots),
+            Self::afgnet_ddqn(robots),
+            Self::afgnet_ddqn(robots).with_head(Head::GainResidual),
+            Self::new(Net::AfgNet, Algo::QStar, robots),
+        ]
     }
 
     /// The paper's AFGNet DDQN trained at `robots` (its headline model).
     pub const fn afgnet_ddqn(robots: usize) -> Self {
-        Self::new(Net::AfgNet, Algo::Ddqn, Variant::Paper, robots)
+        Self::new(Net::AfgNet, Algo::Ddqn, robots)
     }
 
     /// The models trained at [`ModelSpec::PRETRAINED_AT`] that the tables also run at
@@ -140,84 +167,50 @@ impl ModelSpec {
     /// and AFGNet DDQN with the optimal completion as shaping potential (ours).
     pub const TRANSFERRED: [ModelSpec; 3] = [
         Self::afgnet_ddqn(Self::PRETRAINED_AT),
-        Self::new(
-            Net::AfgNet,
-            Algo::QStar,
-            Variant::Paper,
-            Self::PRETRAINED_AT,
-        ),
-        Self::new(
-            Net::AfgNet,
-            Algo::Ddqn,
-            Variant::OptimalShaping,
-            Self::PRETRAINED_AT,
-        ),
+        Self::new(Net::AfgNet, Algo::QStar, Self::PRETRAINED_AT),
+        Self::afgnet_ddqn(Self::PRETRAINED_AT).with_optimal_shaping(),
     ];
 
     /// The warm starts the tables show beside the paper's rows: AFGNet DDQN at N = 100
     /// from the N = 60 model (the paper's, and ours with optimal-completion shaping),
     /// S2V DDQN at N = 60 and 100 from the N = 20 model.
     pub const WARM_STARTS: [ModelSpec; 4] = [
-        Self::new(
-            Net::AfgNet,
-            Algo::Ddqn,
-            Variant::WarmStart { from: 60 },
-            100,
-        ),
-        Self::new(
-            Net::AfgNet,
-            Algo::Ddqn,
-            Variant::OptimalShapingWarmStart { from: 60 },
-            100,
-        ),
-        Self::new(Net::S2v, Algo::Ddqn, Variant::WarmStart { from: 20 }, 60),
-        Self::new(Net::S2v, Algo::Ddqn, Variant::WarmStart { from: 20 }, 100),
+        Self::afgnet_ddqn(100).warm_started_from(60),
+        Self::afgnet_ddqn(100)
+            .with_optimal_shaping()
+            .warm_started_from(60),
+        Self::new(Net::S2v, Algo::Ddqn, 60).warm_started_from(20),
+        Self::new(Net::S2v, Algo::Ddqn, 100).warm_started_from(20),
     ];
 
     /// AFGNet with a price head, trained at [`ModelSpec::PRETRAINED_AT`] and run at
     /// every N (ours): on the exact Q*, on the exact Q* and the exact prices, by Double
     /// DQN, and by Double DQN with demonstrations.
-    pub const PRICE_HEADED: [ModelSpec; 4] = [
-        Self::new(
-            Net::AfgNet,
-            Algo::QStar,
-            Variant::PriceHead,
-            Self::PRETRAINED_AT,
-        ),
-        Self::new(
-            Net::AfgNet,
-            Algo::QStar,
-            Variant::PriceHeadPriceLoss,
-            Self::PRETRAINED_AT,
-        ),
-        Self::new(
-            Net::AfgNet,
-            Algo::Ddqn,
-            Variant::PriceHead,
-            Self::PRETRAINED_AT,
-        ),
-        Self::new(
-            Net::AfgNet,
-            Algo::Ddqn,
-            Variant::PriceHeadDemos,
-            Self::PRETRAINED_AT,
-        ),
-    ];
+    pub const PRICE_HEADED: [ModelSpec; 4] = {
+        let exact = Self::new(Net::AfgNet, Algo::QStar, Self::PRETRAINED_AT).with_head(Head::Price);
+        let td = Self::afgnet_ddqn(Self::PRETRAINED_AT).with_head(Head::Price);
+        [exact, exact.with_price_loss(), td, td.with_demonstrations()]
+    };
 
     /// The run directory's name under `models/`, e.g. `afgnet_ddqn_n60`.
     pub fn dir_name(&self) -> String {
-        let net = self.net.name();
-        let variant = match self.variant {
-            Variant::Paper => "",
-            Variant::GainResidual => "_gain",
-            Variant::WarmStart { .. } => "_warm",
-            Variant::PriceHead => "_price",
-            Variant::PriceHeadDemos => "_price_demos",
-            Variant::PriceHeadPriceLoss => "_price_oneshot",
-            Variant::OptimalShaping => "_optshape",
-            Variant::OptimalShapingWarmStart { .. } => "_optshape_warm",
+        let mut name = format!("{}_{}", self.net.name(), self.algo.name());
+        name += match self.head {
+            Head::Plain => "",
+            Head::GainResidual => "_gain",
+            Head::Price => "_price",
         };
-        format!("{net}_{}{variant}_n{}", self.algo.name(), self.trained_at)
+        for (on, part) in [
+            (self.price_loss, "_oneshot"),
+            (self.demonstrations, "_demos"),
+            (self.optimal_shaping, "_optshape"),
+            (self.warm_start_from.is_some(), "_warm"),
+        ] {
+            if on {
+                name += part;
+            }
+        }
+        format!("{name}_n{}", self.trained_at)
     }
 
     /// The run directory under the repository `root`.
@@ -233,36 +226,35 @@ impl ModelSpec {
     /// The row label with `detail` (how the model is run, e.g. ", one-shot") after the
     /// model's name and before "(ours)".
     pub fn label_with(&self, detail: &str) -> String {
-        let net = match self.net {
+        let mut name = String::from(match self.net {
             Net::AfgNet => "AFGNet",
             Net::S2v => "S2V",
+        });
+        match self.algo {
+            Algo::Dqn => name += "_DQN",
+            Algo::Ddqn => name += "_DDQN",
+            Algo::QStar => {}
+        }
+        name += match self.head {
+            Head::Plain => "",
+            Head::GainResidual => " + gain residual",
+            Head::Price => " + price head",
         };
-        let algo = match self.algo {
-            Algo::Dqn => "DQN",
-            Algo::Ddqn => "DDQN",
-            Algo::QStar => "",
-        };
-        let name = match (self.algo, self.variant) {
-            (Algo::QStar, Variant::PriceHead) => format!("{net} + price head, exact Q* regression"),
-            (Algo::QStar, Variant::PriceHeadPriceLoss) => {
-                format!("{net} + price head, exact Q* and price regression")
-            }
-            (Algo::QStar, _) => format!("{net}, exact Q* regression"),
-            (_, Variant::PriceHead) => format!("{net}_{algo} + price head"),
-            (_, Variant::PriceHeadDemos) => format!("{net}_{algo} + price head + demonstrations"),
-            (_, Variant::PriceHeadPriceLoss) => {
-                format!("{net}_{algo} + price head + price regression")
-            }
-            (_, Variant::Paper) => format!("{net}_{algo}"),
-            (_, Variant::GainResidual) => format!("{net}_{algo} + gain residual"),
-            (_, Variant::OptimalShaping) => format!("{net}_{algo}, optimal-completion shaping"),
-            (_, Variant::WarmStart { from }) => {
-                format!("{net}_{algo}, warm start from the N = {from} model")
-            }
-            (_, Variant::OptimalShapingWarmStart { from }) => format!(
-                "{net}_{algo}, optimal-completion shaping, warm start from the N = {from} model"
-            ),
-        };
+        if self.demonstrations {
+            name += " + demonstrations";
+        }
+        match (self.algo, self.price_loss) {
+            (Algo::QStar, false) => name += ", exact Q* regression",
+            (Algo::QStar, true) => name += ", exact Q* and price regression",
+            (_, true) => name += " + price regression",
+            (_, false) => {}
+        }
+        if self.optimal_shaping {
+            name += ", optimal-completion shaping";
+        }
+        if let Some(from) = self.warm_start_from {
+            name += &format!(", warm start from the N = {from} model");
+        }
         let ours = if self.is_ours() { " (ours)" } else { "" };
         format!("{name}{detail}{ours}")
     }
@@ -270,15 +262,51 @@ impl ModelSpec {
     /// Whether the model is ours (not the paper's network and algorithm); the tables
     /// treat ours as optional. A warm start keeps the paper's network and algorithm.
     pub fn is_ours(&self) -> bool {
-        matches!(
-            self.variant,
-            Variant::GainResidual
-                | Variant::PriceHead
-                | Variant::PriceHeadDemos
-                | Variant::PriceHeadPriceLoss
-                | Variant::OptimalShaping
-                | Variant::OptimalShapingWarmStart { .. }
-        ) || self.algo == Algo::QStar
+        self.head != Head::Plain
+            || self.optimal_shaping
+            || self.demonstrations
+            || self.price_loss
+            || self.algo == Algo::QStar
+    }
+
+    /// Whether the model is one the paper reports: its network and algorithm, trained
+    /// from scratch.
+    pub fn is_paper_method(&self) -> bool {
+        !self.is_ours() && self.warm_start_from.is_none()
+    }
+}
+
+/// How a price model was trained: the steps of its ablation (ours).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PriceTraining {
+    /// Q* regression on the expert's states only (no DAgger, no one-shot loss).
+    ExpertStates,
+    /// Q* regression with DAgger, no one-shot loss.
+    Dagger,
+    /// Q* regression with DAgger and the one-shot price loss: the committed model.
+    #[default]
+    DaggerPriceLoss,
+}
+
+impl PriceTraining {
+    /// Every training, in the ablation's order.
+    pub const ALL: [PriceTraining; 3] = [
+        PriceTraining::ExpertStates,
+        PriceTraining::Dagger,
+        PriceTraining::DaggerPriceLoss,
+    ];
+
+    /// What it is, as the ablation table says.
+    pub fn describe(self) -> &'static str {
+        match self {
+            PriceTraining::ExpertStates => {
+                "Q* regression on the expert's states only (no DAgger, no one-shot loss)"
+            }
+            PriceTraining::Dagger => "Q* regression with DAgger, no one-shot loss",
+            PriceTraining::DaggerPriceLoss => {
+                "Q* regression with DAgger + one-shot price loss (the committed model)"
+            }
+        }
     }
 }
 
@@ -288,10 +316,13 @@ impl ModelSpec {
 ///
 /// # Examples
 /// ```
-/// use afg_eval::PriceSpec;
+/// use std::path::Path;
+/// use afg_eval::{PriceSpec, PriceTraining};
 /// use afg_learn::price::PriceMode;
 /// let s = PriceSpec::new(60, PriceMode::OneShot);
-/// assert_eq!(s.dir_name(), "price_n60");
+/// assert_eq!(s.dir(Path::new("/repo")), Path::new("/repo/models/price_n60"));
+/// let ablation = s.with_training(PriceTraining::Dagger);
+/// assert_eq!(ablation.dir(Path::new("r")), Path::new("r/models/ablations/price_n60_qstar"));
 /// assert_eq!(s.label(), "Price model, one-shot, trained at N = 60 (ours)");
 /// let b = PriceSpec::new(60, PriceMode::Sequential).with_block(10);
 /// assert_eq!(b.label(), "Price model, sequential, prices every 10 robots, trained at N = 60 (ours)");
@@ -304,6 +335,8 @@ pub struct PriceSpec {
     pub mode: afg_learn::price::PriceMode,
     /// Robots per price evaluation in the sequential mode (1: every step).
     pub block: usize,
+    /// How it was trained.
+    pub training: PriceTraining,
 }
 
 impl PriceSpec {
@@ -316,7 +349,13 @@ impl PriceSpec {
             trained_at,
             mode,
             block: 1,
+            training: PriceTraining::DaggerPriceLoss,
         }
+    }
+
+    /// The same trained otherwise (one of the ablation's models).
+    pub const fn with_training(self, training: PriceTraining) -> Self {
+        PriceSpec { training, ..self }
     }
 
     /// The same in the sequential mode with prices once per `block` robots.
@@ -332,16 +371,20 @@ impl PriceSpec {
         ]
     }
 
-    /// The run directory's name under `models/` (every mode shares one model).
-    pub fn dir_name(&self) -> String {
-        format!("price_n{}", self.trained_at)
+    /// The run directory under the repository `root` (every mode shares one model).
+    pub fn dir(&self, root: &Path) -> std::path::PathBuf {
+        let n = self.trained_at;
+        let models = root.join("models");
+        match self.training {
+            PriceTraining::DaggerPriceLoss => models.join(format!("price_n{n}")),
+            PriceTraining::Dagger => models.join(format!("ablations/price_n{n}_qstar")),
+            PriceTraining::ExpertStates => models.join(format!("ablations/price_n{n}_expert")),
+        }
     }
 
     /// The model file under the repository `root`.
     pub fn model_path(&self, root: &Path) -> std::path::PathBuf {
-        root.join("models")
-            .join(self.dir_name())
-            .join(afg_learn::price::PriceModel::FILE_NAME)
+        self.dir(root).join(afg_learn::price::PriceModel::FILE_NAME)
     }
 
     /// The row label; ends in "(ours)".

@@ -2,7 +2,7 @@
 
 use afg_learn::{nets::Net, train::Algo};
 
-use crate::{ModelSpec, Variant};
+use crate::ModelSpec;
 
 /// One scale of the paper's Table I.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -20,7 +20,8 @@ pub struct Table1Row {
 }
 
 impl Table1Row {
-    /// The paper's welfare for `model`, if it reports one (not for ours).
+    /// The paper's welfare for `model`, if it reports one (not for ours, nor for a warm
+    /// start).
     ///
     /// # Examples
     /// ```
@@ -29,10 +30,13 @@ impl Table1Row {
     /// assert_eq!(row.welfare_of(&ModelSpec::afgnet_ddqn(60)), Some(59.51));
     /// ```
     pub fn welfare_of(&self, model: &ModelSpec) -> Option<f64> {
-        match (model.net, model.algo, model.variant) {
-            (Net::S2v, Algo::Ddqn, Variant::Paper) => Some(self.s2v_ddqn),
-            (Net::AfgNet, Algo::Dqn, Variant::Paper) => Some(self.afgnet_dqn),
-            (Net::AfgNet, Algo::Ddqn, Variant::Paper) => Some(self.afgnet_ddqn),
+        if !model.is_paper_method() {
+            return None;
+        }
+        match (model.net, model.algo) {
+            (Net::S2v, Algo::Ddqn) => Some(self.s2v_ddqn),
+            (Net::AfgNet, Algo::Dqn) => Some(self.afgnet_dqn),
+            (Net::AfgNet, Algo::Ddqn) => Some(self.afgnet_ddqn),
             _ => None,
         }
     }

@@ -6,36 +6,10 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use afg_baseline::{Allocator, Method};
-use afg_learn::price::{PriceMode, PriceModel, PricePolicy, PriceRunSummary};
+use afg_learn::price::{PriceMode, PriceRunSummary};
 use serde::Serialize;
 
-use crate::{EvalError, dataset, evaluate};
-
-/// One ablation of the price model: what it was trained with, and where it lives.
-struct Ablation {
-    label: &'static str,
-    /// Directory under the repository root; `None` for the untrained model (Nearest).
-    dir: Option<&'static str>,
-}
-
-const ABLATIONS: [Ablation; 4] = [
-    Ablation {
-        label: "untrained (all prices 0: Nearest) — the structure alone",
-        dir: None,
-    },
-    Ablation {
-        label: "Q* regression on the expert's states only (no DAgger, no one-shot loss)",
-        dir: Some("models/ablations/price_n60_expert"),
-    },
-    Ablation {
-        label: "Q* regression with DAgger, no one-shot loss",
-        dir: Some("models/ablations/price_n60_qstar"),
-    },
-    Ablation {
-        label: "Q* regression with DAgger + one-shot price loss (the committed model)",
-        dir: Some("models/price_n60"),
-    },
-];
+use crate::{EvalError, PriceSpec, PriceTraining, dataset, evaluate};
 
 /// The scales of the ablation table.
 pub const SIZES: [usize; 4] = [20, 60, 100, 1000];
@@ -64,26 +38,34 @@ pub fn price_ablation(root: &Path, instances: usize) -> Result<Vec<PriceAblation
         sets.push((n, insts, opt));
     }
     let mut rows = Vec::new();
-    for a in &ABLATIONS {
-        let (policies, command): (Vec<Box<dyn Allocator>>, _) = match a.dir {
-            None => (vec![Method::Nearest.allocator(0)], None),
-            Some(dir) => {
-                let path = root.join(dir).join(PriceModel::FILE_NAME);
-                if !path.exists() {
+    // The untrained structure (all prices 0: Nearest), then each training.
+    let trainings = std::iter::once(None).chain(PriceTraining::ALL.map(Some));
+    for training in trainings {
+        let (label, policies, command): (_, Vec<Box<dyn Allocator>>, _) = match training {
+            None => (
+                "untrained (all prices 0: Nearest) — the structure alone",
+                vec![Method::Nearest.allocator(0)],
+                None,
+            ),
+            Some(training) => {
+                let spec =
+                    |mode| PriceSpec::new(PriceSpec::TRAINED_AT, mode).with_training(training);
+                let [sequential, one_shot] = [PriceMode::Sequential, PriceMode::OneShot].map(spec);
+                if !sequential.model_path(root).exists() {
                     continue;
                 }
-                let summary = PriceRunSummary::load(&root.join(dir))?;
-                let mut policies: Vec<Box<dyn Allocator>> = Vec::new();
-                for mode in [PriceMode::Sequential, PriceMode::OneShot] {
-                    policies.push(Box::new(PricePolicy::load(&path, mode)?));
-                }
-                (policies, Some(summary.command))
+                let summary = PriceRunSummary::load(&sequential.dir(root))?;
+                let policies: Vec<Box<dyn Allocator>> = vec![
+                    Box::new(sequential.load(root)?),
+                    Box::new(one_shot.load(root)?),
+                ];
+                (training.describe(), policies, Some(summary.command))
             }
         };
         let mut percent_of_opt = Vec::new();
         for (n, insts, opt) in &sets {
             let score = |p: &dyn Allocator| -> Result<f64, EvalError> {
-                Ok(evaluate(a.label, p, insts, opt)?.percent_of_opt)
+                Ok(evaluate(label, p, insts, opt)?.percent_of_opt)
             };
             let sequential = score(policies[0].as_ref())?;
             let one_shot = match policies.get(1) {
@@ -93,7 +75,7 @@ pub fn price_ablation(root: &Path, instances: usize) -> Result<Vec<PriceAblation
             percent_of_opt.push((*n, sequential, one_shot));
         }
         rows.push(PriceAblationRow {
-            method: a.label.to_owned(),
+            method: label.to_owned(),
             command,
             percent_of_opt,
         });

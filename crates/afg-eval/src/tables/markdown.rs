@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use afg_baseline::Method;
 
-use super::Scale;
+use super::{RowId, Run, Scale};
 use crate::{EvalError, ModelSpec, Summary, dataset, paper};
 
 /// A duration with three significant digits and a unit: `12.3 µs`, `4.56 ms`, `7.89 s`.
@@ -69,12 +69,17 @@ pub fn table1_markdown(scales: &[Scale]) -> String {
         let _ = writeln!(s, "| method | {MEASURED_HEADER} | paper welfare |");
         let _ = writeln!(s, "|---|---|---|---|---|---|---|");
         for row in &scale.rows {
-            let reported = match row.model.and_then(|m| paper.welfare_of(&m).map(|w| (m, w))) {
-                Some((m, w)) if m == ModelSpec::afgnet_ddqn(n) => {
-                    format!("{w} (NS {} %)", paper.afgnet_ddqn_ns_rate)
+            let reported = match row.id {
+                RowId::Model { spec, .. } if row.id.is_paper_row() => {
+                    match paper.welfare_of(&spec) {
+                        Some(w) if spec == ModelSpec::afgnet_ddqn(n) => {
+                            format!("{w} (NS {} %)", paper.afgnet_ddqn_ns_rate)
+                        }
+                        Some(w) => format!("{w}"),
+                        None => "–".into(),
+                    }
                 }
-                Some((_, w)) => format!("{w}"),
-                None => "–".into(),
+                _ => "–".into(),
             };
             let r = &row.summary;
             let _ = writeln!(s, "| {} | {} | {reported} |", r.method, measured_cells(r));
@@ -133,22 +138,18 @@ pub fn headline(table1: &[Scale]) -> String {
     let mut s = String::from("**Headline.** ");
     for scale in table1 {
         let n = scale.robots;
-        let get = |m: Method| {
-            scale
-                .rows
-                .iter()
-                .find(|r| r.model.is_none() && r.summary.method == m.label())
-                .map(|r| r.summary.percent_of_opt)
-        };
+        let find = |id: RowId| scale.rows.iter().find(|r| r.id == id);
+        let get = |m: Method| find(RowId::Method(m)).map(|r| r.summary.percent_of_opt);
         let (Some(da), Some(greedy), Some(nearest)) =
             (get(Method::Da), get(Method::Greedy), get(Method::Nearest))
         else {
             continue;
         };
-        let drl = scale
-            .rows
-            .iter()
-            .find(|r| r.model == Some(ModelSpec::afgnet_ddqn(n)));
+        let drl = find(RowId::Model {
+            spec: ModelSpec::afgnet_ddqn(n),
+            robots: n,
+            run: Run::AS_TRAINED,
+        });
         let _ = match drl {
             Some(drl) => write!(
                 s,
@@ -178,11 +179,8 @@ pub fn models_table(root: &Path) -> Result<String, EvalError> {
          | model | N | steps | learning rate | wall time | final validation, % of OPT | command |\n\
          |---|---|---|---|---|---|---|\n",
     );
-    let specs = ModelSpec::TABLE1_KINDS
-        .into_iter()
-        .flat_map(|(net, algo, variant)| {
-            dataset::TABLE1_SIZES.map(|n| ModelSpec::new(net, algo, variant, n))
-        })
+    let specs = (0..ModelSpec::table1(0).len())
+        .flat_map(|kind| dataset::TABLE1_SIZES.map(|n| ModelSpec::table1(n)[kind]))
         .chain(
             ModelSpec::TRANSFERRED
                 .into_iter()
@@ -228,16 +226,17 @@ mod tests {
     use super::*;
     use crate::tables::Row;
 
-    fn summary(method: &str, pct: f64) -> Summary {
-        Summary {
-            method: method.to_owned(),
+    fn row(id: RowId, pct: f64) -> Row {
+        let summary = Summary {
+            method: id.label(),
             instances: 3,
             welfare: pct / 2.0,
             percent_of_opt: pct,
             ns_rate_balanced: 50.0,
             ns_rate_selfish: 25.0,
             seconds_per_instance: 2e-6,
-        }
+        };
+        Row { id, summary }
     }
 
     fn scale_60() -> Scale {
@@ -245,10 +244,17 @@ mod tests {
         Scale {
             robots: 60,
             rows: vec![
-                Row::of_model(ddqn, summary(&ddqn.label(), 98.0)),
-                Row::new(summary(Method::Da.label(), 98.9)),
-                Row::new(summary(Method::Greedy.label(), 98.5)),
-                Row::new(summary(Method::Nearest.label(), 98.6)),
+                row(
+                    RowId::Model {
+                        spec: ddqn,
+                        robots: 60,
+                        run: Run::AS_TRAINED,
+                    },
+                    98.0,
+                ),
+                row(RowId::Method(Method::Da), 98.9),
+                row(RowId::Method(Method::Greedy), 98.5),
+                row(RowId::Method(Method::Nearest), 98.6),
             ],
         }
     }
@@ -271,9 +277,14 @@ mod tests {
         );
         let da_line = md.lines().find(|l| l.starts_with("| GRAPE DA |")).unwrap();
         assert!(da_line.ends_with("| – |"), "{da_line}");
-        // A row labelled like the paper's model but not marked as one gets no number.
+        // A row labelled like the paper's model but that is not it (a warm start) gets
+        // no number: rows are told apart by what they measure, not by their labels.
         let mut impostor = scale_60();
-        impostor.rows[0].model = None;
+        impostor.rows[0].id = RowId::Model {
+            spec: ModelSpec::afgnet_ddqn(60).warm_started_from(20),
+            robots: 60,
+            run: Run::AS_TRAINED,
+        };
         let md = table1_markdown(&[impostor]);
         let line = md
             .lines()
@@ -297,7 +308,7 @@ mod tests {
     fn table2_names_the_instances_of_each_row() {
         let scale = Scale {
             robots: 500,
-            rows: vec![Row::new(summary(Method::Opt.label(), 100.0))],
+            rows: vec![row(RowId::Method(Method::Opt), 100.0)],
         };
         let md = table2_markdown(&[scale]);
         assert!(

@@ -9,46 +9,15 @@ mod rows;
 use std::fmt::Write as _;
 use std::path::Path;
 
-use afg_learn::policy::LearnedPolicy;
 use serde::Serialize;
 
 pub use document::{BEGIN, END, RunInfo, assignment_map_svg, block, results_document, with_block};
 pub use markdown::{duration, headline, models_table, table1_markdown, table2_markdown};
-pub use rows::{classical_rows, price_headed_rows, price_model_rows};
+use rows::committed_model_row;
+pub use rows::{Row, RowId, Run, classical_rows, price_headed_rows, price_model_rows};
 
 use crate::price_ablation::{PriceAblationRow, price_ablation, price_ablation_markdown};
-use crate::{EvalError, ModelSpec, Summary, Variant, dataset, evaluate};
-
-/// One row of a table: a measured method, and the learned model it measures when it
-/// is one of Table I's models at its own scale (then the paper's number stands beside
-/// it).
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Row {
-    /// The measurement.
-    #[serde(flatten)]
-    pub summary: Summary,
-    /// The model, for a Table I model at the scale it was trained at.
-    #[serde(skip)]
-    pub model: Option<ModelSpec>,
-}
-
-impl Row {
-    /// A row that is not one of Table I's models at its own scale.
-    pub fn new(summary: Summary) -> Self {
-        Row {
-            summary,
-            model: None,
-        }
-    }
-
-    /// The row of `model` at the scale it was trained at.
-    pub fn of_model(model: ModelSpec, summary: Summary) -> Self {
-        Row {
-            summary,
-            model: Some(model),
-        }
-    }
-}
+use crate::{EvalError, Head, ModelSpec, dataset};
 
 /// The rows of one N.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -118,51 +87,33 @@ fn table1_scale(
 ) -> Result<Scale, EvalError> {
     let (insts, opt) = dataset::first_with_optima(root, n, instances)?;
     let mut rows = Vec::new();
+    // Our variants are optional; the paper's three models are expected.
     for spec in ModelSpec::table1(n) {
-        let run = spec.run_dir(root);
-        if !run.has_weights() {
-            // Our variants are optional; the paper's three models are expected.
-            if !spec.is_ours() {
-                missing.push(format!("models/{}", spec.dir_name()));
-            }
-            continue;
+        if !spec.run_dir(root).has_weights() && !spec.is_ours() {
+            missing.push(format!("models/{}", spec.dir_name()));
         }
-        let policy = LearnedPolicy::load(&run.weights())?;
-        rows.push(Row::of_model(
-            spec,
-            evaluate(&spec.label(), &policy, &insts, &opt)?,
-        ));
     }
-    // The N = 60 models at the other scales (the paper's "Pretrain_60" at N = 20, 100),
-    // and at N = 60 those that are not one of Table I's kinds.
-    for pretrained in ModelSpec::TRANSFERRED {
-        let run = pretrained.run_dir(root);
-        let own_scale = n == ModelSpec::PRETRAINED_AT;
-        if !run.has_weights() || (own_scale && ModelSpec::table1(n).contains(&pretrained)) {
-            continue;
-        }
-        let policy = LearnedPolicy::load(&run.weights())?;
-        let label = if own_scale {
-            pretrained.label()
-        } else {
-            format!(
-                "{} trained at N = {}",
-                pretrained.label(),
-                ModelSpec::PRETRAINED_AT
-            )
-        };
-        rows.push(Row::new(evaluate(&label, &policy, &insts, &opt)?));
-    }
-    // Models trained further at this N from a smaller one (warm starts).
-    for warm in ModelSpec::WARM_STARTS
+    // Table I's models, the N = 60 models at the other scales (the paper's
+    // "Pretrain_60" at N = 20, 100) and at N = 60 those that are not one of Table I's
+    // kinds, then the models trained further at this N from a smaller one.
+    let transferred = ModelSpec::TRANSFERRED
         .into_iter()
-        .filter(|w| w.trained_at == n)
+        .filter(|t| !ModelSpec::table1(n).contains(t));
+    let warm = ModelSpec::WARM_STARTS
+        .into_iter()
+        .filter(|w| w.trained_at == n);
+    for spec in ModelSpec::table1(n)
+        .into_iter()
+        .chain(transferred)
+        .chain(warm)
     {
-        let run = warm.run_dir(root);
-        if run.has_weights() {
-            let policy = LearnedPolicy::load(&run.weights())?;
-            rows.push(Row::new(evaluate(&warm.label(), &policy, &insts, &opt)?));
-        }
+        rows.extend(committed_model_row(
+            root,
+            spec,
+            Run::AS_TRAINED,
+            &insts,
+            &opt,
+        )?);
     }
     rows.extend(price_headed_rows(root, &insts, &opt)?);
     rows.extend(price_model_rows(root, &insts, &opt)?);
@@ -186,33 +137,22 @@ fn table2_scale(
     rows.extend(price_model_rows(root, &insts, &opt)?);
     // The paper's model and ours with the gain residual at every training N, then
     // ours trained at N = 60 only.
-    let specs = [Variant::Paper, Variant::GainResidual]
+    let specs = [Head::Plain, Head::GainResidual]
         .into_iter()
-        .flat_map(|variant| {
-            dataset::TABLE1_SIZES.map(|trained| ModelSpec {
-                variant,
-                ..ModelSpec::afgnet_ddqn(trained)
-            })
-        })
+        .flat_map(|head| dataset::TABLE1_SIZES.map(|t| ModelSpec::afgnet_ddqn(t).with_head(head)))
         .chain(ModelSpec::TRANSFERRED.into_iter().filter(|s| s.is_ours()));
     for spec in specs {
-        let run = spec.run_dir(root);
-        if !run.has_weights() {
-            continue;
-        }
-        let policy = LearnedPolicy::load(&run.weights())?;
-        let label = format!("{} trained at N = {}", spec.label(), spec.trained_at);
-        rows.push(Row::new(evaluate(
-            &label,
-            &policy,
-            &insts[..few],
-            &opt[..few],
-        )?));
-        if spec == ModelSpec::afgnet_ddqn(spec.trained_at) {
+        let exact = committed_model_row(root, spec, Run::AS_TRAINED, &insts[..few], &opt[..few])?;
+        if exact.is_some() && spec == ModelSpec::afgnet_ddqn(spec.trained_at) {
             // The fast variant: one pass per N/100 robots, then balanced repair.
-            let policy = policy.with_block(n / 100)?.with_repair(true);
-            let label = format!("{label}, block {}, + repair", policy.block());
-            rows.push(Row::new(evaluate(&label, &policy, &insts, &opt)?));
+            let fast = Run {
+                block: n / 100,
+                repair: true,
+            };
+            rows.extend(exact);
+            rows.extend(committed_model_row(root, spec, fast, &insts, &opt)?);
+        } else {
+            rows.extend(exact);
         }
     }
     Ok(Scale { robots: n, rows })
@@ -266,11 +206,13 @@ mod tests {
         let b = compute(root, true, || {}).unwrap();
         assert_eq!(without_timings(&a), without_timings(&b));
         for scale in a.table1.iter().chain(&a.table2) {
-            let rows: Vec<_> = scale.rows.iter().map(|r| &r.summary).collect();
-            let opt = rows
+            let opt = &scale
+                .rows
                 .iter()
-                .find(|r| r.method == Method::Opt.label())
-                .unwrap();
+                .find(|r| r.id == RowId::Method(Method::Opt))
+                .unwrap()
+                .summary;
+            let rows: Vec<_> = scale.rows.iter().map(|r| &r.summary).collect();
             assert!((opt.percent_of_opt - 100.0).abs() < 1e-9);
             for r in &rows {
                 assert!(

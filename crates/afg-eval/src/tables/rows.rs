@@ -3,12 +3,145 @@
 
 use std::path::Path;
 
-use afg_baseline::Method;
+use afg_baseline::{Allocator, Method};
 use afg_game::Instance;
 use afg_learn::{policy::LearnedPolicy, train::Algo};
+use serde::Serialize;
 
-use super::Row;
-use crate::{EvalError, ModelSpec, PriceSpec, evaluate};
+use crate::{EvalError, ModelSpec, PriceSpec, Summary, evaluate};
+
+/// How a learned Q-network is run: one network pass per `block` robots, with or
+/// without balanced repair afterwards.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Run {
+    /// Robots placed per network pass (1: an exact rollout; N: one pass for all).
+    pub block: usize,
+    /// Balanced repair after the network.
+    pub repair: bool,
+}
+
+impl Run {
+    /// As trained: one robot per pass, no repair.
+    pub const AS_TRAINED: Run = Run {
+        block: 1,
+        repair: false,
+    };
+}
+
+/// What a row measures; its label is made from this alone ([`RowId::label`]).
+///
+/// # Examples
+/// ```
+/// use afg_baseline::Method;
+/// use afg_eval::{ModelSpec, tables::{RowId, Run}};
+/// assert_eq!(RowId::Method(Method::Opt).label(), "OPT");
+/// let ddqn = ModelSpec::afgnet_ddqn(60);
+/// let own = RowId::Model { spec: ddqn, robots: 60, run: Run::AS_TRAINED };
+/// assert_eq!(own.label(), "AFGNet_DDQN");
+/// assert!(own.is_paper_row());
+/// let fast = RowId::Model { spec: ddqn, robots: 500, run: Run { block: 5, repair: true } };
+/// assert_eq!(fast.label(), "AFGNet_DDQN, network every 5 robots, + repair, trained at N = 60");
+/// let one_shot = RowId::Model { spec: ModelSpec::TRANSFERRED[1], robots: 20, run: Run { block: 20, repair: false } };
+/// assert_eq!(one_shot.label(), "AFGNet, exact Q* regression, one-shot (one pass), trained at N = 60 (ours)");
+/// assert!(!fast.is_paper_row() && !one_shot.is_paper_row());
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RowId {
+    /// A classical method.
+    Method(Method),
+    /// A learned Q-network evaluated at `robots` robots, run as `run` says.
+    Model {
+        /// The model.
+        spec: ModelSpec,
+        /// Robots per evaluated instance.
+        robots: usize,
+        /// How it is run.
+        run: Run,
+    },
+    /// The price model (ours).
+    PriceModel(PriceSpec),
+}
+
+impl RowId {
+    /// The row's label, e.g. `AFGNet_DDQN, network every 5 robots, + repair, trained at N = 60`.
+    pub fn label(&self) -> String {
+        match self {
+            RowId::Method(m) => m.label().to_owned(),
+            RowId::PriceModel(p) => p.label(),
+            RowId::Model { spec, robots, run } => {
+                let mut detail = match run.block {
+                    1 => String::new(),
+                    b if b >= *robots => ", one-shot (one pass)".to_owned(),
+                    b => format!(", network every {b} robots"),
+                };
+                if run.repair {
+                    detail += ", + repair";
+                }
+                if *robots != spec.trained_at {
+                    detail += &format!(", trained at N = {}", spec.trained_at);
+                }
+                spec.label_with(&detail)
+            }
+        }
+    }
+
+    /// Whether the row is one of the paper's models at the scale it was trained at, run
+    /// as trained: the paper's number stands beside it.
+    pub fn is_paper_row(&self) -> bool {
+        matches!(self, RowId::Model { spec, robots, run }
+            if spec.is_paper_method() && *robots == spec.trained_at && *run == Run::AS_TRAINED)
+    }
+}
+
+/// One row of a table: what it measures, and the measurement.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Row {
+    /// What the row measures.
+    #[serde(skip)]
+    pub id: RowId,
+    /// The measurement, under [`RowId::label`].
+    #[serde(flatten)]
+    pub summary: Summary,
+}
+
+impl Row {
+    /// `allocator`, which is what `id` names, measured on `insts` whose optima are `opt`.
+    ///
+    /// # Errors
+    /// The allocator's errors; see [`evaluate`].
+    pub fn measure(
+        id: RowId,
+        allocator: &dyn Allocator,
+        insts: &[Instance],
+        opt: &[f64],
+    ) -> Result<Row, EvalError> {
+        Ok(Row {
+            id,
+            summary: evaluate(&id.label(), allocator, insts, opt)?,
+        })
+    }
+}
+
+/// The committed Q-network `spec` under `root`, run as `run` says, measured on `insts`
+/// (N robots each); `None` when its weights are not committed.
+pub(super) fn committed_model_row(
+    root: &Path,
+    spec: ModelSpec,
+    run: Run,
+    insts: &[Instance],
+    opt: &[f64],
+) -> Result<Option<Row>, EvalError> {
+    let dir = spec.run_dir(root);
+    if !dir.has_weights() {
+        return Ok(None);
+    }
+    let policy = LearnedPolicy::load(&dir.weights())?
+        .with_block(run.block)?
+        .with_repair(run.repair);
+    let robots = insts.first().map_or(0, Instance::num_robots);
+    let id = RowId::Model { spec, robots, run };
+    Row::measure(id, &policy, insts, opt).map(Some)
+}
 
 /// Every classical method ([`Method::ALL`]) on `insts`, whose optima are `opt`; the
 /// decentralised DA (the slowest: a message-passing simulation of the dynamics that
@@ -41,12 +174,13 @@ pub fn classical_rows(
             Method::DaDecentralised => simulated.min(insts.len()),
             _ => insts.len(),
         };
-        rows.push(Row::new(evaluate(
-            method.label(),
-            method.allocator(0).as_ref(),
+        let allocator = method.allocator(0);
+        rows.push(Row::measure(
+            RowId::Method(method),
+            allocator.as_ref(),
             &insts[..k],
             &opt[..k],
-        )?));
+        )?);
     }
     Ok(rows)
 }
@@ -66,30 +200,17 @@ pub fn price_headed_rows(
     let n = insts.first().map_or(0, Instance::num_robots);
     let mut rows = Vec::new();
     for spec in ModelSpec::PRICE_HEADED {
-        let run = spec.run_dir(root);
-        if !run.has_weights() {
-            continue;
-        }
-        let trained = if n == spec.trained_at {
-            String::new()
-        } else {
-            format!(", trained at N = {}", spec.trained_at)
-        };
         let block = if n >= 500 { n / 10 } else { 1 };
-        let mut modes = vec![(
-            block,
-            match block {
-                1 => String::new(),
-                b => format!(", network every {b} robots"),
-            },
-        )];
+        let mut runs = vec![block];
         if spec.algo == Algo::QStar {
-            modes.push((n, ", one-shot (one pass)".to_owned()));
+            runs.push(n);
         }
-        for (block, mode) in modes {
-            let policy = LearnedPolicy::load(&run.weights())?.with_block(block)?;
-            let label = spec.label_with(&format!("{mode}{trained}"));
-            rows.push(Row::new(evaluate(&label, &policy, insts, opt)?));
+        for block in runs {
+            let run = Run {
+                block,
+                repair: false,
+            };
+            rows.extend(committed_model_row(root, spec, run, insts, opt)?);
         }
     }
     Ok(rows)
@@ -116,7 +237,7 @@ pub fn price_model_rows(
     {
         if spec.model_path(root).exists() {
             let policy = spec.load(root)?;
-            rows.push(Row::new(evaluate(&spec.label(), &policy, insts, opt)?));
+            rows.push(Row::measure(RowId::PriceModel(spec), &policy, insts, opt)?);
         }
     }
     Ok(rows)
