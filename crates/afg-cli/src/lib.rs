@@ -11,6 +11,7 @@
 //! | `afg train` | a Q network by DQN or Double DQN, resumable | [`train`] |
 //! | `afg train-price` | the price model (ours) | [`price`] |
 //! | `afg plot-curves`, `afg training-report` | training runs as an SVG or a Markdown table | [`curves`] |
+//! | `afg migrate` | run directories of an older afg brought to the current format | [`migrate`] |
 //!
 //! The maintainer's commands (`cargo xtask reproduce-tables`, benchmarks, the dataset
 //! check) live in the repository's `xtask` and call this library.
@@ -26,6 +27,7 @@
 
 pub mod curves;
 pub mod generate;
+pub mod migrate;
 pub mod price;
 pub mod realloc;
 pub mod solve;
@@ -64,6 +66,8 @@ pub enum Command {
     PlotCurves(curves::PlotArgs),
     /// Summarise finished training runs against the classical methods (Markdown).
     TrainingReport(curves::ReportArgs),
+    /// Bring run directories written by an older afg to the current format, in place.
+    Migrate(migrate::MigrateArgs),
 }
 
 impl Command {
@@ -80,6 +84,7 @@ impl Command {
             Command::TrainPrice(args) => price::run(args),
             Command::PlotCurves(args) => curves::run_plot(args),
             Command::TrainingReport(args) => curves::run_report(args),
+            Command::Migrate(args) => migrate::run(args),
         }
     }
 }

@@ -19,6 +19,8 @@ use crate::tensors::GraphTensors;
 pub struct AfgNetConfig {
     /// Number of tasks M (input width of ν and μ, number of Q values).
     pub tasks: usize,
+    /// The units of the inputs and rewards ([`Units`]).
+    pub units: Units,
     /// Embedding width d.
     #[config(default = 64)]
     pub hidden: usize,
@@ -34,23 +36,17 @@ pub struct AfgNetConfig {
     /// Add the actor's join gain (the immediate reward of each action, in the task
     /// features' unit) to the Q values, so the network learns only what comes after
     /// the action: the untrained policy starts close to one-pass greedy. Off in the
-    /// paper's model. Optional so that files written before it existed still load
-    /// (`None` = off).
-    #[config(default = "None")]
-    pub gain_residual: Option<bool>,
-    /// The units of the inputs and rewards ([`Units`]). Optional so that files written
-    /// before it existed still load (`None` = [`Units::MeanReward`]).
-    #[config(default = "None")]
-    pub units: Option<Units>,
+    /// paper's model.
+    #[config(default = false)]
+    pub gain_residual: bool,
     /// Price structure (ours; off in the paper's model):
     /// `Q(s, a) = π_a(s) − β d(t, a) + c_a(s)`, where the price `π_a` comes from one
     /// MLP shared by all tasks ([`PriceHead`]) reading the task's summaries
     /// ([`GraphBatch::task_inputs`](afg_graph::GraphBatch::task_inputs)) and the pooled
     /// embedding, and the correction `c` is the paper's head. Both output layers start
-    /// at zero, so the untrained network is Nearest. Optional so that files written
-    /// before it existed still load (`None` = off).
-    #[config(default = "None")]
-    pub price_head: Option<bool>,
+    /// at zero, so the untrained network is Nearest.
+    #[config(default = false)]
+    pub price_head: bool,
 }
 
 impl AfgNetConfig {
@@ -70,7 +66,7 @@ impl AfgNetConfig {
             .collect();
         let mut head = QHead::new(&mut rng, d, m, self.activation, device);
         // Drawn after everything else, so the paper's network keeps its weights.
-        let price = self.price_head.unwrap_or(false).then(|| {
+        let price = self.price_head.then(|| {
             head.output = zero_linear(d, m, device);
             PriceHead {
                 input: seeded_linear(&mut rng, PRICE_INPUTS + d, d, device),
@@ -85,8 +81,8 @@ impl AfgNetConfig {
             head,
             price,
             activation: self.activation,
-            gain_residual: self.gain_residual.unwrap_or(false),
-            units: self.units.unwrap_or(Units::MeanReward),
+            gain_residual: self.gain_residual,
+            units: self.units,
         }
     }
 }

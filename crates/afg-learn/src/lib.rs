@@ -11,7 +11,7 @@
 //! | [`nets`] | AFGNet and S2V (Burn), `NetworkConfig`, `QNetwork`, batches as tensors, weight files |
 //! | [`env`](mod@env) | the sequential allocation MDP (`Env`) and reward shaping |
 //! | [`train`] | DQN / Double DQN: `TrainConfig`, `TrainSettings`, `Trainer`, `Session`, the targets |
-//! | [`run`] | a training run's directory: `RunDir`, its log, manifest and lock |
+//! | [`run`] | a training run's directory: `RunDir`, its log, manifest and lock; `migrate_run` for older formats |
 //! | [`policy`] | a trained network as an allocator (`LearnedPolicy`), rollouts, regret against Q* |
 //! | [`fast`] | the trained network exported to faer for fast exact rollouts (`FastPolicy`) |
 //! | [`price`] | the price model (ours): `PriceNet`, `PriceTrainer`, `PricePolicy` |
@@ -23,6 +23,7 @@ mod error;
 pub mod fast;
 mod layers;
 mod log_float;
+mod migrate;
 mod network;
 pub mod policy;
 pub mod price;
@@ -48,6 +49,7 @@ pub mod nets {
 
 /// A training run's directory: its files, typed log, manifest and lock.
 pub mod run {
+    pub use crate::migrate::{RUN_FORMAT_VERSION, migrate_run};
     pub use crate::run_dir::{LogEvent, RunDir, RunLock, RunManifest, ValidationLine};
 }
 

@@ -99,13 +99,13 @@ impl NetworkConfig {
     /// AFGNet with the defaults of docs/models.md (d = 64, L = 3, ReLU) for `tasks` tasks,
     /// in the default [`Units`].
     pub fn afgnet(tasks: usize, seed: u64) -> Self {
-        NetworkConfig::AfgNet(AfgNetConfig::new(tasks).with_seed(seed)).with_units(Units::default())
+        NetworkConfig::AfgNet(AfgNetConfig::new(tasks, Units::default()).with_seed(seed))
     }
 
     /// S2V with the defaults of docs/models.md (p = 64, T = 4) for `tasks` tasks, in the
     /// default [`Units`].
     pub fn s2v(tasks: usize, seed: u64) -> Self {
-        NetworkConfig::S2v(S2vConfig::new(tasks).with_seed(seed)).with_units(Units::default())
+        NetworkConfig::S2v(S2vConfig::new(tasks, Units::default()).with_seed(seed))
     }
 
     /// Number of tasks (actions).
@@ -122,16 +122,13 @@ impl NetworkConfig {
             NetworkConfig::AfgNet(c) => c.units,
             NetworkConfig::S2v(c) => c.units,
         }
-        .unwrap_or(Units::MeanReward)
     }
 
-    /// The same network in other units (`None` for [`Units::MeanReward`], so that the
-    /// configuration files of such networks stay as they were).
+    /// The same network in other units.
     pub fn with_units(self, units: Units) -> Self {
-        let units = (units != Units::MeanReward).then_some(units);
         match self {
-            NetworkConfig::AfgNet(c) => NetworkConfig::AfgNet(c.with_units(units)),
-            NetworkConfig::S2v(c) => NetworkConfig::S2v(c.with_units(units)),
+            NetworkConfig::AfgNet(c) => NetworkConfig::AfgNet(AfgNetConfig { units, ..c }),
+            NetworkConfig::S2v(c) => NetworkConfig::S2v(S2vConfig { units, ..c }),
         }
     }
 
@@ -169,7 +166,7 @@ impl NetworkConfig {
     /// ```
     /// use afg_learn::nets::{AfgNetConfig, NetworkConfig};
     /// assert!(NetworkConfig::afgnet(5, 0).check().is_ok());
-    /// let wide = NetworkConfig::AfgNet(AfgNetConfig::new(5).with_hidden(0));
+    /// let wide = NetworkConfig::AfgNet(AfgNetConfig::new(5, Default::default()).with_hidden(0));
     /// assert!(wide.check().unwrap_err().contains("hidden"));
     /// ```
     pub fn check(&self) -> Result<(), String> {

@@ -2,12 +2,14 @@
 //!
 //! | file | written by | content |
 //! |---|---|---|
-//! | `config.json` | [`RunDir::create`] | the [`TrainConfig`] |
+//! | `config.json` | [`RunDir::create`] | the format version and the [`TrainConfig`] |
 //! | `log.jsonl` | [`RunDir::append`] | one [`LogEvent`] per line |
 //! | `checkpoint/` | [`Trainer::save_checkpoint`](crate::Trainer::save_checkpoint) | the resumable state |
 //! | `model.json`, `model.mpk` | [`save_network`](crate::save_network) at [`RunDir::weights`] | the final weights |
 //! | `manifest.json` | [`RunDir::write_manifest`] | a [`RunManifest`]: how to rerun it, what it cost |
 //! | `.lock` | [`RunDir::lock`] | held while a trainer writes into the directory |
+//!
+//! Files of an older format are refused with a word on [`migrate_run`](crate::run::migrate_run).
 
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -25,13 +27,13 @@ use crate::{LearnError, TrainConfig, Validation};
 pub enum LogEvent {
     /// The run started.
     Start {
+        /// The format of the run's files ([`crate::run::RUN_FORMAT_VERSION`]).
+        version: u32,
         /// Its settings.
         config: Box<TrainConfig>,
         /// The git revision it was started from, if known.
-        #[serde(default)]
         git_revision: Option<String>,
         /// Mean welfare of the classical methods on the validation set.
-        #[serde(default)]
         baselines: BTreeMap<Method, f64>,
     },
     /// Mean loss over the last ten gradient steps.
@@ -118,6 +120,17 @@ impl LogEvent {
             LogEvent::Validation(v) => Some(v.elapsed_s),
         }
     }
+}
+
+/// `config.json` as written: the format version, then the configuration.
+pub(crate) fn config_json(config: &TrainConfig) -> String {
+    let json = serde_json::to_string_pretty(config).expect("a configuration serialises");
+    // `{` and the fields of the configuration, with the version first.
+    format!(
+        "{{\n  \"version\": {},{}",
+        crate::migrate::RUN_FORMAT_VERSION,
+        &json[1..]
+    )
 }
 
 /// How to rerun a finished run and what it cost (`manifest.json`).
@@ -214,8 +227,7 @@ impl RunDir {
                     .into(),
             });
         }
-        let json = serde_json::to_string_pretty(config).expect("a configuration serialises");
-        afg_game::fs::write_atomic(&config_path, json.as_bytes())?;
+        afg_game::fs::write_atomic(&config_path, config_json(config).as_bytes())?;
         Ok((run, lock))
     }
 
@@ -315,11 +327,23 @@ impl RunDir {
     /// [`LearnError::RunFile`] if the directory holds no run or the file is not a
     /// training configuration.
     pub fn config(&self) -> Result<TrainConfig, LearnError> {
-        self.read_json(
+        let mut config: serde_json::Value = self.read_json(
             "config.json",
             "no training run here",
             "a training configuration",
-        )
+        )?;
+        let bad = |reason| LearnError::RunFile {
+            path: self.file("config.json").display().to_string(),
+            reason,
+        };
+        if crate::migrate::is_older_version(config.get("version").and_then(|v| v.as_u64())) {
+            return Err(bad(crate::migrate::older_format_hint()));
+        }
+        if let Some(fields) = config.as_object_mut() {
+            fields.remove("version");
+        }
+        serde_json::from_value(config)
+            .map_err(|e| bad(format!("not a training configuration: {e}")))
     }
 
     /// Appends one event to `log.jsonl`.
@@ -388,7 +412,12 @@ impl RunDir {
             .map(|(number, line)| {
                 let event = serde_json::from_str(line).map_err(|e| LearnError::RunFile {
                     path: format!("{}:{number}", path.display()),
-                    reason: format!("not a log event: {e}"),
+                    reason: if line.contains(r#""event":"start""#) && crate::migrate::is_older(line)
+                    {
+                        crate::migrate::older_format_hint()
+                    } else {
+                        format!("not a log event: {e}")
+                    },
                 })?;
                 Ok((line.to_owned(), event))
             })

@@ -18,6 +18,8 @@ use crate::tensors::GraphTensors;
 pub struct S2vConfig {
     /// Number of tasks M.
     pub tasks: usize,
+    /// The units of the inputs and rewards ([`Units`]).
+    pub units: Units,
     /// Embedding width p.
     #[config(default = 64)]
     pub hidden: usize,
@@ -30,10 +32,6 @@ pub struct S2vConfig {
     /// Seed of the weight initialisation.
     #[config(default = 0)]
     pub seed: u64,
-    /// The units of the inputs and rewards ([`Units`]). Optional so that files written
-    /// before it existed still load (`None` = [`Units::MeanReward`]).
-    #[config(default = "None")]
-    pub units: Option<Units>,
 }
 
 impl S2vConfig {
@@ -48,7 +46,7 @@ impl S2vConfig {
             theta4: seeded_linear(&mut rng, 1, p, device),
             head: QHead::new(&mut rng, p, m, self.activation, device),
             iterations: self.iterations,
-            units: self.units.unwrap_or(Units::MeanReward),
+            units: self.units,
         }
     }
 }

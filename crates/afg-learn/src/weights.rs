@@ -1,7 +1,7 @@
 //! Weight files of a Q network.
 //!
 //! Weights are stored as two files with one stem: `STEM.json`, a header
-//! (`{"format": "afg-weights", "version": 1, "network": {..config..}}`), and
+//! (`{"format": "afg-weights", "version": 2, "network": {..config..}}`), and
 //! `STEM.mpk`, Burn's named MessagePack record in full precision. Loading checks the
 //! header and then every parameter's shape against the configured network.
 
@@ -26,7 +26,8 @@ fn weights_error(path: &Path, reason: impl Into<String>) -> LearnError {
 }
 
 const WEIGHTS_FORMAT: &str = "afg-weights";
-const WEIGHTS_VERSION: u32 = 1;
+/// Format 2: the network configuration states every field ([`crate::run::migrate_run`]).
+const WEIGHTS_VERSION: u32 = crate::migrate::RUN_FORMAT_VERSION;
 
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -73,14 +74,19 @@ pub fn save_network<B: Backend>(
     stem: &Path,
 ) -> Result<(), LearnError> {
     write_record::<B, _>(network.into_record(), &with_extension(stem, "mpk"))?;
+    let json = header_json(config);
+    afg_game::fs::write_atomic(&with_extension(stem, "json"), json.as_bytes())?;
+    Ok(())
+}
+
+/// The weights header of a network configured by `config`, as written.
+pub(crate) fn header_json(config: &NetworkConfig) -> String {
     let header = WeightsHeader {
         format: WEIGHTS_FORMAT.into(),
         version: WEIGHTS_VERSION,
         network: config.clone(),
     };
-    let json = serde_json::to_string_pretty(&header).expect("a header always serialises");
-    afg_game::fs::write_atomic(&with_extension(stem, "json"), json.as_bytes())?;
-    Ok(())
+    serde_json::to_string_pretty(&header).expect("a header always serialises")
 }
 
 /// Collects parameter shapes in visiting order.
@@ -148,6 +154,35 @@ pub(crate) fn weights_are_finite<B: Backend>(network: &impl Module<B>) -> bool {
     v.0
 }
 
+/// The weights header at `header_path`, checked: its format and version, and the
+/// network's shape within [`crate::nets::NETWORK_LIMITS`].
+fn read_header(header_path: &Path) -> Result<WeightsHeader, LearnError> {
+    let text = std::fs::read_to_string(header_path)
+        .map_err(|e| weights_error(header_path, e.to_string()))?;
+    if text.contains(WEIGHTS_FORMAT) && crate::migrate::is_older(&text) {
+        return Err(weights_error(
+            header_path,
+            crate::migrate::older_format_hint(),
+        ));
+    }
+    let header: WeightsHeader = serde_json::from_str(&text)
+        .map_err(|e| weights_error(header_path, format!("not a weights header: {e}")))?;
+    if header.format != WEIGHTS_FORMAT || header.version != WEIGHTS_VERSION {
+        return Err(weights_error(
+            header_path,
+            format!(
+                "format {} version {}, expected {WEIGHTS_FORMAT} version {WEIGHTS_VERSION}",
+                header.format, header.version
+            ),
+        ));
+    }
+    header
+        .network
+        .check()
+        .map_err(|reason| weights_error(header_path, reason))?;
+    Ok(header)
+}
+
 /// Loads weights saved by [`save_network`].
 ///
 /// # Errors
@@ -159,23 +194,7 @@ pub fn load_network<B: Backend>(
     device: &B::Device,
 ) -> Result<(NetworkConfig, QNetwork<B>), LearnError> {
     let header_path = with_extension(stem, "json");
-    let text = std::fs::read_to_string(&header_path)
-        .map_err(|e| weights_error(&header_path, e.to_string()))?;
-    let header: WeightsHeader = serde_json::from_str(&text)
-        .map_err(|e| weights_error(&header_path, format!("not a weights header: {e}")))?;
-    if header.format != WEIGHTS_FORMAT || header.version != WEIGHTS_VERSION {
-        return Err(weights_error(
-            &header_path,
-            format!(
-                "format {} version {}, expected {WEIGHTS_FORMAT} version {WEIGHTS_VERSION}",
-                header.format, header.version
-            ),
-        ));
-    }
-    header
-        .network
-        .check()
-        .map_err(|reason| weights_error(&header_path, reason))?;
+    let header = read_header(&header_path)?;
     let fresh = header.network.init::<B>(device);
     let expected = shapes(&fresh);
     let recorder = NamedMpkFileRecorder::<FullPrecisionSettings>::new();
@@ -202,7 +221,7 @@ pub fn load_network<B: Backend>(
     // An optional part (AFGNet's price head) that the record has and the header does
     // not would be dropped without a word by `load_record`.
     if let (QNetworkRecord::AfgNet(r), NetworkConfig::AfgNet(c)) = (&record, &header.network)
-        && r.price.is_some() != c.price_head.unwrap_or(false)
+        && r.price.is_some() != c.price_head
     {
         return Err(weights_error(
             &record_path,

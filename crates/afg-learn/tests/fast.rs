@@ -80,15 +80,15 @@ fn fast_path_matches_burn_with_random_weights_on_the_datasets() {
         NetworkConfig::s2v(5, 11),
         // Other activations and depths go through the same code.
         NetworkConfig::AfgNet(
-            afg_learn::nets::AfgNetConfig::new(5)
+            afg_learn::nets::AfgNetConfig::new(5, afg_graph::Units::MeanReward)
                 .with_activation(Activation::Tanh)
                 .with_layers(2)
                 .with_hidden(16)
                 .with_seed(4),
         ),
         NetworkConfig::AfgNet(
-            afg_learn::nets::AfgNetConfig::new(5)
-                .with_gain_residual(Some(true))
+            afg_learn::nets::AfgNetConfig::new(5, afg_graph::Units::MeanReward)
+                .with_gain_residual(true)
                 .with_seed(6),
         ),
         // Scale-free units: μ, gains and edge weights rescaled on both paths.
@@ -96,8 +96,8 @@ fn fast_path_matches_burn_with_random_weights_on_the_datasets() {
         NetworkConfig::s2v(5, 12).with_units(afg_graph::Units::ScaleFree),
         NetworkConfig::afgnet(5, 13).with_units(afg_graph::Units::Bounded),
         NetworkConfig::AfgNet(
-            afg_learn::nets::AfgNetConfig::new(5)
-                .with_gain_residual(Some(true))
+            afg_learn::nets::AfgNetConfig::new(5, afg_graph::Units::MeanReward)
+                .with_gain_residual(true)
                 .with_seed(7),
         )
         .with_units(afg_graph::Units::ScaleFree),
@@ -129,8 +129,8 @@ fn price_headed(seed: u64, units: afg_graph::Units) -> (NetworkConfig, QNetwork<
     use rand::{Rng, SeedableRng};
     let device = Default::default();
     let config = NetworkConfig::AfgNet(
-        afg_learn::nets::AfgNetConfig::new(5)
-            .with_price_head(Some(true))
+        afg_learn::nets::AfgNetConfig::new(5, afg_graph::Units::MeanReward)
+            .with_price_head(true)
             .with_seed(seed),
     )
     .with_units(units);

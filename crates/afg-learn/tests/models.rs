@@ -22,8 +22,8 @@ type B = InferBackend;
 
 fn price_headed(seed: u64) -> NetworkConfig {
     NetworkConfig::AfgNet(
-        afg_learn::nets::AfgNetConfig::new(5)
-            .with_price_head(Some(true))
+        afg_learn::nets::AfgNetConfig::new(5, afg_graph::Units::MeanReward)
+            .with_price_head(true)
             .with_seed(seed),
     )
     .with_units(afg_graph::Units::Bounded)
@@ -325,7 +325,7 @@ fn bad_weight_files_are_clear_errors() {
     let headed = price_headed(1);
     save_network(headed.init::<B>(&Default::default()), &headed, &stem).unwrap();
     let text = std::fs::read_to_string(&json).unwrap();
-    let plain = text.replace("\"price_head\": true", "\"price_head\": null");
+    let plain = text.replace("\"price_head\": true", "\"price_head\": false");
     assert_ne!(plain, text);
     std::fs::write(&json, plain).unwrap();
     let err = load_network::<B>(&stem, &Default::default()).unwrap_err();
@@ -342,13 +342,21 @@ fn bad_weight_files_are_clear_errors() {
     let err = load_network::<B>(&stem, &Default::default()).unwrap_err();
     assert!(err.to_string().contains("corrupt or truncated"), "{err}");
 
-    // A header of another version, and one that is not JSON.
+    // A header of a later version, one of format 1 (named as such), and one that is
+    // not JSON.
     std::fs::write(
         &json,
         "{\"format\":\"afg-weights\",\"version\":7,\"network\":{\"net\":\"s2v\",\"tasks\":5}}",
     )
     .unwrap();
     assert!(load_network::<B>(&stem, &Default::default()).is_err());
+    std::fs::write(
+        &json,
+        "{\"format\":\"afg-weights\",\"version\":1,\"network\":{\"net\":\"s2v\",\"tasks\":5}}",
+    )
+    .unwrap();
+    let err = load_network::<B>(&stem, &Default::default()).unwrap_err();
+    assert!(err.to_string().contains("afg migrate"), "{err}");
     std::fs::write(&json, "garbage").unwrap();
     assert!(
         load_network::<B>(&stem, &Default::default())
@@ -512,13 +520,13 @@ fn an_untrained_price_head_is_nearest() {
 }
 
 #[test]
-fn networks_without_a_price_head_load_from_files_that_predate_it() {
-    let json = r#"{"net":"afgnet","tasks":5,"hidden":64,"layers":3,"activation":"relu","seed":0,"gain_residual":null,"units":"bounded"}"#;
+fn a_price_head_is_off_unless_asked_and_leaves_the_papers_weights_alone() {
+    let json = r#"{"net":"afgnet","tasks":5,"hidden":64,"layers":3,"activation":"relu","seed":0,"gain_residual":false,"price_head":false,"units":"bounded"}"#;
     let config: NetworkConfig = serde_json::from_str(json).unwrap();
     let NetworkConfig::AfgNet(c) = &config else {
         unreachable!()
     };
-    assert_eq!(c.price_head, None);
+    assert!(!c.price_head);
     // The price head draws its weights after everything else: the paper's network
     // keeps the weights of its seed.
     let device = Default::default();

@@ -31,6 +31,7 @@ fn events_round_trip_and_old_validation_lines_still_read() {
     };
     let events = vec![
         LogEvent::Start {
+            version: afg_learn::run::RUN_FORMAT_VERSION,
             config: Box::new(config()),
             git_revision: Some("abc".into()),
             baselines: [(afg_baseline::Method::Opt, 13.0)].into_iter().collect(),
@@ -161,7 +162,7 @@ fn truncating_a_log_keeps_earlier_steps_and_their_clock() {
     assert_eq!(run.truncate_log(0).unwrap(), 0.0); // no log yet
     let lines = [
         format!(
-            r#"{{"event":"start","config":{}}}"#,
+            r#"{{"event":"start","version":2,"config":{},"git_revision":null,"baselines":{{}}}}"#,
             serde_json::to_string(&config()).unwrap()
         ),
         r#"{"event":"step","step":10,"loss":0.5,"epsilon":1.0,"elapsed_s":1.0}"#.to_owned(),
@@ -211,12 +212,20 @@ fn a_directory_holds_one_run_and_one_trainer_at_a_time() {
             .to_string()
             .contains("no training run")
     );
-    std::fs::write(dir.join("config.json"), "{\"robots\": 3}").unwrap();
+    std::fs::write(dir.join("config.json"), "{\"version\": 2, \"robots\": 3}").unwrap();
     assert!(
         run.config()
             .unwrap_err()
             .to_string()
             .contains("not a training configuration")
+    );
+    // Without a version, the file is an older format's: the error says how to migrate.
+    std::fs::write(dir.join("config.json"), "{\"robots\": 3}").unwrap();
+    assert!(
+        run.config()
+            .unwrap_err()
+            .to_string()
+            .contains("afg migrate")
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -241,16 +250,18 @@ fn manifests_round_trip() {
 }
 
 #[test]
-fn presets_are_recorded_and_old_configs_read_as_ours() {
+fn presets_are_recorded_and_every_field_is_required() {
     let paper = TrainConfig::paper(20, Algo::Dqn, NetworkConfig::s2v(5, 0), 100, 0);
     let text = serde_json::to_string(&paper).unwrap();
     assert!(text.contains("\"preset\":\"paper\""));
     let back: TrainConfig = serde_json::from_str(&text).unwrap();
     assert_eq!(back, paper);
+    assert_eq!(config().preset, Preset::Ours);
+    // Format 1 left the preset out; format 2 refuses that (`afg migrate` fills it in).
     let mut old: serde_json::Value = serde_json::to_value(config()).unwrap();
     old.as_object_mut().unwrap().remove("preset");
-    let back: TrainConfig = serde_json::from_value(old).unwrap();
-    assert_eq!(back.preset, Preset::Ours);
+    let err = serde_json::from_value::<TrainConfig>(old).unwrap_err();
+    assert!(err.to_string().contains("missing field `preset`"), "{err}");
 }
 
 /// Every committed run directory (models/ and models/ablations/).

@@ -177,6 +177,7 @@ fn a_session_logs_and_saves_its_run_and_refuses_a_second_writer() {
     let run = RunDir::new(&dir);
     let log = run.log().unwrap();
     let LogEvent::Start {
+        version,
         config: logged,
         git_revision,
         baselines,
@@ -185,8 +186,8 @@ fn a_session_logs_and_saves_its_run_and_refuses_a_second_writer() {
         panic!("the log starts with {:?}", log[0]);
     };
     assert_eq!(
-        (**logged == config, git_revision.as_deref()),
-        (true, Some("abc"))
+        (**logged == config, git_revision.as_deref(), *version),
+        (true, Some("abc"), afg_learn::run::RUN_FORMAT_VERSION)
     );
     assert!(baselines[&afg_baseline::Method::Opt] >= baselines[&afg_baseline::Method::Greedy]);
     let steps: Vec<u64> = log
@@ -363,9 +364,9 @@ fn bad_settings_are_refused() {
 
 fn price_headed() -> NetworkConfig {
     NetworkConfig::AfgNet(
-        AfgNetConfig::new(5)
+        AfgNetConfig::new(5, afg_graph::Units::MeanReward)
             .with_seed(1)
-            .with_price_head(Some(true)),
+            .with_price_head(true),
     )
 }
 
@@ -500,8 +501,10 @@ fn scale_free_and_shaped_runs_train() {
 
 #[test]
 fn the_gain_residual_refuses_shaping() {
-    let net =
-        NetworkConfig::AfgNet(afg_learn::nets::AfgNetConfig::new(5).with_gain_residual(Some(true)));
+    let net = NetworkConfig::AfgNet(
+        afg_learn::nets::AfgNetConfig::new(5, afg_graph::Units::MeanReward)
+            .with_gain_residual(true),
+    );
     let mut c = tiny(Algo::Ddqn, net, 10);
     for shaping in [Shaping::Greedy, Shaping::Optimal] {
         c.shaping = shaping;

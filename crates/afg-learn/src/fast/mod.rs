@@ -130,7 +130,7 @@ impl FastPolicy {
                     head: Head::from_burn(&n.head, s),
                     tasks: c.tasks,
                     hidden: d,
-                    gain_residual: c.gain_residual.unwrap_or(false),
+                    gain_residual: c.gain_residual,
                     units: config.units(),
                 }
             }

@@ -54,7 +54,8 @@ impl TrainerState {
 }
 
 const STATE_FORMAT: &str = "afg-train-state";
-const STATE_VERSION: u32 = 1;
+/// Format 2: the configuration inside states every field ([`crate::run::migrate_run`]).
+const STATE_VERSION: u32 = crate::migrate::RUN_FORMAT_VERSION;
 
 impl Trainer {
     /// Writes a checkpoint into `dir/checkpoint` atomically: everything goes to
@@ -139,6 +140,9 @@ impl Trainer {
             reason,
         };
         let text = std::fs::read_to_string(&state_path).map_err(|e| bad(e.to_string()))?;
+        if crate::migrate::is_older(&text) {
+            return Err(bad(crate::migrate::older_format_hint()));
+        }
         let state: TrainerState =
             serde_json::from_str(&text).map_err(|e| bad(format!("corrupt or truncated: {e}")))?;
         if state.format != STATE_FORMAT || state.version != STATE_VERSION {
@@ -194,4 +198,9 @@ pub fn checkpoint_dir(dir: &Path) -> PathBuf {
 /// Where [`Trainer::save_checkpoint`] keeps the previous checkpoint.
 fn previous_checkpoint_dir(dir: &Path) -> PathBuf {
     dir.join("checkpoint.old")
+}
+
+/// The checkpoint directories a run in `dir` may hold: the current and the previous.
+pub(crate) fn checkpoint_dirs(dir: &Path) -> [PathBuf; 2] {
+    [checkpoint_dir(dir), previous_checkpoint_dir(dir)]
 }

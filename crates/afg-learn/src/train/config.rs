@@ -61,8 +61,7 @@ pub enum Preset {
 #[serde(deny_unknown_fields)]
 pub struct TrainConfig {
     /// The defaults this configuration started from (recorded so that a run's command
-    /// line can be rebuilt; files written before it existed load as [`Preset::Ours`]).
-    #[serde(default)]
+    /// line can be rebuilt).
     pub preset: Preset,
     /// Robots per training instance N (M and the network come from `network`).
     pub robots: usize,
@@ -78,8 +77,7 @@ pub struct TrainConfig {
     pub lr: f64,
     /// Anneal the learning rate linearly from `lr` to `lr / 10` over the run
     /// ([`TrainConfig::learning_rate`]), so that the final weights settle instead of
-    /// swinging between validations. Files written before it existed load as `false`.
-    #[serde(default)]
+    /// swinging between validations.
     pub lr_decay: bool,
     /// Gradient steps between target-network syncs.
     pub target_sync: u64,
@@ -97,7 +95,6 @@ pub struct TrainConfig {
     pub warmup: usize,
     /// Steps of reward summed before bootstrapping (1: the paper's one-step target;
     /// with γ = 1 an n-step target is `r_t + … + r_{t+n-1} + Q(s_{t+n}, ·)`).
-    #[serde(default = "one")]
     pub n_step: usize,
     /// Huber loss (δ = 1) instead of the squared error.
     pub huber: bool,
@@ -111,13 +108,7 @@ pub struct TrainConfig {
     /// the network learns `Q(s, a) − Φ(s)`, what the policy gains over finishing
     /// greedily, O(action gaps) instead of O(N). Φ does not depend on the action, so
     /// the optimal policy and the greedy policy of a learned Q are unchanged. Not in the
-    /// paper. Files written before it was an enum store `"greedy_shaping": true/false`
-    /// (read as greedy / none); files older still load as none.
-    #[serde(
-        default,
-        alias = "greedy_shaping",
-        deserialize_with = "shaping_or_flag"
-    )]
+    /// paper.
     pub shaping: Shaping,
     /// Gradient norm clipping.
     pub grad_clip: Option<f32>,
@@ -352,7 +343,7 @@ impl TrainConfig {
     /// The settings that go together: gain residual, demonstrations, price head and loss.
     fn check_heads(&self) -> Result<(), LearnError> {
         let bad = |what: &str| Err(LearnError::InvalidConfig(what.to_owned()));
-        if matches!(&self.network, NetworkConfig::AfgNet(c) if c.gain_residual == Some(true))
+        if matches!(&self.network, NetworkConfig::AfgNet(c) if c.gain_residual)
             && (!self.reward_scaling || self.shaping != Shaping::None)
         {
             return bad(
@@ -373,8 +364,7 @@ impl TrainConfig {
                 );
             }
         }
-        let price_head =
-            matches!(&self.network, NetworkConfig::AfgNet(c) if c.price_head == Some(true));
+        let price_head = matches!(&self.network, NetworkConfig::AfgNet(c) if c.price_head);
         if !(self.price_loss.is_finite() && self.price_loss >= 0.0) {
             return bad("price_loss must be finite and at least 0");
         }
@@ -383,7 +373,7 @@ impl TrainConfig {
         }
         if price_head
             && (!self.reward_scaling
-                || matches!(&self.network, NetworkConfig::AfgNet(c) if c.gain_residual == Some(true)))
+                || matches!(&self.network, NetworkConfig::AfgNet(c) if c.gain_residual))
         {
             return bad(
                 "the price head subtracts the actor's cost in the features' unit: it needs reward scaling, and no gain residual",
@@ -433,10 +423,6 @@ impl TrainConfig {
     }
 }
 
-fn one() -> usize {
-    1
-}
-
 fn is_zero(x: &f64) -> bool {
     *x == 0.0
 }
@@ -484,47 +470,4 @@ pub(crate) fn validation_set(
         })
         .collect::<Result<_, LearnError>>()?;
     Ok((instances, optima))
-}
-
-/// Reads [`TrainConfig::shaping`] as a name (`"none"`, `"greedy"`, `"optimal"`) or as
-/// the boolean `greedy_shaping` flag of older files.
-fn shaping_or_flag<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Shaping, D::Error> {
-    #[derive(Deserialize)]
-    #[serde(untagged)]
-    enum Stored {
-        Flag(bool),
-        Name(Shaping),
-    }
-    Ok(match Stored::deserialize(d)? {
-        Stored::Flag(true) => Shaping::Greedy,
-        Stored::Flag(false) => Shaping::None,
-        Stored::Name(s) => s,
-    })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn shaping_reads_its_name_and_the_older_boolean_flag() {
-        let config = TrainConfig::new(20, Algo::Ddqn, NetworkConfig::afgnet(5, 0), 10, 0);
-        let json = serde_json::to_string(&config).unwrap();
-        assert!(json.contains(r#""shaping":"greedy""#), "{json}");
-        let read = |text: &str| serde_json::from_str::<TrainConfig>(text).unwrap().shaping;
-        assert_eq!(read(&json), Shaping::Greedy);
-        let named = json.replace(r#""shaping":"greedy""#, r#""shaping":"optimal""#);
-        assert_eq!(read(&named), Shaping::Optimal);
-        for (flag, shaping) in [("true", Shaping::Greedy), ("false", Shaping::None)] {
-            let old = json.replace(
-                r#""shaping":"greedy""#,
-                &format!(r#""greedy_shaping":{flag}"#),
-            );
-            assert_eq!(read(&old), shaping, "{old}");
-        }
-        let older = json.replace(r#""shaping":"greedy","#, "");
-        assert_eq!(read(&older), Shaping::None);
-        let wrong = json.replace(r#""shaping":"greedy""#, r#""shaping":"perfect""#);
-        assert!(serde_json::from_str::<TrainConfig>(&wrong).is_err());
-    }
 }

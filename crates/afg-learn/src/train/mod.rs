@@ -36,6 +36,7 @@ use serde::{Deserialize, Serialize};
 
 pub use crate::targets::{double_dqn_target, dqn_target, masked_argmax};
 pub use checkpoint::checkpoint_dir;
+pub(crate) use checkpoint::checkpoint_dirs;
 pub(crate) use config::validation_set;
 pub use config::{
     Algo, Demonstrations, Preset, TrainConfig, training_instance_seed, validation_instances,

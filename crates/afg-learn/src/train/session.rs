@@ -38,6 +38,7 @@ impl Session {
         let (run, lock) = RunDir::create(dir, &config)?;
         let trainer = Trainer::new(config.clone())?;
         run.append(&LogEvent::Start {
+            version: crate::migrate::RUN_FORMAT_VERSION,
             baselines: baselines(&config)?,
             config: Box::new(config),
             git_revision,

@@ -174,10 +174,10 @@ impl TrainSettings {
         let tasks = self.tasks.unwrap_or(GeneratorConfig::PAPER_TASKS);
         let network = match self.net.unwrap_or(Net::AfgNet) {
             Net::AfgNet => NetworkConfig::AfgNet(
-                AfgNetConfig::new(tasks)
+                AfgNetConfig::new(tasks, Units::Bounded)
                     .with_seed(seed)
-                    .with_gain_residual(self.gain_residual.then_some(true))
-                    .with_price_head(self.price_head.then_some(true)),
+                    .with_gain_residual(self.gain_residual)
+                    .with_price_head(self.price_head),
             ),
             Net::S2v if self.gain_residual || self.price_head => {
                 return bad("--gain-residual and --price-head exist for AFGNet only".into());
@@ -233,7 +233,7 @@ impl TrainSettings {
             c.seed,
         );
         let (gain_residual, price_head) = match &c.network {
-            NetworkConfig::AfgNet(a) => (a.gain_residual == Some(true), a.price_head == Some(true)),
+            NetworkConfig::AfgNet(a) => (a.gain_residual, a.price_head),
             NetworkConfig::S2v(_) => (false, false),
         };
         // --gain-residual implies no shaping.

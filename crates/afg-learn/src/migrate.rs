@@ -1,0 +1,258 @@
+//! Run directories written by earlier versions of afg, brought to the current format
+//! once ([`migrate_run`], `afg migrate DIR…`). Readers accept the current format only
+//! and name this migration when they meet an older one.
+//!
+//! | format | files |
+//! |---|---|
+//! | 1 | weights headers (`model.json`, the checkpoint's) of version 1, whose network may leave out `gain_residual` and `price_head` (off) and `units` (mean reward); `config.json` and the log's start line without a version, and possibly without `preset` (ours), `lr_decay` (off), `n_step` (1) or `shaping` (none), or with the boolean `greedy_shaping` instead; start lines possibly without `git_revision` or `baselines` |
+//! | 2 | every field written; `config.json` and the log's start line carry `"version": 2`, weights headers version 2 |
+
+use std::path::{Path, PathBuf};
+
+use serde_json::{Map, Value, json};
+
+use crate::{LearnError, LogEvent, TrainConfig};
+
+/// The current format of a run directory's files.
+pub const RUN_FORMAT_VERSION: u32 = 2;
+
+/// What a reader says of a file in an older format.
+pub(crate) fn older_format_hint() -> String {
+    format!(
+        "written in an older format; run `afg migrate DIR` once to bring the run directory to format {RUN_FORMAT_VERSION}"
+    )
+}
+
+/// Whether the JSON text is a file of an older format than [`RUN_FORMAT_VERSION`]: an
+/// object that records no `version` (format 1 files other than weights headers
+/// recorded none) or a lower one. Asked before the file is read as the current format,
+/// so that an older file is named as such rather than as malformed; text that is not a
+/// JSON object (a truncated file) is not older, and its reader reports it.
+pub(crate) fn is_older(text: &str) -> bool {
+    #[derive(serde::Deserialize)]
+    struct Versioned {
+        version: Option<u64>,
+    }
+    serde_json::from_str::<Versioned>(text).is_ok_and(|v| is_older_version(v.version))
+}
+
+/// Whether a file that records `version` (`None`: no version) is older than
+/// [`RUN_FORMAT_VERSION`].
+pub(crate) fn is_older_version(version: Option<u64>) -> bool {
+    version.is_none_or(|v| v < u64::from(RUN_FORMAT_VERSION))
+}
+
+fn bad(path: &Path, reason: impl Into<String>) -> LearnError {
+    LearnError::RunFile {
+        path: path.display().to_string(),
+        reason: reason.into(),
+    }
+}
+
+/// Fills in what a format-1 network configuration left out.
+fn network_v1(network: &mut Value) {
+    let Some(fields) = network.as_object_mut() else {
+        return;
+    };
+    let afgnet = fields.get("net") == Some(&json!("afgnet"));
+    let mut fill = |key: &str, value: Value| {
+        if fields.get(key).is_none_or(Value::is_null) {
+            fields.insert(key.to_owned(), value);
+        }
+    };
+    fill("units", json!("mean-reward"));
+    if afgnet {
+        fill("gain_residual", json!(false));
+        fill("price_head", json!(false));
+    }
+}
+
+/// Fills in what a format-1 training configuration left out.
+fn config_v1(config: &mut Value) {
+    let Some(fields) = config.as_object_mut() else {
+        return;
+    };
+    if let Some(network) = fields.get_mut("network") {
+        network_v1(network);
+    }
+    if let Some(flag) = fields.remove("greedy_shaping") {
+        let shaping = if flag == json!(true) {
+            "greedy"
+        } else {
+            "none"
+        };
+        fields.insert("shaping".into(), json!(shaping));
+    }
+    for (key, value) in [
+        ("preset", json!("ours")),
+        ("lr_decay", json!(false)),
+        ("n_step", json!(1)),
+        ("shaping", json!("none")),
+    ] {
+        fields.entry(key).or_insert(value);
+    }
+}
+
+/// A format-1 start line's fields brought to format 2 (other events are unchanged).
+fn start_v1(event: &mut Map<String, Value>) {
+    if let Some(config) = event.get_mut("config") {
+        config_v1(config);
+    }
+    event.entry("git_revision").or_insert(Value::Null);
+    event.entry("baselines").or_insert(json!({}));
+    event.insert("version".into(), json!(RUN_FORMAT_VERSION));
+}
+
+/// The version a file's JSON object records (`None`: format 1, before versions).
+fn version_of(value: &Value) -> Option<u64> {
+    value.get("version").and_then(Value::as_u64)
+}
+
+fn read_json(path: &Path) -> Result<Value, LearnError> {
+    let text = std::fs::read_to_string(path).map_err(|e| bad(path, e.to_string()))?;
+    serde_json::from_str(&text).map_err(|e| bad(path, format!("not JSON: {e}")))
+}
+
+fn write(path: &Path, text: &str) -> Result<(), LearnError> {
+    afg_game::fs::write_atomic(path, text.as_bytes())?;
+    Ok(())
+}
+
+/// A weights header brought to format 2; `false` if it already was.
+fn migrate_weights_header(path: &Path) -> Result<bool, LearnError> {
+    let mut header = read_json(path)?;
+    match version_of(&header) {
+        Some(1) => {}
+        Some(2) => return Ok(false),
+        _ => return Err(bad(path, "not a weights header of a known version")),
+    }
+    if let Some(network) = header.get_mut("network") {
+        network_v1(network);
+    }
+    header["version"] = json!(RUN_FORMAT_VERSION);
+    // Read back as the current format, so that what is written is what loads.
+    let network: crate::NetworkConfig = serde_json::from_value(header["network"].clone())
+        .map_err(|e| bad(path, format!("not a network configuration: {e}")))?;
+    let text = crate::weights::header_json(&network);
+    write(path, &text)?;
+    Ok(true)
+}
+
+/// A checkpoint's trainer state brought to format 2; `false` if it already was.
+fn migrate_state(path: &Path) -> Result<bool, LearnError> {
+    let mut state = read_json(path)?;
+    match version_of(&state) {
+        Some(1) => {}
+        Some(2) => return Ok(false),
+        _ => return Err(bad(path, "not a trainer state of a known version")),
+    }
+    if let Some(config) = state.get_mut("config") {
+        config_v1(config);
+    }
+    state["version"] = json!(RUN_FORMAT_VERSION);
+    write(path, &state.to_string())?;
+    Ok(true)
+}
+
+/// `config.json` brought to format 2; `false` if it already was.
+fn migrate_config(path: &Path) -> Result<bool, LearnError> {
+    let mut config = read_json(path)?;
+    if version_of(&config).is_some() {
+        return Ok(false);
+    }
+    config_v1(&mut config);
+    let config: TrainConfig = serde_json::from_value(config)
+        .map_err(|e| bad(path, format!("not a training configuration: {e}")))?;
+    write(path, &crate::run_dir::config_json(&config))?;
+    Ok(true)
+}
+
+/// `log.jsonl` with its start lines brought to format 2 (every other line kept as
+/// written); `false` if there was nothing to change.
+fn migrate_log(path: &Path) -> Result<bool, LearnError> {
+    let text = std::fs::read_to_string(path).map_err(|e| bad(path, e.to_string()))?;
+    let mut changed = false;
+    let mut out = String::with_capacity(text.len());
+    for (number, line) in text.lines().enumerate() {
+        let mut kept = line.to_owned();
+        if let Ok(Value::Object(mut event)) = serde_json::from_str::<Value>(line)
+            && event.get("event") == Some(&json!("start"))
+            && !event.contains_key("version")
+        {
+            start_v1(&mut event);
+            let event: LogEvent = serde_json::from_value(Value::Object(event))
+                .map_err(|e| bad(path, format!("line {}: not a start event: {e}", number + 1)))?;
+            kept = serde_json::to_string(&event).expect("an event serialises");
+            changed = true;
+        }
+        out.push_str(&kept);
+        out.push('\n');
+    }
+    if changed {
+        write(path, &out)?;
+    }
+    Ok(changed)
+}
+
+/// Brings the run directory `dir` (a Q network's: its weights headers, checkpoints,
+/// `config.json` and `log.jsonl`) to format [`RUN_FORMAT_VERSION`], rewriting each
+/// file atomically; returns the files rewritten (none if it already was current).
+/// Running it twice changes nothing the second time.
+///
+/// # Errors
+/// [`LearnError::RunFile`] naming a file that is not what its name says, and
+/// [`LearnError::Io`] if one cannot be rewritten.
+///
+/// # Examples
+/// ```
+/// use afg_learn::run::{RUN_FORMAT_VERSION, migrate_run};
+/// let dir = std::env::temp_dir().join(format!("afg-doc-migrate-{}", std::process::id()));
+/// std::fs::create_dir_all(&dir)?;
+/// let v1 = r#"{"format":"afg-weights","version":1,"network":{"net":"s2v","tasks":5,"hidden":64,"iterations":4,"activation":"relu","seed":0}}"#;
+/// std::fs::write(dir.join("model.json"), v1)?;
+/// assert_eq!(migrate_run(&dir)?.len(), 1);
+/// let header = std::fs::read_to_string(dir.join("model.json"))?;
+/// assert!(header.contains(r#""units": "mean-reward""#) && header.contains(&format!(r#""version": {RUN_FORMAT_VERSION}"#)));
+/// assert!(migrate_run(&dir)?.is_empty()); // already current
+/// # std::fs::remove_dir_all(&dir)?;
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn migrate_run(dir: &Path) -> Result<Vec<PathBuf>, LearnError> {
+    let mut rewritten = Vec::new();
+    let mut headers = vec![dir.join("model.json")];
+    let mut states = Vec::new();
+    for checkpoint in crate::train::checkpoint_dirs(dir) {
+        headers.extend(["online.json", "target.json"].map(|f| checkpoint.join(f)));
+        states.push(checkpoint.join("state.json"));
+    }
+    for path in headers {
+        if path.exists() && migrate_weights_header(&path)? {
+            rewritten.push(path);
+        }
+    }
+    for path in states {
+        if path.exists() && migrate_state(&path)? {
+            rewritten.push(path);
+        }
+    }
+    let config = dir.join("config.json");
+    if config.exists() && migrate_config(&config)? {
+        rewritten.push(config);
+    }
+    let log = dir.join("log.jsonl");
+    if log.exists() && is_q_network_log(&log)? && migrate_log(&log)? {
+        rewritten.push(log);
+    }
+    Ok(rewritten)
+}
+
+/// Whether `log.jsonl` is a Q network's log (its lines are tagged events), not a
+/// price model's rounds.
+fn is_q_network_log(path: &Path) -> Result<bool, LearnError> {
+    let text = std::fs::read_to_string(path).map_err(|e| bad(path, e.to_string()))?;
+    Ok(text
+        .lines()
+        .next()
+        .and_then(|l| serde_json::from_str::<Value>(l).ok())
+        .is_some_and(|v| v.get("event").is_some()))
+}
