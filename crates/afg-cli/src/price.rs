@@ -45,7 +45,7 @@ pub struct PriceArgs {
     #[arg(long)]
     one_shot_weight: Option<f64>,
     /// Run directory: price.json (weights and settings), log.jsonl (one line per round),
-    /// summary.json (the command and its wall time). An existing model is not overwritten
+    /// manifest.json (the kind of model, the command and its wall time). An existing model is not overwritten
     /// unless --force is given.
     #[arg(long)]
     out: PathBuf,
@@ -79,7 +79,7 @@ pub fn run(args: PriceArgs) -> Result<()> {
     let trainer = PriceTrainer::new(config)?;
     let bar = crate::progress(trainer.config().rounds as u64, "train-price");
     let command = format!("afg train-price {}", crate::command_args(&args).join(" "));
-    let summary = trainer.run_in(&args.out, command, |round| {
+    let manifest = trainer.run_in(&args.out, command, |round| {
         bar.inc(1);
         bar.println(format!(
             "round {:>3}  states {:>7}  expert {:.3}  loss {:.5}  sequential {:.2} %  one-shot {:.2} %",
@@ -87,7 +87,8 @@ pub fn run(args: PriceArgs) -> Result<()> {
         ));
     })?;
     bar.finish_and_clear();
-    println!("wrote {} ({:.0} s)", model_path.display(), summary.wall_s);
+    let seconds = manifest.wall_time_s.unwrap_or_default();
+    println!("wrote {} ({seconds:.0} s)", model_path.display());
     Ok(())
 }
 
@@ -102,7 +103,8 @@ mod tests {
             "ablations/price_n60_qstar",
         ] {
             let dir = crate::repo_root().join("models").join(run);
-            let command = afg_learn::price::PriceRunSummary::load(&dir)
+            let command = afg_learn::run::RunDir::new(&dir)
+                .manifest()
                 .unwrap()
                 .command;
             let Ok(crate::Command::TrainPrice(args)) =

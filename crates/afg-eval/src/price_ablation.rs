@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use afg_baseline::{Allocator, Method};
-use afg_learn::price::{PriceMode, PriceRunSummary};
+use afg_learn::{price::PriceMode, run::RunDir};
 use serde::Serialize;
 
 use crate::{EvalError, PriceSpec, PriceTraining, dataset, evaluate};
@@ -54,12 +54,12 @@ pub fn price_ablation(root: &Path, instances: usize) -> Result<Vec<PriceAblation
                 if !sequential.model_path(root).exists() {
                     continue;
                 }
-                let summary = PriceRunSummary::load(&sequential.dir(root))?;
+                let manifest = RunDir::new(sequential.dir(root)).manifest()?;
                 let policies: Vec<Box<dyn Allocator>> = vec![
                     Box::new(sequential.load(root)?),
                     Box::new(one_shot.load(root)?),
                 ];
-                (training.describe(), policies, Some(summary.command))
+                (training.describe(), policies, Some(manifest.command))
             }
         };
         let mut percent_of_opt = Vec::new();

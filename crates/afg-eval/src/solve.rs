@@ -9,7 +9,7 @@ use afg_game::{Assignment, Instance, Preference};
 use afg_learn::{
     policy::LearnedPolicy,
     price::{PriceMode, PriceModel, PricePolicy},
-    run::RunDir,
+    run::{ModelKind, RunDir},
 };
 use serde::Serialize;
 
@@ -40,17 +40,15 @@ pub enum OptionConflict {
     #[error("a block size applies to the sequential mode, not the one-shot one")]
     BlockWithOneShot,
     /// The one-shot mode asked of a Q network.
-    #[error(
-        "the one-shot mode applies to price models (a directory holding price.json), not Q networks"
-    )]
+    #[error("the one-shot mode applies to price models, not Q networks")]
     OneShotOnQNetwork,
     /// A block size other than 1 with the exact Burn rollout.
     #[error("the exact Burn rollout places one robot at a time (block 1)")]
     BlockWithExactBurn,
 }
 
-/// The trained model in `dir` as an allocator: a price model if the directory holds a
-/// price file ([`PriceModel::FILE_NAME`]), else the Q network of a training run.
+/// The trained model in run directory `dir` as an allocator, whatever its kind
+/// ([`RunDir::kind`]: a Q network or a price model).
 ///
 /// # Errors
 /// [`EvalError::ModelOptions`] for options that do not apply to the model found, and
@@ -71,8 +69,8 @@ pub fn load_model(dir: &Path, options: ModelOptions) -> Result<Box<dyn Allocator
         path: dir.display().to_string(),
         source,
     };
-    let price = dir.join(PriceModel::FILE_NAME);
-    if price.exists() {
+    if RunDir::new(dir).kind().map_err(loading)? == ModelKind::PriceModel {
+        let price = dir.join(PriceModel::FILE_NAME);
         if options.repair || options.exact_burn {
             return bad(OptionConflict::QNetworkOptionOnPriceModel);
         }

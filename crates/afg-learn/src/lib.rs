@@ -50,7 +50,9 @@ pub mod nets {
 /// A training run's directory: its files, typed log, manifest and lock.
 pub mod run {
     pub use crate::migrate::{RUN_FORMAT_VERSION, migrate_run};
-    pub use crate::run_dir::{LogEvent, RunDir, RunLock, RunManifest, ValidationLine};
+    pub use crate::run_dir::{
+        LogEvent, ModelKind, RunDir, RunLock, RunManifest, RunRecord, ValidationLine,
+    };
 }
 
 pub use error::LearnError;

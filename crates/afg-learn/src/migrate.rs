@@ -4,8 +4,8 @@
 //!
 //! | format | files |
 //! |---|---|
-//! | 1 | weights headers (`model.json`, the checkpoint's) of version 1, whose network may leave out `gain_residual` and `price_head` (off) and `units` (mean reward); `config.json` and the log's start line without a version, and possibly without `preset` (ours), `lr_decay` (off), `n_step` (1) or `shaping` (none), or with the boolean `greedy_shaping` instead; start lines possibly without `git_revision` or `baselines` |
-//! | 2 | every field written; `config.json` and the log's start line carry `"version": 2`, weights headers version 2 |
+//! | 1 | a Q network's `manifest.json` without version or kind, a price run's `summary.json` instead of a manifest; weights headers (`model.json`, the checkpoint's) of version 1, whose network may leave out `gain_residual` and `price_head` (off) and `units` (mean reward); `config.json` and the log's start line without a version, and possibly without `preset` (ours), `lr_decay` (off), `n_step` (1) or `shaping` (none), or with the boolean `greedy_shaping` instead; start lines possibly without `git_revision` or `baselines` |
+//! | 2 | every field written; `config.json`, `manifest.json` (with the `kind` of model) and the log's start line carry `"version": 2`, weights headers version 2 |
 
 use std::path::{Path, PathBuf};
 
@@ -194,8 +194,8 @@ fn migrate_log(path: &Path) -> Result<bool, LearnError> {
     Ok(changed)
 }
 
-/// Brings the run directory `dir` (a Q network's: its weights headers, checkpoints,
-/// `config.json` and `log.jsonl`) to format [`RUN_FORMAT_VERSION`], rewriting each
+/// Brings the run directory `dir` (a Q network's weights headers, checkpoints,
+/// `config.json`, `log.jsonl` and manifest; a price run's summary) to format [`RUN_FORMAT_VERSION`], rewriting each
 /// file atomically; returns the files rewritten (none if it already was current).
 /// Running it twice changes nothing the second time.
 ///
@@ -239,9 +239,53 @@ pub fn migrate_run(dir: &Path) -> Result<Vec<PathBuf>, LearnError> {
     if config.exists() && migrate_config(&config)? {
         rewritten.push(config);
     }
+    rewritten.extend(migrate_manifest(dir)?);
     let log = dir.join("log.jsonl");
     if log.exists() && is_q_network_log(&log)? && migrate_log(&log)? {
         rewritten.push(log);
+    }
+    Ok(rewritten)
+}
+
+/// A format-1 manifest (a Q network's, without version or kind) brought to format 2,
+/// and a format-1 price run's `summary.json` (command, wall time, last round) made its
+/// `manifest.json`; the files rewritten, removed or made.
+fn migrate_manifest(dir: &Path) -> Result<Vec<PathBuf>, LearnError> {
+    let run = crate::RunDir::new(dir);
+    let path = dir.join("manifest.json");
+    let mut rewritten = Vec::new();
+    if path.exists() {
+        let mut manifest = read_json(&path)?;
+        if version_of(&manifest).is_none() {
+            manifest["version"] = json!(RUN_FORMAT_VERSION);
+            manifest["kind"] = json!("q-network");
+            let manifest = serde_json::from_value(manifest)
+                .map_err(|e| bad(&path, format!("not a run manifest: {e}")))?;
+            run.write_manifest(&manifest)?;
+            rewritten.push(path.clone());
+        }
+    }
+    let summary_path = dir.join("summary.json");
+    if summary_path.exists() {
+        let summary = read_json(&summary_path)?;
+        let model = crate::price::PriceModel::load(&dir.join(crate::price::PriceModel::FILE_NAME))?;
+        let last_round = serde_json::from_value(summary["last"].clone())
+            .map_err(|e| bad(&summary_path, format!("not a price-run summary: {e}")))?;
+        let command = summary["command"].as_str().unwrap_or_default().to_owned();
+        let record = crate::run::RunRecord::PriceModel {
+            rounds: model.training.rounds,
+            last_round: Some(last_round),
+        };
+        let manifest = crate::run::RunManifest {
+            wall_time_s: summary["wall_s"].as_f64(),
+            ..crate::run::RunManifest::new(command, model.training.seed, record)
+        };
+        run.write_manifest(&manifest)?;
+        std::fs::remove_file(&summary_path).map_err(|source| LearnError::Io {
+            path: summary_path.display().to_string(),
+            source,
+        })?;
+        rewritten.extend([path, summary_path]);
     }
     Ok(rewritten)
 }

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use afg_learn::{
     LearnError,
     nets::NetworkConfig,
-    run::{LogEvent, RunDir, RunManifest, ValidationLine},
+    run::{LogEvent, ModelKind, RunDir, RunManifest, RunRecord, ValidationLine},
     train::{Algo, Preset, TrainConfig, Validation},
 };
 
@@ -235,17 +235,38 @@ fn manifests_round_trip() {
     let dir = fresh("manifest");
     let (run, _lock) = RunDir::create(&dir, &config()).unwrap();
     assert!(run.manifest().is_err());
-    let manifest = RunManifest {
-        command: "cargo xtask train --scale 20".into(),
-        seed: 0,
+    // Not finished: no kind of model yet.
+    assert!(
+        run.kind()
+            .unwrap_err()
+            .to_string()
+            .contains("no finished run")
+    );
+    let record = RunRecord::QNetwork {
         steps: 100,
-        wall_time_s: Some(60.0),
-        git_revision: None,
         final_validation: None,
-        weights: vec!["model.json".into(), "model.mpk".into()],
     };
+    let manifest = RunManifest {
+        wall_time_s: Some(60.0),
+        ..RunManifest::new("cargo xtask train --scale 20".into(), 0, record)
+    };
+    assert_eq!(manifest.weights, ["model.json", "model.mpk"]);
     run.write_manifest(&manifest).unwrap();
     assert_eq!(run.manifest().unwrap(), manifest);
+    assert_eq!(run.kind().unwrap(), ModelKind::QNetwork);
+    // A manifest of format 1 (no version, no kind) is named as such.
+    let text = std::fs::read_to_string(dir.join("manifest.json")).unwrap();
+    let old = text
+        .replace("\"version\": 2,", "")
+        .replace("\"kind\": \"q-network\",", "");
+    assert_ne!(old, text);
+    std::fs::write(dir.join("manifest.json"), old).unwrap();
+    assert!(
+        run.manifest()
+            .unwrap_err()
+            .to_string()
+            .contains("afg migrate")
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -293,8 +314,12 @@ fn every_committed_run_reads_back_typed() {
             path.display()
         );
         if path.join("manifest.json").exists() {
-            let manifest = run.manifest().unwrap();
-            assert_eq!(manifest.steps, config.steps, "{}", path.display());
+            let record = run.manifest().unwrap().record;
+            assert!(
+                matches!(record, RunRecord::QNetwork { steps, .. } if steps == config.steps),
+                "{}",
+                path.display()
+            );
         }
     }
 }

@@ -204,11 +204,18 @@ fn a_session_logs_and_saves_its_run_and_refuses_a_second_writer() {
     assert!(matches!(log.last(), Some(LogEvent::End { step: 40, .. })));
     let manifest = run.manifest_from_log("train it".into()).unwrap();
     assert_eq!(
-        (manifest.command.as_str(), manifest.steps, manifest.seed),
-        ("train it", 40, config.seed)
+        (manifest.command.as_str(), manifest.seed, manifest.kind()),
+        ("train it", config.seed, afg_learn::run::ModelKind::QNetwork)
     );
     assert_eq!(manifest.git_revision.as_deref(), Some("abc"));
-    assert_eq!(manifest.final_validation.map(|v| v.step), Some(40));
+    let afg_learn::run::RunRecord::QNetwork {
+        steps,
+        final_validation,
+    } = manifest.record
+    else {
+        unreachable!("a Q network's run")
+    };
+    assert_eq!((steps, final_validation.map(|v| v.step)), (40, Some(40)));
     // The final weights are the trainer's: the same validation.
     let policy = LearnedPolicy::load(&run.weights()).unwrap();
     assert_eq!(policy.config(), &config.network);

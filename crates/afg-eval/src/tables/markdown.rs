@@ -5,6 +5,7 @@ use std::path::Path;
 use std::time::Duration;
 
 use afg_baseline::Method;
+use afg_learn::run::RunRecord;
 
 use super::{RowId, Run, Scale};
 use crate::{EvalError, ModelSpec, Summary, dataset, paper};
@@ -205,10 +206,13 @@ pub fn models_table(root: &Path) -> Result<String, EvalError> {
             format!("{:.1e} (constant)", config.lr)
         };
         let minutes = manifest.wall_time_s.unwrap_or(f64::NAN) / 60.0;
-        let pct = manifest
-            .final_validation
-            .as_ref()
-            .map_or(f64::NAN, |v| v.percent_of_opt);
+        let pct = match &manifest.record {
+            RunRecord::QNetwork {
+                final_validation: Some(v),
+                ..
+            } => v.percent_of_opt,
+            _ => f64::NAN,
+        };
         let _ = writeln!(
             md,
             "| {} | {} | {} | {lr} | {minutes:.0} min | {pct:.1} % | `{}` |",

@@ -124,72 +124,16 @@ impl PriceModel {
     }
 }
 
-/// What a price-model training run leaves beside its model ([`PriceModel::FILE_NAME`])
-/// and its log of rounds ([`PriceRunSummary::LOG_FILE_NAME`], one [`PriceRound`] per
-/// line): enough to rerun the run and to say what it cost.
-///
-/// # Examples
-/// ```
-/// use afg_learn::price::{PriceRound, PriceRunSummary};
-/// let dir = std::env::temp_dir().join(format!("afg_price_summary_doc_{}", std::process::id()));
-/// std::fs::create_dir_all(&dir)?;
-/// let summary = PriceRunSummary {
-///     command: "afg train-price --scale 60 --tasks 5 --seed 0 --out x".into(),
-///     wall_s: 12.5,
-///     last: PriceRound { round: 3, states: 10, expert_share: 0.5, loss: 0.01, sequential: 99.0, one_shot: 97.0 },
-/// };
-/// summary.save(&dir)?;
-/// assert_eq!(PriceRunSummary::load(&dir)?, summary);
-/// # std::fs::remove_dir_all(&dir)?;
-/// # Ok::<(), Box<dyn std::error::Error>>(())
-/// ```
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct PriceRunSummary {
-    /// The command that reproduces the run.
-    pub command: String,
-    /// Wall time of the whole run.
-    pub wall_s: f64,
-    /// The last round.
-    pub last: PriceRound,
-}
-
-impl PriceRunSummary {
-    /// The summary's file name in a run directory.
-    pub const FILE_NAME: &str = "summary.json";
-    /// The file name of the run's log, one JSON [`PriceRound`] per line.
-    pub const LOG_FILE_NAME: &str = "log.jsonl";
-
-    /// Writes the summary into run directory `dir` (temporary file, then rename).
-    ///
-    /// # Errors
-    /// [`LearnError::Weights`] if the file cannot be written.
-    pub fn save(&self, dir: &Path) -> Result<(), LearnError> {
-        let json = serde_json::to_string_pretty(self).expect("a summary always serialises");
-        afg_game::fs::write_atomic(&dir.join(Self::FILE_NAME), json.as_bytes())?;
-        Ok(())
-    }
-
-    /// Reads the summary of run directory `dir`.
-    ///
-    /// # Errors
-    /// [`LearnError::Weights`] naming the file if it is missing or malformed.
-    pub fn load(dir: &Path) -> Result<Self, LearnError> {
-        let path = dir.join(Self::FILE_NAME);
-        let error = |reason: String| LearnError::Weights {
-            path: path.display().to_string(),
-            reason,
-        };
-        let text = std::fs::read_to_string(&path).map_err(|e| error(e.to_string()))?;
-        serde_json::from_str(&text).map_err(|e| error(format!("not a price-run summary: {e}")))
-    }
-}
+/// The file name of a price run's log, one JSON [`PriceRound`] per line.
+pub const LOG_FILE_NAME: &str = "log.jsonl";
 
 impl PriceTrainer {
     /// Trains to the end with run directory `dir` (created if needed, then locked as a
     /// [`RunDir`](crate::RunDir) is, so that a second trainer is refused): after each
-    /// round the log ([`PriceRunSummary::LOG_FILE_NAME`], one [`PriceRound`] per line)
-    /// is rewritten atomically and `on_round` called; at the end the summary with
-    /// `command` and then the model ([`PriceModel::FILE_NAME`]) are written. A run
+    /// round the log ([`LOG_FILE_NAME`], one [`PriceRound`] per line) is rewritten
+    /// atomically and `on_round` called; at the end the run's manifest
+    /// ([`RunManifest`](crate::run::RunManifest), with `command`) and then the model
+    /// ([`PriceModel::FILE_NAME`]) are written. A run
     /// killed before its end leaves no model; the same call starts it again from round
     /// 0 and, being seeded, ends with the same weights.
     ///
@@ -201,7 +145,7 @@ impl PriceTrainer {
         dir: &Path,
         command: String,
         mut on_round: impl FnMut(&PriceRound),
-    ) -> Result<PriceRunSummary, LearnError> {
+    ) -> Result<crate::run::RunManifest, LearnError> {
         let start = std::time::Instant::now();
         std::fs::create_dir_all(dir).map_err(|source| LearnError::Io {
             path: dir.display().to_string(),
@@ -214,19 +158,23 @@ impl PriceTrainer {
             let round = self.round()?;
             log += &serde_json::to_string(&round).expect("a round always serialises");
             log.push('\n');
-            afg_game::fs::write_atomic(&dir.join(PriceRunSummary::LOG_FILE_NAME), log.as_bytes())?;
+            afg_game::fs::write_atomic(&dir.join(LOG_FILE_NAME), log.as_bytes())?;
             on_round(&round);
             last = Some(round);
         }
-        let summary = PriceRunSummary {
-            command,
-            wall_s: start.elapsed().as_secs_f64(),
-            last: last.expect("a checked configuration has at least one round"),
+        let model = self.model();
+        let record = crate::run::RunRecord::PriceModel {
+            rounds: model.training.rounds,
+            last_round: last,
         };
-        summary.save(dir)?;
+        let manifest = crate::run::RunManifest {
+            wall_time_s: Some(start.elapsed().as_secs_f64()),
+            ..crate::run::RunManifest::new(command, model.training.seed, record)
+        };
+        crate::RunDir::new(dir).write_manifest(&manifest)?;
         // The model last: a directory that holds one holds a whole run.
-        self.model().save(&dir.join(PriceModel::FILE_NAME))?;
-        Ok(summary)
+        model.save(&dir.join(PriceModel::FILE_NAME))?;
+        Ok(manifest)
     }
 }
 
@@ -473,16 +421,23 @@ mod tests {
             "{refused:?}"
         );
         drop(held);
-        let summary = PriceTrainer::new(config.clone())
+        let manifest = PriceTrainer::new(config.clone())
             .unwrap()
             .run_in(&run, "train it".into(), |r| rounds.push(r.clone()))
             .unwrap();
-        assert_eq!(PriceRunSummary::load(&run).unwrap(), summary);
+        assert_eq!(crate::RunDir::new(&run).manifest().unwrap(), manifest);
+        let crate::run::RunRecord::PriceModel { last_round, .. } = &manifest.record else {
+            unreachable!("a price run")
+        };
         assert_eq!(
-            (summary.command.as_str(), &summary.last),
-            ("train it", &rounds[1])
+            (manifest.command.as_str(), last_round.as_ref()),
+            ("train it", Some(&rounds[1]))
         );
-        let log = std::fs::read_to_string(run.join(PriceRunSummary::LOG_FILE_NAME)).unwrap();
+        assert_eq!(
+            crate::RunDir::new(&run).kind().unwrap(),
+            crate::run::ModelKind::PriceModel
+        );
+        let log = std::fs::read_to_string(run.join(LOG_FILE_NAME)).unwrap();
         let logged: Vec<PriceRound> = log
             .lines()
             .map(|l| serde_json::from_str(l).unwrap())
