@@ -28,7 +28,7 @@ pub struct SolveArgs {
     /// Learned policy: balanced best-response sweeps after the rollout (Def. 3 stable result).
     #[arg(long)]
     pub(crate) repair: bool,
-    /// Price model (a directory holding price.json): every robot uses the prices of the
+    /// Price model (a run whose manifest names a price model): every robot uses the prices of the
     /// empty state instead of the current one.
     #[arg(long)]
     pub(crate) one_shot: bool,

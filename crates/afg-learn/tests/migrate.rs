@@ -179,3 +179,53 @@ fn the_format_1_shaping_flag_becomes_the_shaping() {
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }
+
+/// A format-1 price run (`summary.json` beside `price.json`) gets the committed run's
+/// format-2 manifest, and its summary is gone; a format-1 Q-network manifest (no version,
+/// no kind) gets its version and kind.
+#[test]
+fn format_1_summaries_and_manifests_become_format_2_manifests() {
+    let committed = repo().join("models/price_n60");
+    let dir = scratch("price");
+    std::fs::copy(committed.join("price.json"), dir.join("price.json")).unwrap();
+    let manifest = read(&committed.join("manifest.json"));
+    let summary = json!({
+        "command": manifest["command"],
+        "wall_s": manifest["wall_time_s"],
+        "last": manifest["last_round"],
+    });
+    write(&dir.join("summary.json"), &summary);
+    assert!(RunDir::new(&dir).kind().is_err());
+    assert_eq!(migrate_run(&dir).unwrap().len(), 2);
+    assert!(!dir.join("summary.json").exists());
+    assert_eq!(
+        RunDir::new(&dir).manifest().unwrap(),
+        RunDir::new(&committed).manifest().unwrap()
+    );
+    assert_eq!(
+        RunDir::new(&dir).kind().unwrap(),
+        afg_learn::run::ModelKind::PriceModel
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+
+    let committed = repo().join("models/afgnet_ddqn_n60");
+    let dir = scratch("q-manifest");
+    let mut manifest = read(&committed.join("manifest.json"));
+    let fields = manifest.as_object_mut().unwrap();
+    fields.remove("version");
+    fields.remove("kind");
+    write(&dir.join("manifest.json"), &manifest);
+    assert!(
+        RunDir::new(&dir)
+            .manifest()
+            .unwrap_err()
+            .to_string()
+            .contains("afg migrate")
+    );
+    assert_eq!(migrate_run(&dir).unwrap().len(), 1);
+    assert_eq!(
+        RunDir::new(&dir).manifest().unwrap(),
+        RunDir::new(&committed).manifest().unwrap()
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
