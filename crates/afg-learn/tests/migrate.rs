@@ -7,8 +7,10 @@ use std::path::{Path, PathBuf};
 use afg_baseline::Allocator;
 use afg_game::GeneratorConfig;
 use afg_learn::{
+    nets::NetworkConfig,
     policy::LearnedPolicy,
     run::{RunDir, migrate_run},
+    train::{Algo, TrainConfig, Trainer},
 };
 use serde_json::{Value, json};
 
@@ -226,6 +228,43 @@ fn format_1_summaries_and_manifests_become_format_2_manifests() {
     assert_eq!(
         RunDir::new(&dir).manifest().unwrap(),
         RunDir::new(&committed).manifest().unwrap()
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A format-1 checkpoint (its two weights headers and the trainer's state): resuming
+/// is refused with a word on the migration; after it the run resumes where it was.
+#[test]
+fn a_format_1_checkpoint_resumes_after_migration() {
+    let dir = scratch("checkpoint");
+    let mut config = TrainConfig::new(10, Algo::Dqn, NetworkConfig::s2v(5, 0), 20, 3);
+    (config.batch, config.parallel_envs, config.warmup) = (32, 4, 64);
+    (config.replay_capacity, config.validation_instances) = (2_000, 4);
+    let mut trainer = Trainer::new(config).unwrap();
+    while trainer.steps_done() < 5 {
+        trainer.step().unwrap();
+    }
+    trainer.save_checkpoint(&dir).unwrap();
+    let checkpoint = afg_learn::train::checkpoint_dir(&dir);
+    for file in ["online.json", "target.json"] {
+        let mut header = read(&checkpoint.join(file));
+        header["version"] = json!(1);
+        network_as_v1(&mut header["network"]);
+        write(&checkpoint.join(file), &header);
+    }
+    let state_path = checkpoint.join("state.json");
+    let mut state = read(&state_path);
+    state["version"] = json!(1);
+    config_as_v1(&mut state["config"]);
+    std::fs::write(&state_path, state.to_string()).unwrap();
+    let refused = Trainer::resume(&dir).err().unwrap().to_string();
+    assert!(refused.contains("afg migrate"), "{refused}");
+
+    assert_eq!(migrate_run(&dir).unwrap().len(), 3);
+    let resumed = Trainer::resume(&dir).unwrap();
+    assert_eq!(
+        (resumed.steps_done(), resumed.config()),
+        (5, trainer.config())
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
