@@ -33,13 +33,8 @@ pub(crate) fn is_older(text: &str) -> bool {
     struct Versioned {
         version: Option<u64>,
     }
-    serde_json::from_str::<Versioned>(text).is_ok_and(|v| is_older_version(v.version))
-}
-
-/// Whether a file that records `version` (`None`: no version) is older than
-/// [`RUN_FORMAT_VERSION`].
-pub(crate) fn is_older_version(version: Option<u64>) -> bool {
-    version.is_none_or(|v| v < u64::from(RUN_FORMAT_VERSION))
+    serde_json::from_str::<Versioned>(text)
+        .is_ok_and(|v| v.version.is_none_or(|v| v < u64::from(RUN_FORMAT_VERSION)))
 }
 
 fn bad(path: &Path, reason: impl Into<String>) -> LearnError {
@@ -108,6 +103,19 @@ fn version_of(value: &Value) -> Option<u64> {
     value.get("version").and_then(Value::as_u64)
 }
 
+/// Whether a file that records its version (`what`, read from `path`) is of format 1;
+/// `false` if it is current.
+///
+/// # Errors
+/// [`LearnError::RunFile`] for any other version.
+fn is_format_1(path: &Path, value: &Value, what: &str) -> Result<bool, LearnError> {
+    match version_of(value) {
+        Some(1) => Ok(true),
+        Some(v) if v == u64::from(RUN_FORMAT_VERSION) => Ok(false),
+        _ => Err(bad(path, format!("not {what} of a known version"))),
+    }
+}
+
 fn read_json(path: &Path) -> Result<Value, LearnError> {
     let text = std::fs::read_to_string(path).map_err(|e| bad(path, e.to_string()))?;
     serde_json::from_str(&text).map_err(|e| bad(path, format!("not JSON: {e}")))
@@ -121,10 +129,8 @@ fn write(path: &Path, text: &str) -> Result<(), LearnError> {
 /// A weights header brought to format 2; `false` if it already was.
 fn migrate_weights_header(path: &Path) -> Result<bool, LearnError> {
     let mut header = read_json(path)?;
-    match version_of(&header) {
-        Some(1) => {}
-        Some(2) => return Ok(false),
-        _ => return Err(bad(path, "not a weights header of a known version")),
+    if !is_format_1(path, &header, "a weights header")? {
+        return Ok(false);
     }
     if let Some(network) = header.get_mut("network") {
         network_v1(network);
@@ -141,10 +147,8 @@ fn migrate_weights_header(path: &Path) -> Result<bool, LearnError> {
 /// A checkpoint's trainer state brought to format 2; `false` if it already was.
 fn migrate_state(path: &Path) -> Result<bool, LearnError> {
     let mut state = read_json(path)?;
-    match version_of(&state) {
-        Some(1) => {}
-        Some(2) => return Ok(false),
-        _ => return Err(bad(path, "not a trainer state of a known version")),
+    if !is_format_1(path, &state, "a trainer state")? {
+        return Ok(false);
     }
     if let Some(config) = state.get_mut("config") {
         config_v1(config);

@@ -350,8 +350,9 @@ impl RunDir {
         self.path.join(name)
     }
 
-    /// Reads the JSON file `name` as a `T`; `missing` says what a missing file means,
-    /// `kind` what the file should be.
+    /// Reads the JSON file `name`, a file of the current format, as a `T`; `missing`
+    /// says what a missing file means, `kind` what the file should be. A file of an
+    /// older format is refused with a word on the migration.
     fn read_json<T: serde::de::DeserializeOwned>(
         &self,
         name: &str,
@@ -364,6 +365,9 @@ impl RunDir {
             reason,
         };
         let text = std::fs::read_to_string(&path).map_err(|e| bad(format!("{missing} ({e})")))?;
+        if crate::migrate::is_older(&text) {
+            return Err(bad(crate::migrate::older_format_hint()));
+        }
         serde_json::from_str(&text).map_err(|e| bad(format!("not {kind}: {e}")))
     }
 
@@ -409,18 +413,13 @@ impl RunDir {
             "no training run here",
             "a training configuration",
         )?;
-        let bad = |reason| LearnError::RunFile {
-            path: self.file("config.json").display().to_string(),
-            reason,
-        };
-        if crate::migrate::is_older_version(config.get("version").and_then(|v| v.as_u64())) {
-            return Err(bad(crate::migrate::older_format_hint()));
-        }
         if let Some(fields) = config.as_object_mut() {
             fields.remove("version");
         }
-        serde_json::from_value(config)
-            .map_err(|e| bad(format!("not a training configuration: {e}")))
+        serde_json::from_value(config).map_err(|e| LearnError::RunFile {
+            path: self.file("config.json").display().to_string(),
+            reason: format!("not a training configuration: {e}"),
+        })
     }
 
     /// Appends one event to `log.jsonl`.
@@ -530,13 +529,6 @@ impl RunDir {
     /// # Errors
     /// [`LearnError::RunFile`] if it is missing or not a manifest.
     pub fn manifest(&self) -> Result<RunManifest, LearnError> {
-        let text = std::fs::read_to_string(self.file("manifest.json")).unwrap_or_default();
-        if crate::migrate::is_older(&text) {
-            return Err(LearnError::RunFile {
-                path: self.file("manifest.json").display().to_string(),
-                reason: crate::migrate::older_format_hint(),
-            });
-        }
         self.read_json("manifest.json", "no manifest", "a run manifest")
     }
 
