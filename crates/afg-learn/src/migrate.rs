@@ -172,7 +172,8 @@ fn migrate_config(path: &Path) -> Result<bool, LearnError> {
 }
 
 /// `log.jsonl` with its start lines brought to format 2 (every other line kept as
-/// written); `false` if there was nothing to change.
+/// written, a price run's rounds included: they have no `event`); `false` if there was
+/// nothing to change.
 fn migrate_log(path: &Path) -> Result<bool, LearnError> {
     let text = std::fs::read_to_string(path).map_err(|e| bad(path, e.to_string()))?;
     let mut changed = false;
@@ -199,8 +200,9 @@ fn migrate_log(path: &Path) -> Result<bool, LearnError> {
 }
 
 /// Brings the run directory `dir` (a Q network's weights headers, checkpoints,
-/// `config.json`, `log.jsonl` and manifest; a price run's summary) to format [`RUN_FORMAT_VERSION`], rewriting each
-/// file atomically; returns the files rewritten (none if it already was current).
+/// `config.json`, `log.jsonl` and manifest; a price run's summary) to format
+/// [`RUN_FORMAT_VERSION`], rewriting each file atomically; returns the files rewritten
+/// (none if it already was current).
 /// Running it twice changes nothing the second time.
 ///
 /// # Errors
@@ -245,7 +247,7 @@ pub fn migrate_run(dir: &Path) -> Result<Vec<PathBuf>, LearnError> {
     }
     rewritten.extend(migrate_manifest(dir)?);
     let log = dir.join("log.jsonl");
-    if log.exists() && is_q_network_log(&log)? && migrate_log(&log)? {
+    if log.exists() && migrate_log(&log)? {
         rewritten.push(log);
     }
     Ok(rewritten)
@@ -292,15 +294,4 @@ fn migrate_manifest(dir: &Path) -> Result<Vec<PathBuf>, LearnError> {
         rewritten.extend([path, summary_path]);
     }
     Ok(rewritten)
-}
-
-/// Whether `log.jsonl` is a Q network's log (its lines are tagged events), not a
-/// price model's rounds.
-fn is_q_network_log(path: &Path) -> Result<bool, LearnError> {
-    let text = std::fs::read_to_string(path).map_err(|e| bad(path, e.to_string()))?;
-    Ok(text
-        .lines()
-        .next()
-        .and_then(|l| serde_json::from_str::<Value>(l).ok())
-        .is_some_and(|v| v.get("event").is_some()))
 }

@@ -190,6 +190,8 @@ fn format_1_summaries_and_manifests_become_format_2_manifests() {
     let committed = repo().join("models/price_n60");
     let dir = scratch("price");
     std::fs::copy(committed.join("price.json"), dir.join("price.json")).unwrap();
+    // Its log of rounds is not a Q network's log of events: left as it is.
+    std::fs::copy(committed.join("log.jsonl"), dir.join("log.jsonl")).unwrap();
     let manifest = read(&committed.join("manifest.json"));
     let summary = json!({
         "command": manifest["command"],
@@ -200,6 +202,10 @@ fn format_1_summaries_and_manifests_become_format_2_manifests() {
     assert!(RunDir::new(&dir).kind().is_err());
     assert_eq!(migrate_run(&dir).unwrap().len(), 2);
     assert!(!dir.join("summary.json").exists());
+    assert_eq!(
+        std::fs::read(dir.join("log.jsonl")).unwrap(),
+        std::fs::read(committed.join("log.jsonl")).unwrap()
+    );
     assert_eq!(
         RunDir::new(&dir).manifest().unwrap(),
         RunDir::new(&committed).manifest().unwrap()
