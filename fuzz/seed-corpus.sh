@@ -5,9 +5,9 @@ set -euo pipefail
 cd "$(dirname "$0")"
 mkdir -p corpus/instance corpus/assignment corpus/configs
 head -n 1 ../datasets/n20.jsonl > corpus/instance/n20_first_line
-cp ../models/afgnet_ddqn_n20/config.json corpus/configs/run_config.json
+cp ../models/paper/afgnet_ddqn_n20/config.json corpus/configs/run_config.json
 python3 -c 'import json, sys; json.dump(json.load(open(sys.argv[1]))["network"], open(sys.argv[2], "w"))' \
-    ../models/afgnet_ddqn_n20/model.json corpus/configs/network.json
+    ../models/paper/afgnet_ddqn_n20/model.json corpus/configs/network.json
 python3 -c 'import json; print(json.dumps({"format": "afg-assignment", "version": 1, "tasks": [i % 5 for i in range(20)]}))' \
     > corpus/assignment/round_robin.json
 for target in instance assignment configs; do

@@ -98,9 +98,9 @@ mod tests {
     #[test]
     fn command_args_write_a_command_back() {
         for run in [
-            "price_n60",
-            "ablations/price_n60_expert",
-            "ablations/price_n60_qstar",
+            "ours/price_n60",
+            "ablations/price_expert_n60",
+            "ablations/price_dagger_n60",
         ] {
             let dir = crate::repo_root().join("models").join(run);
             let command = afg_learn::run::RunDir::new(&dir)

@@ -18,7 +18,7 @@ pub struct SolveArgs {
     #[arg(long, short, group = "allocator")]
     pub(crate) method: Option<Method>,
     /// A learned policy instead: a trained run directory (holding model.json and
-    /// model.mpk), e.g. models/afgnet_ddqn_n20.
+    /// model.mpk), e.g. models/paper/afgnet_ddqn_n20.
     #[arg(long, group = "allocator")]
     pub(crate) model: Option<PathBuf>,
     /// Learned policy (Q network or sequential price model): robots per network evaluation
@@ -362,7 +362,7 @@ mod tests {
     #[test]
     fn learned_policies_solve_and_bad_options_are_refused() {
         let root = crate::repo_root();
-        let model = root.join("models/afgnet_ddqn_n20");
+        let model = root.join("models/paper/afgnet_ddqn_n20");
         let model = model.to_str().unwrap();
         let data = |n: usize| format!("--input {}/datasets/n{n}.jsonl", root.display());
         solve(&format!("--model {model} {} --limit 2 --json", data(20))).unwrap();

@@ -177,7 +177,7 @@ mod tests {
             "--scale 60 --no-shaping",
             "--scale 60 --shaping optimal",
             "--scale 20 --paper --shaping greedy",
-            "--scale 100 --init-from models/afgnet_ddqn_n60 --eps-start 0.1",
+            "--scale 100 --init-from models/paper/afgnet_ddqn_n60 --eps-start 0.1",
             "--scale 60 --price-head --algo qstar",
             "--scale 60 --tasks 50 --price-head --algo qstar",
             "--scale 60 --price-head --algo qstar --price-loss 0.5",
@@ -198,17 +198,14 @@ mod tests {
     fn every_committed_manifest_records_the_command_its_config_gives() {
         let root = crate::repo_root();
         let mut checked = 0;
-        for parent in ["models", "models/ablations"] {
-            for entry in std::fs::read_dir(root.join(parent)).unwrap() {
-                let run = RunDir::new(entry.unwrap().path());
-                let (Ok(manifest), Ok(config)) = (run.manifest(), run.config()) else {
-                    continue; // a price model, or a run without a manifest
-                };
-                let dir = run.path().strip_prefix(&root).unwrap();
-                let line = command_line(&config, dir);
-                assert_eq!(line, manifest.command, "{}", dir.display());
-                checked += 1;
-            }
+        for run in RunDir::find_all(&root.join("models")).unwrap() {
+            let (Ok(manifest), Ok(config)) = (run.manifest(), run.config()) else {
+                continue; // a price model, or a run without a manifest
+            };
+            let dir = run.path().strip_prefix(&root).unwrap();
+            let line = command_line(&config, dir);
+            assert_eq!(line, manifest.command, "{}", dir.display());
+            checked += 1;
         }
         assert!(checked >= 20, "only {checked} manifests");
     }

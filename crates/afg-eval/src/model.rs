@@ -1,6 +1,6 @@
 //! The learned models of the tables, by identity rather than by directory string.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use afg_learn::{nets::Net, run::RunDir, train::Algo};
 
@@ -26,6 +26,7 @@ pub enum Head {
 /// use afg_learn::{nets::Net, train::Algo};
 /// let m = ModelSpec::new(Net::AfgNet, Algo::Ddqn, 60);
 /// assert_eq!(m.dir_name(), "afgnet_ddqn_n60");
+/// assert_eq!(m.models_path(), std::path::Path::new("models/paper/afgnet_ddqn_n60"));
 /// assert_eq!(m.label(), "AFGNet_DDQN");
 /// let ours = m.with_head(Head::GainResidual);
 /// assert!(ours.is_ours() && ours.label().ends_with("(ours)"));
@@ -38,18 +39,22 @@ pub enum Head {
 /// assert_eq!(shaped.dir_name(), "afgnet_ddqn_optshape_n60");
 /// assert_eq!(shaped.label(), "AFGNet_DDQN, optimal-completion shaping (ours)");
 /// let warm = ModelSpec::WARM_STARTS[2];
-/// assert_eq!(warm.dir_name(), "s2v_ddqn_warm_n60");
+/// assert_eq!(warm.dir_name(), "s2v_ddqn_warm20_n60");
 /// assert_eq!(warm.label(), "S2V_DDQN, warm start from the N = 20 model");
 /// assert!(!warm.is_ours() && !warm.is_paper_method());
 /// let shaped_warm = ModelSpec::WARM_STARTS[1];
-/// assert_eq!(shaped_warm.dir_name(), "afgnet_ddqn_optshape_warm_n100");
+/// assert_eq!(shaped_warm.dir_name(), "afgnet_ddqn_optshape_warm60_n100");
+/// assert_eq!(
+///     shaped_warm.models_path(),
+///     std::path::Path::new("models/ours/afgnet_ddqn_optshape_warm60_n100")
+/// );
 /// assert_eq!(
 ///     shaped_warm.label(),
 ///     "AFGNet_DDQN, optimal-completion shaping, warm start from the N = 60 model (ours)"
 /// );
 /// let [exact, prices, td, demos] = ModelSpec::PRICE_HEADED;
 /// assert_eq!(exact.dir_name(), "afgnet_qstar_price_n60");
-/// assert_eq!(prices.dir_name(), "afgnet_qstar_price_oneshot_n60");
+/// assert_eq!(prices.dir_name(), "afgnet_qstar_price_priceloss_n60");
 /// assert_eq!(
 ///     prices.label(),
 ///     "AFGNet + price head, exact Q* and price regression (ours)"
@@ -192,7 +197,10 @@ impl ModelSpec {
         [exact, exact.with_price_loss(), td, td.with_demonstrations()]
     };
 
-    /// The run directory's name under `models/`, e.g. `afgnet_ddqn_n60`.
+    /// The run directory's name: `{network}_{algorithm}`, then one word per way it
+    /// departs from the paper's training (`gain`, `price`, `priceloss`, `demos`,
+    /// `optshape`, `warm{N}` for a warm start from the model trained at N), then
+    /// `n{N trained at}`; e.g. `afgnet_ddqn_warm60_n100`.
     pub fn dir_name(&self) -> String {
         let mut name = format!("{}_{}", self.net.name(), self.algo.name());
         name += match self.head {
@@ -201,21 +209,34 @@ impl ModelSpec {
             Head::Price => "_price",
         };
         for (on, part) in [
-            (self.price_loss, "_oneshot"),
+            (self.price_loss, "_priceloss"),
             (self.demonstrations, "_demos"),
             (self.optimal_shaping, "_optshape"),
-            (self.warm_start_from.is_some(), "_warm"),
         ] {
             if on {
                 name += part;
             }
         }
+        if let Some(from) = self.warm_start_from {
+            name += &format!("_warm{from}");
+        }
         format!("{name}_n{}", self.trained_at)
+    }
+
+    /// The run directory relative to the repository root: `models/paper/…` for the
+    /// paper's method, `models/ours/…` for every other model the tables show.
+    pub fn models_path(&self) -> PathBuf {
+        let role = if self.is_paper_method() {
+            "paper"
+        } else {
+            "ours"
+        };
+        ["models", role, &self.dir_name()].iter().collect()
     }
 
     /// The run directory under the repository `root`.
     pub fn run_dir(&self, root: &Path) -> RunDir {
-        RunDir::new(root.join("models").join(self.dir_name()))
+        RunDir::new(root.join(self.models_path()))
     }
 
     /// The row label, in the paper's naming (e.g. `AFGNet_DDQN`); ours end in "(ours)".
@@ -320,9 +341,9 @@ impl PriceTraining {
 /// use afg_eval::{PriceSpec, PriceTraining};
 /// use afg_learn::price::PriceMode;
 /// let s = PriceSpec::new(60, PriceMode::OneShot);
-/// assert_eq!(s.dir(Path::new("/repo")), Path::new("/repo/models/price_n60"));
+/// assert_eq!(s.dir(Path::new("/repo")), Path::new("/repo/models/ours/price_n60"));
 /// let ablation = s.with_training(PriceTraining::Dagger);
-/// assert_eq!(ablation.dir(Path::new("r")), Path::new("r/models/ablations/price_n60_qstar"));
+/// assert_eq!(ablation.dir(Path::new("r")), Path::new("r/models/ablations/price_dagger_n60"));
 /// assert_eq!(s.label(), "Price model, one-shot, trained at N = 60 (ours)");
 /// let b = PriceSpec::new(60, PriceMode::Sequential).with_block(10);
 /// assert_eq!(b.label(), "Price model, sequential, prices every 10 robots, trained at N = 60 (ours)");
@@ -376,9 +397,9 @@ impl PriceSpec {
         let n = self.trained_at;
         let models = root.join("models");
         match self.training {
-            PriceTraining::DaggerPriceLoss => models.join(format!("price_n{n}")),
-            PriceTraining::Dagger => models.join(format!("ablations/price_n{n}_qstar")),
-            PriceTraining::ExpertStates => models.join(format!("ablations/price_n{n}_expert")),
+            PriceTraining::DaggerPriceLoss => models.join(format!("ours/price_n{n}")),
+            PriceTraining::Dagger => models.join(format!("ablations/price_dagger_n{n}")),
+            PriceTraining::ExpertStates => models.join(format!("ablations/price_expert_n{n}")),
         }
     }
 

@@ -178,7 +178,7 @@ mod tests {
 
     #[test]
     fn the_report_reads_a_log_up_to_a_step() {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/afgnet_ddqn_n20");
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/paper/afgnet_ddqn_n20");
         let validations: Vec<ValidationLine> = RunDir::new(&dir)
             .log()
             .unwrap()

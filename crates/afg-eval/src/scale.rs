@@ -56,11 +56,14 @@ pub struct Plan {
     pub decentralised_up_to: usize,
     /// Trained run directory of the learned policy at M = 5; other M use untrained
     /// weights (timing only).
-    #[cfg_attr(feature = "cli", arg(long, default_value = "models/afgnet_ddqn_n20"))]
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, default_value = "models/paper/afgnet_ddqn_n20")
+    )]
     pub model: PathBuf,
     /// Price model (ours), run at every M in both modes without repair; skipped if the
     /// directory holds no price file.
-    #[cfg_attr(feature = "cli", arg(long, default_value = "models/price_n60"))]
+    #[cfg_attr(feature = "cli", arg(long, default_value = "models/ours/price_n60"))]
     pub price_model: PathBuf,
     /// AFGNet with a price head (ours): run directories, each used at the M its network
     /// was built for, without repair, with 10 network passes and in one pass
@@ -70,7 +73,7 @@ pub struct Plan {
         arg(
             long,
             value_delimiter = ',',
-            default_value = "models/afgnet_qstar_price_n60,models/afgnet_qstar_price_m50_n60"
+            default_value = "models/ours/afgnet_qstar_price_n60,models/ours/afgnet_qstar_price_m50_n60"
         )
     )]
     pub price_headed: Vec<PathBuf>,

@@ -57,7 +57,7 @@ pub enum OptionConflict {
 /// # Examples
 /// ```
 /// use afg_eval::solve::{ModelOptions, load_model};
-/// let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/afgnet_ddqn_n20");
+/// let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/paper/afgnet_ddqn_n20");
 /// let one_shot = ModelOptions { one_shot: true, ..ModelOptions::default() };
 /// let err = load_model(&dir, one_shot).err().unwrap(); // a Q network has no one-shot mode
 /// assert!(err.to_string().starts_with("the one-shot mode applies to price models"));

@@ -1,38 +1,114 @@
-//! models/README.md lists every committed run once, and only those; each line names
-//! docs that exist and discuss the run.
+//! models/README.md lists every committed run once, and only those, in the section of
+//! its role's folder; each name follows the README's grammar and each line names docs
+//! that exist and discuss the run.
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
+
+use afg_learn::run::RunDir;
 
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
-/// The run directories under models/ and models/ablations/, as README names them.
-fn run_dirs(models: &Path) -> BTreeSet<String> {
-    let mut runs = BTreeSet::new();
-    for prefix in ["", "ablations/"] {
-        for entry in std::fs::read_dir(models.join(prefix)).unwrap() {
-            let entry = entry.unwrap();
-            let name = entry.file_name().into_string().unwrap();
-            if entry.file_type().unwrap().is_dir() && name != "ablations" {
-                runs.insert(format!("{prefix}{name}"));
-            }
-        }
-    }
-    runs
+/// Whether `word` is one of the README's words for a change from the default training.
+fn is_change(word: &str) -> bool {
+    let numbered = |prefix: &str, allowed: fn(char) -> bool| {
+        word.strip_prefix(prefix)
+            .is_some_and(|rest| !rest.is_empty() && rest.chars().all(allowed))
+    };
+    let digits = |c: char| c.is_ascii_digit();
+    let rate = |c: char| c.is_ascii_digit() || matches!(c, '.' | 'e' | '-');
+    [
+        "gain",
+        "price",
+        "priceloss",
+        "demos",
+        "optshape",
+        "warmqstar",
+        "scalefree",
+        "noshape",
+        "firstunits",
+        "expert",
+        "dagger",
+    ]
+    .contains(&word)
+        || ["priceloss", "warm", "m", "seed", "steps", "nstep", "sync"]
+            .iter()
+            .any(|prefix| numbered(prefix, digits))
+        || numbered("lr", rate)
+}
+
+/// Whether a run's directory name reads `{model}[_{change}…]_n{N}`.
+fn follows_the_grammar(name: &str) -> bool {
+    let words: Vec<&str> = name.split('_').collect();
+    let changes = match words.as_slice() {
+        ["price", rest @ ..] => rest,
+        ["afgnet" | "s2v", "dqn" | "ddqn" | "qstar", rest @ ..] => rest,
+        _ => return false,
+    };
+    let Some((last, changes)) = changes.split_last() else {
+        return false;
+    };
+    let trained_at = last.strip_prefix('n').unwrap_or("");
+    !trained_at.is_empty()
+        && trained_at.chars().all(|c| c.is_ascii_digit())
+        && changes.iter().all(|w| is_change(w))
 }
 
 #[test]
-fn the_models_readme_lists_every_run_and_where_it_is_discussed() {
+fn the_grammar_takes_the_readme_names_and_refuses_the_old_ones() {
+    for name in [
+        "afgnet_ddqn_n20",
+        "afgnet_qstar_price_priceloss10_n60",
+        "s2v_ddqn_lr3e-4_n60",
+        "price_dagger_n60",
+        "afgnet_ddqn_optshape_warm60_n100",
+    ] {
+        assert!(follows_the_grammar(name), "{name}");
+    }
+    for name in [
+        "afgnet_ddqn_n60_v1",
+        "afgnet_ddqn_n60_warm",
+        "price_n60_qstar",
+        "afgnet_qstar_n60_1000",
+        "afgnet_ddqn_warm_n100",
+        "afgnet_ddqn",
+        "gnn_ddqn_n60",
+    ] {
+        assert!(!follows_the_grammar(name), "{name}");
+    }
+}
+
+#[test]
+fn the_models_readme_lists_every_run_in_its_folder_and_where_it_is_discussed() {
     let root = repo();
     let text = std::fs::read_to_string(root.join("models/README.md")).unwrap();
     let mut listed = BTreeSet::new();
-    for line in text.lines().filter(|l| l.starts_with("| `")) {
+    let mut section_folder = None;
+    for line in text.lines() {
+        if let Some(heading) = line.strip_prefix("## ") {
+            section_folder = heading
+                .strip_prefix('`')
+                .and_then(|h| h.split_once("/`"))
+                .map(|(folder, _)| folder.to_owned());
+            continue;
+        }
+        let Some(folder) = section_folder.as_deref() else {
+            continue;
+        };
+        if !line.starts_with("| `") {
+            continue;
+        }
         let cells: Vec<&str> = line.split('|').map(str::trim).collect();
-        let run = cells[1].trim_matches('`').to_owned();
         assert_eq!(cells.len(), 6, "{line}");
-        let name = run.rsplit('/').next().unwrap();
+        let run = cells[1].trim_matches('`').to_owned();
+        let (run_folder, name) = run.split_once('/').unwrap_or(("", &run));
+        assert_eq!(run_folder, folder, "{run} is listed under `{folder}/`");
+        assert!(
+            follows_the_grammar(name),
+            "{name} does not follow the grammar"
+        );
         for doc in cells[4].split(", ") {
             let doc_text = std::fs::read_to_string(root.join(doc))
                 .unwrap_or_else(|e| panic!("{run}: {doc}: {e}"));
@@ -40,7 +116,16 @@ fn the_models_readme_lists_every_run_and_where_it_is_discussed() {
         }
         assert!(listed.insert(run.clone()), "{run} listed twice");
     }
-    let dirs = run_dirs(&root.join("models"));
+    let models = root.join("models");
+    let dirs: BTreeSet<String> = RunDir::find_all(&models)
+        .unwrap()
+        .iter()
+        .map(|run| {
+            let relative = run.path().strip_prefix(&models).unwrap();
+            relative.to_str().unwrap().replace('\\', "/")
+        })
+        .collect();
+    assert!(dirs.len() >= 45, "{} runs", dirs.len());
     let unlisted: Vec<_> = dirs.difference(&listed).collect();
     let missing: Vec<_> = listed.difference(&dirs).collect();
     assert!(

@@ -1,6 +1,6 @@
 //! Load a committed model and allocate a new instance with it, beside OPT and greedy.
 //!
-//! `cargo run --release -p afg-learn --example allocate_with_model -- models/afgnet_ddqn_n20 60`
+//! `cargo run --release -p afg-learn --example allocate_with_model -- models/paper/afgnet_ddqn_n20 60`
 //! (the model directory is relative to the repository root).
 
 use std::path::PathBuf;
@@ -13,7 +13,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let model = args
         .next()
-        .unwrap_or_else(|| "models/afgnet_ddqn_n20".into());
+        .unwrap_or_else(|| "models/paper/afgnet_ddqn_n20".into());
     let robots: usize = args.next().map_or(Ok(60), |s| s.parse())?;
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
     let policy = LearnedPolicy::load(&RunDir::new(root.join(&model)).weights())?;

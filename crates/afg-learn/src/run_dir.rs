@@ -308,6 +308,44 @@ impl RunDir {
         Ok((run, lock))
     }
 
+    /// The files any run directory holds at least one of.
+    pub const RUN_FILES: [&'static str; 4] =
+        ["config.json", "log.jsonl", "model.json", "price.json"];
+
+    /// Every run directory at or below `root` (a directory holding one of
+    /// [`RunDir::RUN_FILES`]; a run's own subdirectories are not searched), sorted by
+    /// path.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_learn::run::RunDir;
+    /// let models = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models");
+    /// let runs = RunDir::find_all(&models).unwrap();
+    /// assert!(runs.iter().any(|r| r.path().ends_with("paper/afgnet_ddqn_n20")));
+    /// ```
+    ///
+    /// # Errors
+    /// [`LearnError::Io`] if a directory cannot be listed.
+    pub fn find_all(root: &Path) -> Result<Vec<RunDir>, LearnError> {
+        let run = RunDir::new(root);
+        if Self::RUN_FILES.iter().any(|f| run.file(f).exists()) {
+            return Ok(vec![run]);
+        }
+        let io = |source| LearnError::Io {
+            path: root.display().to_string(),
+            source,
+        };
+        let mut runs = Vec::new();
+        for entry in std::fs::read_dir(root).map_err(io)? {
+            let entry = entry.map_err(io)?;
+            if entry.file_type().map_err(io)?.is_dir() {
+                runs.extend(Self::find_all(&entry.path())?);
+            }
+        }
+        runs.sort_by(|a, b| a.path.cmp(&b.path));
+        Ok(runs)
+    }
+
     /// The directory.
     pub fn path(&self) -> &Path {
         &self.path

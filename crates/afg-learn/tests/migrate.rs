@@ -76,13 +76,12 @@ fn write(path: &Path, value: &Value) {
 /// refused with a word on `afg migrate`.
 #[test]
 fn every_committed_run_written_as_format_1_migrates_back_to_itself() {
-    let mut runs: Vec<PathBuf> = ["models", "models/ablations"]
-        .iter()
-        .flat_map(|d| std::fs::read_dir(repo().join(d)).unwrap())
-        .map(|e| e.unwrap().path())
+    let runs: Vec<PathBuf> = RunDir::find_all(&repo().join("models"))
+        .unwrap()
+        .into_iter()
+        .map(|run| run.path().to_path_buf())
         .filter(|p| p.join("config.json").exists() && p.join("model.json").exists())
         .collect();
-    runs.sort();
     assert!(runs.len() >= 30, "{}", runs.len());
     for committed in runs {
         let name = committed
@@ -120,7 +119,7 @@ fn every_committed_run_written_as_format_1_migrates_back_to_itself() {
 /// and allocates exactly as the committed run, and its log's start line reads.
 #[test]
 fn a_format_1_run_allocates_as_the_committed_one_after_migration() {
-    let committed = repo().join("models/afgnet_ddqn_n20");
+    let committed = repo().join("models/paper/afgnet_ddqn_n20");
     let dir = scratch("n20");
     std::fs::copy(committed.join("model.mpk"), dir.join("model.mpk")).unwrap();
     let mut header = read(&committed.join("model.json"));
@@ -159,7 +158,7 @@ fn a_format_1_run_allocates_as_the_committed_one_after_migration() {
 /// The boolean shaping flag of format 1 reads as greedy or none, and no flag as none.
 #[test]
 fn the_format_1_shaping_flag_becomes_the_shaping() {
-    let committed = read(&repo().join("models/afgnet_ddqn_n60/config.json"));
+    let committed = read(&repo().join("models/paper/afgnet_ddqn_n60/config.json"));
     for (flag, shaping) in [
         (Some(true), "greedy"),
         (Some(false), "none"),
@@ -187,7 +186,7 @@ fn the_format_1_shaping_flag_becomes_the_shaping() {
 /// no kind) gets its version and kind.
 #[test]
 fn format_1_summaries_and_manifests_become_format_2_manifests() {
-    let committed = repo().join("models/price_n60");
+    let committed = repo().join("models/ours/price_n60");
     let dir = scratch("price");
     std::fs::copy(committed.join("price.json"), dir.join("price.json")).unwrap();
     // Its log of rounds is not a Q network's log of events: left as it is.
@@ -216,7 +215,7 @@ fn format_1_summaries_and_manifests_become_format_2_manifests() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 
-    let committed = repo().join("models/afgnet_ddqn_n60");
+    let committed = repo().join("models/paper/afgnet_ddqn_n60");
     let dir = scratch("q-manifest");
     let mut manifest = read(&committed.join("manifest.json"));
     let fields = manifest.as_object_mut().unwrap();

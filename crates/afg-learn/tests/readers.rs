@@ -220,16 +220,16 @@ proptest! {
 
     #[test]
     fn model_headers_never_panic(m in mutation()) {
-        let header = committed("models/afgnet_ddqn_n20/model.json");
-        let dir = scratch_run("models/afgnet_ddqn_n20", &["model.mpk"], "model.json", &apply(&header, &m));
+        let header = committed("models/paper/afgnet_ddqn_n20/model.json");
+        let dir = scratch_run("models/paper/afgnet_ddqn_n20", &["model.mpk"], "model.json", &apply(&header, &m));
         let _ = load_network::<afg_learn::InferBackend>(&dir.join("model"), &Default::default());
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
     fn run_configs_never_panic(m in mutation()) {
-        let config = committed("models/afgnet_ddqn_n60/config.json");
-        let dir = scratch_run("models/afgnet_ddqn_n60", &[], "config.json", &apply(&config, &m));
+        let config = committed("models/paper/afgnet_ddqn_n60/config.json");
+        let dir = scratch_run("models/paper/afgnet_ddqn_n60", &[], "config.json", &apply(&config, &m));
         if let Ok(c) = RunDir::new(&dir).config() {
             let _ = c.check();
         }

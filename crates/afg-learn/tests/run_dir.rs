@@ -285,19 +285,15 @@ fn presets_are_recorded_and_every_field_is_required() {
     assert!(err.to_string().contains("missing field `preset`"), "{err}");
 }
 
-/// Every committed run directory (models/ and models/ablations/).
+/// Every committed Q-network run directory (every run below models/ with a config).
 fn committed_runs() -> Vec<PathBuf> {
     let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models");
-    let mut runs = Vec::new();
-    for parent in [models.clone(), models.join("ablations")] {
-        for entry in std::fs::read_dir(parent).unwrap() {
-            let path = entry.unwrap().path();
-            if path.join("config.json").exists() {
-                runs.push(path);
-            }
-        }
-    }
-    runs
+    RunDir::find_all(&models)
+        .unwrap()
+        .into_iter()
+        .map(|run| run.path().to_path_buf())
+        .filter(|path| path.join("config.json").exists())
+        .collect()
 }
 
 #[test]

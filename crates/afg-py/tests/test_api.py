@@ -68,9 +68,9 @@ def test_results_score_what_they_return() -> None:
 
 def test_trained_models_solve_from_a_path_or_once_loaded() -> None:
     inst = afg.read_jsonl(ROOT / "datasets" / "n60.jsonl")[0]
-    model = afg.load_model(ROOT / "models" / "price_n60")
+    model = afg.load_model(ROOT / "models" / "ours" / "price_n60")
     a = model.allocate(inst)
-    b = afg.solve(inst, model=str(ROOT / "models" / "price_n60"))
+    b = afg.solve(inst, model=str(ROOT / "models" / "ours" / "price_n60"))
     assert (a.tasks == b.tasks).all() and a.percent_of_opt > 95.0
     c = afg.solve(inst, model=model)
     assert (c.tasks == a.tasks).all()

@@ -90,7 +90,7 @@ fn table1_scale(
     // Our variants are optional; the paper's three models are expected.
     for spec in ModelSpec::table1(n) {
         if !spec.run_dir(root).has_weights() && !spec.is_ours() {
-            missing.push(format!("models/{}", spec.dir_name()));
+            missing.push(spec.models_path().display().to_string());
         }
     }
     // Table I's models, the N = 60 models at the other scales (the paper's

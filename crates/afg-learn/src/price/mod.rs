@@ -334,7 +334,8 @@ mod tests {
     #[test]
     fn a_block_of_n_is_the_one_shot_mode() {
         // The committed model: its prices move with the state.
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/price_n60/price.json");
+        let path =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/ours/price_n60/price.json");
         let mlp = PriceModel::load(&path).unwrap().mlp;
         let sequential = PricePolicy::new(mlp.clone(), PriceMode::Sequential);
         let one_shot = PricePolicy::new(mlp, PriceMode::OneShot);
