@@ -23,6 +23,7 @@ mod error;
 pub mod fast;
 mod layers;
 mod log_float;
+mod manifest;
 mod migrate;
 mod network;
 pub mod policy;
@@ -49,10 +50,9 @@ pub mod nets {
 
 /// A training run's directory: its files, typed log, manifest and lock.
 pub mod run {
+    pub use crate::manifest::{ModelKind, RunManifest, RunRecord};
     pub use crate::migrate::{RUN_FORMAT_VERSION, migrate_run};
-    pub use crate::run_dir::{
-        LogEvent, ModelKind, RunDir, RunLock, RunManifest, RunRecord, ValidationLine,
-    };
+    pub use crate::run_dir::{LogEvent, RunDir, RunLock, ValidationLine};
 }
 
 pub use error::LearnError;

@@ -14,6 +14,7 @@
 
 mod auction;
 mod grape;
+mod links;
 mod network;
 
 use std::time::Duration;
