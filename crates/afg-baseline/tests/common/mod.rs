@@ -1,0 +1,29 @@
+//! What the allocator tests share: small random instances for brute force.
+
+use afg_game::{GOLDEN_RATIO, GeneratorConfig, Instance};
+use rand::Rng;
+use rand_chacha::ChaCha8Rng;
+
+/// A random instance small enough for brute force (N ≤ 7, M ≤ 4), any eps ≥ φ and
+/// beta; every second case with tight capacities (total just above N, so many tasks
+/// are full). One case in four has eps = φ exactly, where F_j(2) = 2 F_j(1): the first
+/// two members of a task are worth the same, so the balanced scores of joining an
+/// empty task and a task of one tie (and so do the selfish utilities), and one in eight
+/// has β = 0 as well, where every task ties on cost.
+pub fn small_instance(rng: &mut ChaCha8Rng, case: usize) -> Instance {
+    let n = rng.random_range(1..=7);
+    let m = rng.random_range(1..=4);
+    let mut cfg = GeneratorConfig::paper(n, m, rng.random());
+    cfg.eps = rng.random_range(1.62..6.0);
+    cfg.beta = rng.random_range(0.0..3.0);
+    if case % 4 >= 2 {
+        cfg.eps = GOLDEN_RATIO;
+    }
+    if case % 8 == 3 {
+        cfg.beta = 0.0;
+    }
+    if case % 2 == 1 {
+        cfg = cfg.with_capacity_slack(rng.random_range(1.0..1.5));
+    }
+    cfg.generate().unwrap()
+}
