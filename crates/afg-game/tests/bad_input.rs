@@ -1,9 +1,14 @@
 //! Inputs a user can hand the readers: misspelled fields, overflowing numbers, CRLF
-//! line ends and byte order marks, assignments that name tasks no instance has.
+//! line ends and byte order marks, assignments that name tasks no instance has; and
+//! every invalid game, one test each.
+
+mod common;
 
 use afg_game::io;
 use afg_game::realloc::PreviousAssignment;
-use afg_game::{GameError, GeneratorConfig, Instance, MAX_VALUE, TaskId};
+use afg_game::{Assignment, GameError, GeneratorConfig, Instance, MAX_VALUE, Point, Task, TaskId};
+
+use common::task;
 
 fn instance() -> Instance {
     GeneratorConfig::paper(6, 2, 1).generate().unwrap()
@@ -125,4 +130,231 @@ fn atomic_writes_replace_whole_files_and_leave_no_temporary_behind() {
     let names: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
     assert_eq!(names.len(), 1);
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+// ---- invalid games: one test each ----
+
+fn one_task() -> Vec<Task> {
+    vec![task(0.5, 0.5, 1.0, 2.0)]
+}
+
+#[test]
+fn error_no_robots() {
+    assert!(matches!(
+        Instance::new(vec![], one_task(), 1.0),
+        Err(GameError::NoRobots)
+    ));
+    assert!(matches!(
+        GeneratorConfig::paper(0, 5, 1).generate(),
+        Err(GameError::NoRobots)
+    ));
+}
+
+#[test]
+fn error_no_tasks() {
+    assert!(matches!(
+        Instance::new(vec![Point::new(0.0, 0.0)], vec![], 1.0),
+        Err(GameError::NoTasks)
+    ));
+    assert!(matches!(
+        GeneratorConfig::paper(5, 0, 1).generate(),
+        Err(GameError::NoTasks)
+    ));
+}
+
+#[test]
+fn error_non_finite_coordinates() {
+    for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        let r = Instance::new(
+            vec![Point::new(0.0, 0.0), Point::new(bad, 0.0)],
+            one_task(),
+            1.0,
+        );
+        assert!(matches!(
+            r,
+            Err(GameError::NonFiniteCoordinate {
+                what: "robot",
+                index: 1,
+                ..
+            })
+        ));
+        let r = Instance::new(
+            vec![Point::new(0.0, 0.0)],
+            vec![task(0.0, bad, 1.0, 2.0)],
+            1.0,
+        );
+        assert!(matches!(
+            r,
+            Err(GameError::NonFiniteCoordinate {
+                what: "task",
+                index: 0,
+                ..
+            })
+        ));
+    }
+}
+
+#[test]
+fn error_eps_below_golden_ratio() {
+    for eps in [1.0, 1.618, f64::NAN, 0.0, -3.0] {
+        let r = Instance::new(
+            vec![Point::new(0.0, 0.0)],
+            vec![task(0.0, 0.0, 1.0, eps)],
+            1.0,
+        );
+        assert!(
+            matches!(r, Err(GameError::EpsBelowGoldenRatio { .. })),
+            "eps = {eps}"
+        );
+    }
+    let mut cfg = GeneratorConfig::paper(5, 5, 1);
+    cfg.eps = 1.5;
+    let err = cfg.generate().unwrap_err();
+    assert!(err.to_string().contains("golden ratio"), "{err}");
+}
+
+#[test]
+fn error_negative_reward() {
+    let r = Instance::new(
+        vec![Point::new(0.0, 0.0)],
+        vec![task(0.0, 0.0, -1.0, 2.0)],
+        1.0,
+    );
+    assert!(matches!(r, Err(GameError::InvalidReward { task: 0, .. })));
+}
+
+#[test]
+fn error_invalid_beta() {
+    for beta in [-1.0, f64::NAN] {
+        let r = Instance::new(vec![Point::new(0.0, 0.0)], one_task(), beta);
+        assert!(matches!(r, Err(GameError::InvalidBeta(_))));
+    }
+}
+
+#[test]
+fn error_capacities_below_n() {
+    let mut tasks = vec![task(0.0, 0.0, 1.0, 2.0), task(1.0, 0.0, 1.0, 2.0)];
+    tasks[0].capacity = Some(1);
+    tasks[1].capacity = Some(1);
+    let robots = vec![Point::new(0.0, 0.0); 3];
+    assert!(matches!(
+        Instance::new(robots.clone(), tasks.clone(), 1.0),
+        Err(GameError::CapacityTooSmall {
+            total: 2,
+            robots: 3
+        })
+    ));
+    // One unbounded task makes any total enough.
+    tasks[1].capacity = None;
+    assert!(Instance::new(robots, tasks, 1.0).is_ok());
+}
+
+#[test]
+fn error_assignment_of_wrong_length() {
+    let inst = GeneratorConfig::paper(4, 2, 1).generate().unwrap();
+    let r = Assignment::from_tasks(&inst, vec![None; 3]);
+    assert!(matches!(
+        r,
+        Err(GameError::AssignmentLength {
+            expected: 4,
+            got: 3
+        })
+    ));
+}
+
+#[test]
+fn error_assignment_task_out_of_range() {
+    let inst = GeneratorConfig::paper(4, 2, 1).generate().unwrap();
+    let r = Assignment::from_tasks(&inst, vec![None, Some(TaskId(2)), None, None]);
+    assert!(matches!(
+        r,
+        Err(GameError::TaskOutOfRange {
+            robot: 1,
+            task: 2,
+            tasks: 2
+        })
+    ));
+    let r = Assignment::from_json(
+        r#"{"format":"afg-assignment","version":1,"tasks":[0,0,0,7]}"#,
+        &inst,
+    );
+    assert!(matches!(r, Err(GameError::TaskOutOfRange { robot: 3, .. })));
+}
+
+#[test]
+fn error_assignment_over_capacity() {
+    let inst = GeneratorConfig::paper(6, 2, 1)
+        .with_capacity_slack(1.0)
+        .generate()
+        .unwrap();
+    let r = Assignment::from_tasks(&inst, vec![Some(TaskId(0)); 6]);
+    assert!(matches!(
+        r,
+        Err(GameError::CapacityExceeded {
+            task: 0,
+            size: 6,
+            capacity: 3
+        })
+    ));
+}
+
+#[test]
+fn error_json_of_another_version() {
+    let inst = GeneratorConfig::paper(4, 2, 1).generate().unwrap();
+    let text = inst.to_json().replace("\"version\":1", "\"version\":2");
+    assert!(matches!(
+        Instance::from_json(&text),
+        Err(GameError::UnsupportedVersion { found: 2, .. })
+    ));
+}
+
+#[test]
+fn error_json_of_another_format() {
+    let inst = GeneratorConfig::paper(4, 2, 1).generate().unwrap();
+    let a = Assignment::unassigned(4, 2).to_json();
+    assert!(matches!(
+        Instance::from_json(&a),
+        Err(GameError::Json { .. })
+    ));
+    let text = inst.to_json().replace("afg-instance", "afg-assignment");
+    assert!(matches!(
+        Instance::from_json(&text),
+        Err(GameError::WrongFormat { .. })
+    ));
+    let text = a.replace("afg-assignment", "afg-instance");
+    assert!(matches!(
+        Assignment::from_json(&text, &inst),
+        Err(GameError::WrongFormat { .. })
+    ));
+}
+
+#[test]
+fn error_json_of_wrong_shape() {
+    for text in [
+        "",
+        "[1,2]",
+        "{\"format\":\"afg-instance\"}",
+        "{\"robots\": 3}",
+        "not json",
+    ] {
+        assert!(
+            matches!(
+                Instance::from_json(text),
+                Err(GameError::Json { line: None, .. })
+            ),
+            "{text}"
+        );
+    }
+    let inst = GeneratorConfig::paper(4, 2, 1).generate().unwrap();
+    let jsonl = format!("{}\n{{\"oops\":1}}\n", inst.to_json());
+    assert!(matches!(
+        io::parse_dataset(&jsonl),
+        Err(GameError::Json { line: Some(2), .. })
+    ));
+    // Validation applies inside JSON too.
+    let text = inst.to_json().replacen("\"reward\":", "\"reward\":-", 1);
+    assert!(matches!(
+        Instance::from_json(&text),
+        Err(GameError::InvalidReward { .. })
+    ));
 }
