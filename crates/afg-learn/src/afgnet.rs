@@ -11,7 +11,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use crate::layers::{Activation, QHead, linear_of_concat, seeded_linear, zero_linear};
-use crate::price::PRICE_INPUTS;
+use crate::price::{PRICE_INPUTS, PriceNet};
 use crate::tensors::GraphTensors;
 
 /// Shape and seed of an [`AfgNet`].
@@ -41,7 +41,7 @@ pub struct AfgNetConfig {
     pub gain_residual: bool,
     /// Price structure (ours; off in the paper's model):
     /// `Q(s, a) = π_a(s) − β d(t, a) + c_a(s)`, where the price `π_a` comes from one
-    /// MLP shared by all tasks ([`PriceHead`]) reading the task's summaries
+    /// MLP shared by all tasks ([`PriceNet`](crate::price::PriceNet)) reading the task's summaries
     /// ([`GraphBatch::task_inputs`](afg_graph::GraphBatch::task_inputs)) and the pooled
     /// embedding, and the correction `c` is the paper's head. Both output layers start
     /// at zero, so the untrained network is Nearest.
@@ -68,11 +68,7 @@ impl AfgNetConfig {
         // Drawn after everything else, so the paper's network keeps its weights.
         let price = self.price_head.then(|| {
             head.output = zero_linear(d, m, device);
-            PriceHead {
-                input: seeded_linear(&mut rng, PRICE_INPUTS + d, d, device),
-                hidden: seeded_linear(&mut rng, d, d, device),
-                output: zero_linear(d, 1, device),
-            }
+            PriceNet::seeded(&mut rng, PRICE_INPUTS + d, d, device)
         });
         AfgNet {
             theta1,
@@ -113,7 +109,7 @@ pub struct AfgNet<B: Backend> {
     /// θ7 and the Q MLP (with a price head, the correction `c`).
     pub head: QHead<B>,
     /// The price head, when configured ([`AfgNetConfig::price_head`]).
-    pub price: Option<PriceHead<B>>,
+    pub price: Option<PriceNet<B>>,
     #[module(skip)]
     activation: Activation,
     #[module(skip)]
@@ -188,7 +184,7 @@ impl<B: Backend> AfgNet<B> {
     pub fn prices(&self, g: &GraphTensors<B>) -> Option<Tensor<B, 2>> {
         let price = self.price.as_ref()?;
         let pooled = g.graph_mean(self.embed(g));
-        Some(price.forward(g, pooled, self.activation))
+        Some(self.prices_of(price, g, pooled))
     }
 
     /// Q values of each graph's acting robot (eq. 9 and the head).
@@ -200,7 +196,7 @@ impl<B: Backend> AfgNet<B> {
         let pooled = g.graph_mean(delta.clone());
         let mut q = self.head.forward(pooled.clone(), g.actor_rows(delta));
         if let Some(price) = &self.price {
-            q = q + price.forward(g, pooled, self.activation) - g.cost.clone();
+            q = q + self.prices_of(price, g, pooled) - g.cost.clone();
         }
         if self.gain_residual {
             q + g.gain.clone()
@@ -208,31 +204,18 @@ impl<B: Backend> AfgNet<B> {
             q
         }
     }
-}
 
-/// The price head: one MLP shared by every task, from the task's summaries and the
-/// pooled graph embedding to its price π_j (ours, not in the paper).
-#[derive(Module, Debug)]
-pub struct PriceHead<B: Backend> {
-    /// `[task inputs || pooled embedding]`, `2 · TASK_FEATURES + d → d`.
-    pub input: Linear<B>,
-    /// `d → d`.
-    pub hidden: Linear<B>,
-    /// `d → 1`, zero at initialisation.
-    pub output: Linear<B>,
-}
-
-impl<B: Backend> PriceHead<B> {
-    /// Every task's price.
+    /// Every task's price by the price head, from the tasks' summaries and the pooled
+    /// embedding.
     ///
     /// # Shapes
     /// - `pooled`: `[G, d]`
     /// - output: `[G, M]`
-    pub fn forward(
+    fn prices_of(
         &self,
+        price: &PriceNet<B>,
         g: &GraphTensors<B>,
         pooled: Tensor<B, 2>,
-        activation: Activation,
     ) -> Tensor<B, 2> {
         let [graphs, d] = pooled.dims();
         let m = g.cost.dims()[1];
@@ -246,11 +229,8 @@ impl<B: Backend> PriceHead<B> {
             .unsqueeze_dim::<3>(1)
             .repeat_dim(1, m)
             .reshape([graphs * m, d]);
-        let x = activation.apply(linear_of_concat(
-            &self.input,
-            vec![g.task_inputs.clone(), pooled],
-        ));
-        let x = activation.apply(self.hidden.forward(x));
-        self.output.forward(x).reshape([graphs, m])
+        price
+            .forward_parts(vec![g.task_inputs.clone(), pooled], self.activation)
+            .reshape([graphs, m])
     }
 }

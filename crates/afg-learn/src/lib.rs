@@ -40,7 +40,7 @@ mod weights;
 /// The Q networks (AFGNet, S2V) generic over the Burn back end, their batches as
 /// tensors, their configurations and weight files.
 pub mod nets {
-    pub use crate::afgnet::{AfgLayer, AfgNet, AfgNetConfig, PriceHead};
+    pub use crate::afgnet::{AfgLayer, AfgNet, AfgNetConfig};
     pub use crate::layers::{Activation, QHead, linear_of_concat};
     pub use crate::network::{NETWORK_LIMITS, Net, NetworkConfig, NetworkLimits, QNetwork};
     pub use crate::s2v::{S2v, S2vConfig};

@@ -4,9 +4,9 @@ use burn::tensor::backend::Backend;
 
 use crate::Activation;
 use crate::PRICE_INPUTS;
-use crate::afgnet::PriceHead;
 use crate::dense::{Dense, task_mlp};
 use crate::layers::QHead;
+use crate::price::PriceNet;
 
 /// The Q head: `Q = out(σ(hidden [σ(θ7 pooled) || δ_actor]))`.
 #[derive(Clone, Debug, PartialEq)]
@@ -46,7 +46,7 @@ pub(super) struct FastPriceHead {
 }
 
 impl FastPriceHead {
-    pub(super) fn from_burn<B: Backend>(head: &PriceHead<B>) -> Self {
+    pub(super) fn from_burn<B: Backend>(head: &PriceNet<B>) -> Self {
         let input = Dense::from_burn(&head.input);
         FastPriceHead {
             input_task: input.rows_with_bias(0..PRICE_INPUTS),

@@ -3,7 +3,6 @@
 
 use burn::module::{Module, Param};
 use burn::nn::Linear;
-use burn::tensor::activation::relu;
 use burn::tensor::backend::Backend;
 use burn::tensor::{Tensor, TensorData};
 use rand::SeedableRng;
@@ -12,7 +11,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::Activation;
 use crate::dense::{Dense, task_mlp};
-use crate::layers::{seeded_linear, zero_linear};
+use crate::layers::{linear_of_concat, seeded_linear, zero_linear};
 use afg_graph::{TASK_FEATURES, task_inputs};
 
 /// Width of a task's network input: its features and the mean of all tasks' features.
@@ -32,20 +31,22 @@ impl PriceNetConfig {
     /// Builds the network: hidden layers drawn from `seed`, the output layer zero, so
     /// that every price is 0 and the untrained policy is Nearest.
     pub fn init<B: Backend>(&self, device: &B::Device) -> PriceNet<B> {
-        let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
-        let h = self.hidden;
-        PriceNet {
-            input: seeded_linear(&mut rng, PRICE_INPUTS, h, device),
-            hidden: seeded_linear(&mut rng, h, h, device),
-            output: zero_linear(h, 1, device),
-        }
+        PriceNet::seeded(
+            &mut ChaCha8Rng::seed_from_u64(self.seed),
+            PRICE_INPUTS,
+            self.hidden,
+            device,
+        )
     }
 }
 
-/// The price MLP in Burn (for training): `π = out(relu(hidden(relu(input(x)))))`.
+/// The price MLP in Burn, one network shared by every task:
+/// `π = out(σ(hidden(σ(input(x)))))`. The price model's network reads a task's inputs
+/// with σ = ReLU; AFGNet's price head reads `[task inputs || pooled embedding]` with
+/// the network's activation.
 #[derive(Module, Debug)]
 pub struct PriceNet<B: Backend> {
-    /// `PRICE_INPUTS → h`.
+    /// `inputs → h`.
     pub input: Linear<B>,
     /// `h → h`.
     pub hidden: Linear<B>,
@@ -54,13 +55,37 @@ pub struct PriceNet<B: Backend> {
 }
 
 impl<B: Backend> PriceNet<B> {
-    /// Prices of a batch of tasks.
+    /// A network of `inputs → hidden → hidden → 1`: the hidden layers drawn from
+    /// `rng`, the output layer zero, so that every price starts at 0.
+    pub(crate) fn seeded(
+        rng: &mut ChaCha8Rng,
+        inputs: usize,
+        hidden: usize,
+        device: &B::Device,
+    ) -> Self {
+        PriceNet {
+            input: seeded_linear(rng, inputs, hidden, device),
+            hidden: seeded_linear(rng, hidden, hidden, device),
+            output: zero_linear(hidden, 1, device),
+        }
+    }
+
+    /// Prices of a batch of tasks (the price model's network).
     ///
     /// # Shapes
     /// `inputs: [R, PRICE_INPUTS]` → `[R]`
     pub fn forward(&self, inputs: Tensor<B, 2>) -> Tensor<B, 1> {
-        let x = relu(self.input.forward(inputs));
-        let x = relu(self.hidden.forward(x));
+        self.forward_parts(vec![inputs], Activation::Relu)
+    }
+
+    /// Prices of a batch of tasks whose inputs come in `parts`, side by side (their
+    /// concatenation is never built), with `activation` after each hidden layer.
+    ///
+    /// # Shapes
+    /// `parts: [R, w_k]` with `Σ w_k` the input width → `[R]`
+    pub fn forward_parts(&self, parts: Vec<Tensor<B, 2>>, activation: Activation) -> Tensor<B, 1> {
+        let x = activation.apply(linear_of_concat(&self.input, parts));
+        let x = activation.apply(self.hidden.forward(x));
         let rows = x.dims()[0];
         self.output.forward(x).reshape([rows])
     }
