@@ -19,6 +19,7 @@
 //!
 //! Every input is per task, so the same weights serve any M.
 
+mod config;
 mod net;
 mod train;
 
@@ -30,9 +31,10 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use afg_graph::{PriceState, TASK_FEATURES};
+pub use config::PriceTrainConfig;
 use net::PriceScratch;
 pub use net::{PRICE_INPUTS, PriceMlp, PriceNet, PriceNetConfig};
-pub use train::{PriceRound, PriceTrainConfig, PriceTrainer};
+pub use train::{PriceRound, PriceTrainer};
 
 use crate::{LearnError, masked_argmax};
 

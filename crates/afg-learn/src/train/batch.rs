@@ -285,7 +285,7 @@ mod tests {
     fn large_margins_by_hand() {
         let mask = [true, false, true, true, true, true];
         assert_eq!(
-            super::super::large_margins(&mask, &[2, 0], 3, 0.5),
+            super::super::demos::large_margins(&mask, &[2, 0], 3, 0.5),
             vec![0.5, -1e9, 0.0, 0.0, 0.5, 0.5]
         );
     }
