@@ -1,6 +1,6 @@
 //! `cargo xtask bench-baselines`: a Markdown table of allocator times and welfare.
 
-use afg_eval::bench::{allocators_markdown, networks_markdown};
+use afg_repro::bench::{allocators_markdown, networks_markdown};
 use anyhow::Result;
 use clap::Args;
 

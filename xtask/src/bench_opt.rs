@@ -4,13 +4,14 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::str::FromStr;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use afg_baseline::{Allocator, Greedy, Nearest, Optimum, verify_optimal};
-use afg_eval::tables::duration;
+use afg_eval::report::duration;
 use afg_game::fs::write_atomic;
 use afg_game::io::{dataset_to_jsonl, read_dataset};
 use afg_game::{Assignment, GeneratorConfig, Instance, TaskId};
+use afg_repro::bench::{clocked, median_of};
 use anyhow::{Context, Result, bail, ensure};
 use clap::Args;
 use serde::Serialize;
@@ -59,7 +60,11 @@ impl FromStr for Case {
         let (n, m) = text
             .split_once('x')
             .ok_or_else(|| format!("`{text}`: write a size as NxM, e.g. 1000x5"))?;
-        let count = |s: &str| afg_cli::at_least_one(s).map_err(|e| format!("`{text}`: {e}"));
+        let count = |s: &str| match s.parse::<usize>() {
+            Ok(0) => Err(format!("`{text}`: sizes must be at least 1")),
+            Ok(k) => Ok(k),
+            Err(e) => Err(format!("`{text}`: {e}")),
+        };
         Ok(Case {
             robots: count(n)?,
             tasks: count(m)?,
@@ -111,7 +116,7 @@ pub fn run(args: BenchOptArgs) -> Result<()> {
     if let Some(python) = &args.python {
         check_python(python)?;
     }
-    let bar = afg_cli::progress(args.cases.len() as u64, "bench-opt");
+    let bar = afg_eval::report::progress(args.cases.len() as u64, "bench-opt");
     let mut rows = Vec::new();
     for &case in &args.cases {
         bar.set_message(format!("bench-opt N = {} M = {}", case.robots, case.tasks));
@@ -153,7 +158,7 @@ fn check_python(python: &Path) -> Result<()> {
 }
 
 fn measure(case: Case, args: &BenchOptArgs, dir: &Path) -> Result<Row> {
-    afg_eval::bench::reset_peak_rss();
+    afg_repro::bench::reset_peak_rss();
     let opt_peak_rss_mib = peak_rss_of_optimum(case, args.seed)?;
     let file = dir.join(format!(
         "n{}_m{}_seed{}.jsonl",
@@ -208,7 +213,7 @@ fn measure(case: Case, args: &BenchOptArgs, dir: &Path) -> Result<Row> {
 fn peak_rss_of_optimum(case: Case, seed: u64) -> Result<Option<f64>> {
     let inst = GeneratorConfig::paper(case.robots, case.tasks, seed).generate()?;
     std::hint::black_box(Optimum.with_prices(&inst));
-    Ok(afg_eval::bench::peak_rss_mib())
+    Ok(afg_repro::bench::peak_rss_mib())
 }
 
 fn empty(inst: &Instance) -> Assignment {
@@ -223,22 +228,16 @@ fn time_optimum(
     budget_s: f64,
     solve: impl Fn() -> Result<(Assignment, Vec<f64>)>,
 ) -> Result<(Duration, f64, f64)> {
-    let (mut times, mut gap, mut spent) = (Vec::new(), 0.0f64, 0.0);
-    let mut welfare = 0.0;
+    let mut gap = 0.0f64;
     // The first touch of fresh memory is not the solver's work.
     std::hint::black_box(solve()?);
-    while times.is_empty() || (spent < budget_s && times.len() < 20) {
-        let start = Instant::now();
-        let (assignment, prices) = solve()?;
-        let took = start.elapsed();
+    let (time, welfare) = median_of(budget_s, 20, || {
+        let (took, (assignment, prices)) = clocked(&solve)?;
         let proof = verify_optimal(inst, &assignment, &prices)?;
         gap = gap.max(proof.gap());
-        welfare = proof.welfare;
-        spent += took.as_secs_f64();
-        times.push(took);
-    }
-    times.sort();
-    Ok((times[times.len() / 2], gap, welfare))
+        Ok::<_, anyhow::Error>((took, proof.welfare))
+    })?;
+    Ok((time, gap, welfare))
 }
 
 /// Median time of `job` over repeats within `budget_s` (at least one, at most 20).
@@ -246,18 +245,7 @@ fn timed<T, E: Into<anyhow::Error>>(
     budget_s: f64,
     mut job: impl FnMut() -> Result<T, E>,
 ) -> Result<(Duration, T)> {
-    let (mut times, mut spent) = (Vec::new(), 0.0);
-    loop {
-        let start = Instant::now();
-        let out = job().map_err(Into::into)?;
-        let took = start.elapsed();
-        spent += took.as_secs_f64();
-        times.push(took);
-        if spent >= budget_s || times.len() >= 20 {
-            times.sort();
-            return Ok((times[times.len() / 2], out));
-        }
-    }
+    median_of(budget_s, 20, || clocked(&mut job)).map_err(Into::into)
 }
 
 /// The floor of any method that looks at every robot–task pair: one pass computing

@@ -194,7 +194,7 @@ fn crash_trainer(
     // A resumed run goes on from its checkpoint, so kills within the first half of
     // each resumed run reach its end after a few kills.
     let span = o.reference_s * if trainer.resumes { 0.5 } else { 0.9 };
-    let bar = afg_cli::progress(kills as u64, &format!("crash-test {}", trainer.name));
+    let bar = afg_eval::report::progress(kills as u64, &format!("crash-test {}", trainer.name));
     let compare = |o: &mut Outcome| -> Result<()> {
         o.completed += 1;
         o.equal &= (trainer.same_weights)(&reference, &crashed)?;

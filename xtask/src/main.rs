@@ -7,6 +7,7 @@ mod bench_opt;
 mod crash;
 mod datasets;
 mod manifest;
+mod realloc_study;
 mod regret;
 mod scale;
 mod tables;
@@ -54,7 +55,7 @@ enum Command {
     /// The learned policy (fast path, blocks, repair) against OPT, DA and greedy up to N = 100 000.
     BenchScale(scale::ScaleArgs),
     /// Robots leave an optimally allocated instance: warm-start reallocation against OPT from scratch.
-    ReallocStudy(afg_cli::realloc::StudyArgs),
+    ReallocStudy(realloc_study::StudyArgs),
     /// Where a trained model loses welfare along its rollouts, against the exact Q*.
     Regret(regret::RegretArgs),
     /// (Re)write manifest.json of finished training runs from their config and log.
@@ -71,22 +72,23 @@ enum Command {
     },
 }
 
-fn main() -> Result<()> {
-    Cli::parse().command.run()
+/// Exit status 0 on success, 1 after one line `error: …` on stderr, 2 for a usage error.
+fn main() -> std::process::ExitCode {
+    afg_eval::report::exit_code(Cli::parse().command.run())
 }
 
 impl Command {
     fn run(self) -> Result<()> {
         match self {
             Command::ReproduceTables(args) => tables::run(args),
-            Command::Train(args) => afg_cli::train::run(args),
+            Command::Train(args) => afg_cli::train::run(args, "cargo xtask train"),
             Command::TrainAll(args) => train_all::run_all(args),
             Command::GenDatasets(args) => datasets::run(args),
             Command::BenchBaselines(args) => bench::run(args),
             Command::BenchModels(args) => bench::run_models(args),
             Command::BenchOpt(args) => bench_opt::run(args),
             Command::BenchScale(args) => scale::run(args),
-            Command::ReallocStudy(args) => afg_cli::realloc::run_study(args),
+            Command::ReallocStudy(args) => realloc_study::run(args),
             Command::Regret(args) => regret::run(args),
             Command::Manifest(args) => manifest::run_manifest(args),
             Command::CrashTest(args) => crash::run(args),

@@ -12,7 +12,8 @@ use clap::Args;
 pub fn write_manifest(dir: &Path) -> Result<()> {
     let run = RunDir::new(dir);
     let relative = dir.strip_prefix(crate::repo_root()).unwrap_or(dir);
-    let manifest = run.manifest_from_log(command_line(&run.config()?, relative))?;
+    let manifest =
+        run.manifest_from_log(command_line("cargo xtask train", &run.config()?, relative))?;
     run.write_manifest(&manifest)?;
     Ok(())
 }

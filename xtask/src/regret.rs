@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use afg_eval::regret::{markdown, summarise};
+use afg_repro::regret::{markdown, summarise};
 use anyhow::Result;
 use clap::Args;
 
@@ -30,7 +30,10 @@ pub fn run(args: RegretArgs) -> Result<()> {
         .dirs
         .iter()
         .map(|d| {
-            let bar = afg_cli::progress(instances.len() as u64, &format!("regret {}", d.display()));
+            let bar = afg_eval::report::progress(
+                instances.len() as u64,
+                &format!("regret {}", d.display()),
+            );
             let summary = summarise(d, &instances, || bar.inc(1));
             bar.finish_and_clear();
             summary

@@ -3,11 +3,14 @@
 
 use std::path::{Path, PathBuf};
 
-use afg_eval::tables::{
+use afg_eval::dataset;
+use afg_eval::figures::runs_curves_svg;
+use afg_game::fs::write_atomic_making_dirs;
+use afg_repro::ModelSpec;
+use afg_repro::tables::{
     BEGIN, END, RunInfo, Tables, assignment_map_svg, block, compute, markdown, results_document,
     with_block,
 };
-use afg_eval::{ModelSpec, dataset};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 
@@ -40,7 +43,7 @@ pub fn run(args: TablesArgs) -> Result<()> {
         check_readme(&root)?;
         let committed = results_block(&root.join("docs/RESULTS.md"))?;
         let fresh = markdown(&compute_tables(&root, false)?);
-        let differences = afg_eval::markdown::table_differences(&committed, &fresh);
+        let differences = afg_repro::markdown::table_differences(&committed, &fresh);
         if !differences.is_empty() {
             for d in &differences {
                 eprintln!("{d}");
@@ -71,7 +74,7 @@ pub fn run(args: TablesArgs) -> Result<()> {
 
 /// Every table, with a progress bar over the five test sets.
 fn compute_tables(root: &Path, quick: bool) -> Result<Tables> {
-    let bar = afg_cli::progress(5, "reproduce-tables (datasets)");
+    let bar = afg_eval::report::progress(5, "reproduce-tables (datasets)");
     let tables = compute(root, quick, || bar.inc(1))?;
     bar.finish_and_clear();
     Ok(tables)
@@ -89,16 +92,16 @@ fn write_outputs(root: &Path, res: &Tables, tables: &str, quick: bool, minutes: 
             .map(|run| run.path().to_path_buf())
             .collect();
         if !dirs.is_empty() {
-            afg_cli::curves::plot_curves(
+            let svg = runs_curves_svg(
                 &dirs,
-                &figures.join(format!("fig1_n{n}.svg")),
                 &format!("Fig. 1 — N = {n}: validation welfare (dashed: classical methods)"),
             )?;
+            write_atomic_making_dirs(&figures.join(format!("fig1_n{n}.svg")), svg.as_bytes())?;
         }
     }
-    afg_cli::write_svg(
+    write_atomic_making_dirs(
         &figures.join("assignment_n100.svg"),
-        &assignment_map_svg(root)?,
+        assignment_map_svg(root)?.as_bytes(),
     )?;
     let threads = rayon::current_num_threads();
     let info = RunInfo {

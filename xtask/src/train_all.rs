@@ -1,8 +1,8 @@
 //! `cargo xtask train-all`: every paper-form model of the tables, with the default
 //! budgets.
 
-use afg_eval::ModelSpec;
-use afg_learn::train::TrainSettings;
+use afg_cli::settings::TrainSettings;
+use afg_repro::ModelSpec;
 use anyhow::Result;
 use clap::Args;
 
@@ -36,18 +36,21 @@ pub fn run_all(args: TrainAllArgs) -> Result<()> {
             if dir.exists() {
                 std::fs::remove_dir_all(&dir)?;
             }
-            run(TrainArgs {
-                settings: TrainSettings {
-                    scale: Some(*scale),
-                    algo: Some(spec.algo),
-                    net: Some(spec.net),
-                    seed: Some(0),
-                    ..TrainSettings::default()
+            run(
+                TrainArgs {
+                    settings: TrainSettings {
+                        scale: Some(*scale),
+                        algo: Some(spec.algo),
+                        net: Some(spec.net),
+                        seed: Some(0),
+                        ..TrainSettings::default()
+                    },
+                    out: Some(dir),
+                    checkpoint_secs: 300,
+                    ..TrainArgs::default()
                 },
-                out: Some(dir),
-                checkpoint_secs: 300,
-                ..TrainArgs::default()
-            })?;
+                "cargo xtask train",
+            )?;
         }
     }
     Ok(())

@@ -1,9 +1,10 @@
 //! `afg plot-curves` and `afg training-report`: what training runs' logs show.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use afg_eval::figures::curves_svg;
-use afg_eval::runs::{read_curve, report_markdown};
+use afg_eval::figures::runs_curves_svg;
+use afg_eval::runs::report_markdown;
+use afg_game::fs::write_atomic_making_dirs;
 use anyhow::Result;
 use clap::Args;
 
@@ -18,25 +19,16 @@ pub struct PlotArgs {
     out: PathBuf,
 }
 
-/// Draws the validation curves of `dirs` into `out`.
-pub fn plot_curves(dirs: &[PathBuf], out: &Path, title: &str) -> Result<()> {
-    let curves = dirs
-        .iter()
-        .map(|d| read_curve(d))
-        .collect::<Result<Vec<_>, _>>()?;
-    crate::write_svg(out, &curves_svg(&curves, title)?)
-}
-
 /// Draws the runs' validation curves.
 ///
 /// # Errors
 /// A run without a readable log, or the SVG not written.
 pub fn run_plot(args: PlotArgs) -> Result<()> {
-    plot_curves(
+    let svg = runs_curves_svg(
         &args.dirs,
-        &args.out,
         "Validation welfare during training (dashed: classical methods)",
     )?;
+    write_atomic_making_dirs(&args.out, svg.as_bytes())?;
     println!("wrote {}", args.out.display());
     Ok(())
 }

@@ -2,11 +2,9 @@
 
 use std::path::PathBuf;
 
-use afg_eval::dataset;
-use afg_game::GeneratorConfig;
-use afg_game::Instance;
 use afg_game::fs::write_atomic;
 use afg_game::io::dataset_to_jsonl;
+use afg_game::{GeneratorConfig, GeneratorKnobs, Instance};
 use anyhow::{Result, bail};
 use clap::Args;
 
@@ -17,7 +15,7 @@ pub struct GenArgs {
     #[arg(long)]
     robots: usize,
     /// Tasks M per instance.
-    #[arg(long, default_value_t = dataset::TASKS)]
+    #[arg(long, default_value_t = GeneratorConfig::PAPER_TASKS)]
     tasks: usize,
     /// Number of instances.
     #[arg(long, default_value_t = 1)]
@@ -47,29 +45,21 @@ pub fn generate(args: &GenArgs) -> Result<Vec<Instance>> {
     if args.count == 0 {
         bail!("--count must be at least 1");
     }
+    let rewards = match args.rewards.as_deref() {
+        None => None,
+        Some(&[lo, hi]) => Some((lo, hi)),
+        Some(_) => bail!("--rewards takes two numbers, LO,HI"),
+    };
+    let knobs = GeneratorKnobs {
+        capacity_slack: args.capacity_slack,
+        eps: args.eps,
+        beta: args.beta,
+        rewards,
+    };
     (0..args.count as u64)
         .map(|i| {
-            let mut cfg =
-                GeneratorConfig::paper(args.robots, args.tasks, args.seed.wrapping_add(i));
-            if let Some(eps) = args.eps {
-                cfg.eps = eps;
-            }
-            if let Some(beta) = args.beta {
-                cfg.beta = beta;
-            }
-            if let Some(r) = &args.rewards {
-                let [lo, hi] = r[..] else {
-                    bail!("--rewards takes two numbers, LO,HI");
-                };
-                (cfg.reward_min, cfg.reward_max) = (lo, hi);
-            }
-            if let Some(slack) = args.capacity_slack {
-                if !(slack.is_finite() && slack >= 1.0) {
-                    bail!("--capacity-slack must be at least 1 (got {slack})");
-                }
-                cfg = cfg.with_capacity_slack(slack);
-            }
-            Ok(cfg.generate()?)
+            let seed = args.seed.wrapping_add(i);
+            Ok(knobs.config(args.robots, args.tasks, seed)?.generate()?)
         })
         .collect()
 }
@@ -138,7 +128,7 @@ mod tests {
             ("--robots 0 --out x.jsonl", "robot"),
             (
                 "--robots 10 --capacity-slack 0.5 --out x.jsonl",
-                "capacity-slack",
+                "capacity slack must be at least 1 (got 0.5)",
             ),
             ("--robots 10 --count 0 --out x.jsonl", "count"),
             ("--robots 10 --rewards 5,2 --out x.jsonl", "reward"),

@@ -30,12 +30,15 @@ pub mod generate;
 pub mod migrate;
 pub mod price;
 pub mod realloc;
+pub mod settings;
 pub mod solve;
 pub mod swarm;
 pub mod train;
 
+#[cfg(test)]
 use std::path::Path;
 
+use afg_game::Named;
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 
@@ -80,7 +83,7 @@ impl Command {
             Command::Solve(args) => solve::run(args),
             Command::Gen(args) => generate::run(args),
             Command::Swarm(args) => swarm::run(args),
-            Command::Train(args) => train::run(args),
+            Command::Train(args) => train::run(args, "afg train"),
             Command::TrainPrice(args) => price::run(args),
             Command::PlotCurves(args) => curves::run_plot(args),
             Command::TrainingReport(args) => curves::run_report(args),
@@ -172,41 +175,36 @@ pub fn at_least_one(text: &str) -> Result<usize, String> {
     }
 }
 
-/// A progress bar on stderr (hidden when stderr is not a terminal).
+/// A value parser for an enum a user names ([`Named`]): its names are the possible
+/// values that `--help` lists and that a typo is told about.
 ///
 /// # Examples
 /// ```
-/// let bar = afg_cli::progress(10, "solving");
-/// bar.inc(1);
-/// bar.finish_and_clear();
+/// use afg_game::Preference;
+/// #[derive(clap::Parser)]
+/// struct Args {
+///     #[arg(long, value_parser = afg_cli::choice::<Preference>())]
+///     preference: Preference,
+/// }
+/// use clap::Parser;
+/// let args = Args::try_parse_from(["x", "--preference", "selfish"])?;
+/// assert_eq!(args.preference, Preference::Selfish);
+/// assert!(Args::try_parse_from(["x", "--preference", "greedy"]).is_err());
+/// # Ok::<(), clap::Error>(())
 /// ```
-pub fn progress(len: u64, message: &str) -> indicatif::ProgressBar {
-    let bar = indicatif::ProgressBar::new(len);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} ({eta})")
-            .expect("valid template")
-            .progress_chars("=> "),
-    );
-    bar.set_message(message.to_owned());
-    bar
+pub fn choice<T: Named + Send + Sync>() -> impl clap::builder::TypedValueParser<Value = T> {
+    use clap::builder::TypedValueParser as _;
+    clap::builder::PossibleValuesParser::new(T::ALL.iter().map(|v| v.name()))
+        .map(|name| T::from_name(&name).expect("clap checked the name"))
 }
 
-/// Writes an SVG atomically, creating its folder.
-///
-/// # Errors
-/// If the folder cannot be made or the file written.
-///
-/// # Examples
-/// ```
-/// let path = std::env::temp_dir().join("afg-cli-doc/figure.svg");
-/// afg_cli::write_svg(&path, "<svg/>")?;
-/// assert_eq!(std::fs::read_to_string(&path)?, "<svg/>");
-/// # Ok::<(), anyhow::Error>(())
-/// ```
-pub fn write_svg(out: &Path, svg: &str) -> Result<()> {
-    if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
-        std::fs::create_dir_all(parent)?;
-    }
-    afg_game::fs::write_atomic(out, svg.as_bytes())?;
-    Ok(())
+/// Sets each named field of a configuration to the value given for it, where one was
+/// given: `set_given!(config; lr = args.lr, network.hidden = args.hidden)`.
+macro_rules! set_given {
+    ($config:expr; $($($field:ident).+ = $value:expr),* $(,)?) => {
+        $(if let Some(value) = $value {
+            $config$(.$field)+ = value;
+        })*
+    };
 }
+pub(crate) use set_given;

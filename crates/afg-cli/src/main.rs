@@ -7,6 +7,7 @@ use clap::Parser;
 #[global_allocator]
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
-fn main() -> anyhow::Result<()> {
-    afg_cli::Cli::parse().command.run()
+/// Exit status 0 on success, 1 after one line `error: …` on stderr, 2 for a usage error.
+fn main() -> std::process::ExitCode {
+    afg_eval::report::exit_code(afg_cli::Cli::parse().command.run())
 }

@@ -14,7 +14,7 @@ pub struct PriceArgs {
     #[arg(long, default_value_t = 60)]
     scale: usize,
     /// Tasks per training instance M.
-    #[arg(long, default_value_t = afg_eval::dataset::TASKS)]
+    #[arg(long, default_value_t = afg_game::GeneratorConfig::PAPER_TASKS)]
     tasks: usize,
     /// Seed of everything random in the run.
     #[arg(long, default_value_t = 0)]
@@ -68,16 +68,18 @@ pub fn run(args: PriceArgs) -> Result<()> {
         );
     }
     let mut config = PriceTrainConfig::new(args.scale, args.tasks, args.seed);
-    config.rounds = args.rounds.unwrap_or(config.rounds);
-    config.episodes_per_round = args.episodes.unwrap_or(config.episodes_per_round);
-    config.steps_per_round = args.steps.unwrap_or(config.steps_per_round);
-    config.batch = args.batch.unwrap_or(config.batch);
-    config.lr = args.lr.unwrap_or(config.lr);
-    config.network.hidden = args.hidden.unwrap_or(config.network.hidden);
-    config.expert_decay = args.expert_decay.unwrap_or(config.expert_decay);
-    config.one_shot_weight = args.one_shot_weight.unwrap_or(config.one_shot_weight);
+    crate::set_given!(config;
+        rounds = args.rounds,
+        episodes_per_round = args.episodes,
+        steps_per_round = args.steps,
+        batch = args.batch,
+        lr = args.lr,
+        network.hidden = args.hidden,
+        expert_decay = args.expert_decay,
+        one_shot_weight = args.one_shot_weight,
+    );
     let trainer = PriceTrainer::new(config)?;
-    let bar = crate::progress(trainer.config().rounds as u64, "train-price");
+    let bar = afg_eval::report::progress(trainer.config().rounds as u64, "train-price");
     let command = format!("afg train-price {}", crate::command_args(&args).join(" "));
     let manifest = trainer.run_in(&args.out, command, |round| {
         bar.inc(1);

@@ -2,11 +2,14 @@
 
 use std::path::PathBuf;
 
-use afg_baseline::{Allocator, Method, Optimum};
-use afg_eval::EvalError;
-use afg_eval::solve::{ModelOptions, OptionConflict, Report, Row, load_model};
+use afg_baseline::{Allocator, Method};
+use afg_eval::solve::{Report, Row};
+use afg_game::fs::write_atomic_making_dirs;
+use afg_game::io::read_instances;
 use afg_game::{Assignment, Instance};
-use anyhow::{Context, Result};
+use afg_learn::LearnError;
+use afg_learn::run::{ModelOptions, OptionConflict, load_model};
+use anyhow::Result;
 use clap::Args;
 
 /// `afg solve`: an allocator, a source of instances and what to write.
@@ -69,8 +72,8 @@ pub struct SolveArgs {
 }
 
 /// The library's error, with the flags to change when options conflict.
-fn with_flags(error: EvalError) -> anyhow::Error {
-    let EvalError::ModelOptions(conflict) = error else {
+fn with_flags(error: LearnError) -> anyhow::Error {
+    let LearnError::ModelOptions(conflict) = error else {
         return error.into();
     };
     let fix = match conflict {
@@ -96,21 +99,6 @@ fn committed_dataset(n: usize) -> Result<Vec<Instance>> {
     Ok(afg_eval::dataset::load(root, n)?)
 }
 
-/// Reads `--input`: a file or standard input ("-"), one instance or JSON Lines.
-pub(crate) fn read_instances(path: &std::path::Path) -> Result<Vec<Instance>> {
-    let text = if path.as_os_str() == "-" {
-        std::io::read_to_string(std::io::stdin()).context("reading standard input")?
-    } else {
-        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?
-    };
-    let instances = afg_game::io::parse_instances(&text)
-        .with_context(|| format!("reading {}", path.display()))?;
-    if instances.is_empty() {
-        anyhow::bail!("{} holds no instance", path.display());
-    }
-    Ok(instances)
-}
-
 /// Solves every instance and prints (or writes) the report.
 ///
 /// # Errors
@@ -133,7 +121,12 @@ pub fn run(args: SolveArgs) -> Result<()> {
         instances.truncate(k);
     }
     if let Some(from) = &args.from {
-        return crate::realloc::run(&args, from, &instances);
+        let out = crate::realloc::Outputs {
+            out: args.out.as_deref(),
+            svg: args.svg.as_deref(),
+            json: args.json,
+        };
+        return crate::realloc::run(args.method, from, &instances, &out);
     }
     let (name, method): (String, Box<dyn Allocator>) = match (&args.method, &args.model) {
         (Some(m), _) => (m.to_string(), m.allocator(args.seed)),
@@ -151,7 +144,7 @@ pub fn run(args: SolveArgs) -> Result<()> {
         }
         (None, None) => unreachable!("clap requires an allocator"),
     };
-    let bar = crate::progress(instances.len() as u64, &format!("{name} on {source}"));
+    let bar = afg_eval::report::progress(instances.len() as u64, &format!("{name} on {source}"));
     let (rows, assignments): (Vec<Row>, Vec<Assignment>) = instances
         .iter()
         .map(|inst| {
@@ -191,14 +184,9 @@ fn write_outputs(
         afg_game::fs::write_atomic(out, text.as_bytes())?;
     }
     if let Some(svg) = &args.svg {
-        let opt = Optimum.allocate(&instances[0])?.assignment;
-        crate::write_svg(
-            svg,
-            &afg_eval::figures::assignments_svg(
-                &instances[0],
-                &[("OPT", &opt), (name, &assignments[0])],
-            )?,
-        )?;
+        let map =
+            afg_eval::figures::beside_optimum_svg(&instances[0], "OPT", name, &assignments[0])?;
+        write_atomic_making_dirs(svg, map.as_bytes())?;
     }
     Ok(())
 }

@@ -1,16 +1,18 @@
 //! `afg swarm`: GRAPE and the decentralised auction over a lossy, late,
-//! range-limited network where robots fail mid-run; a grid of methods × robot counts ×
-//! loss rates × failing shares, several seeds each, as a Markdown table, JSON lines
-//! and an SVG of the runs against rounds.
+//! range-limited network where robots fail mid-run; the flags make afg-eval's grid of
+//! methods × robot counts × loss rates × failing shares ([`SwarmGrid`]), printed as a
+//! Markdown table or JSON lines, with an SVG of the runs against rounds.
 
 use std::path::PathBuf;
 
-use afg_baseline::{Failure, Network, Swarm, SwarmMethod, SwarmReport};
-use afg_game::{GeneratorConfig, Instance, Preference};
+use afg_baseline::{Network, SwarmMethod, SwarmReport};
+use afg_eval::swarm::{SwarmGrid, table};
+use afg_game::fs::write_atomic_making_dirs;
+use afg_game::io::read_instances;
+use afg_game::{GeneratorConfig, Named, Preference};
 use afg_graph::GraphKind;
-use anyhow::{Context, Result, ensure};
+use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
-use rayon::prelude::*;
 
 /// `afg swarm`: the methods, the instances and the network's knobs (one run per
 /// combination of the listed values).
@@ -22,8 +24,8 @@ pub struct SwarmArgs {
     #[arg(long, value_enum, value_delimiter = ',', default_value = "grape")]
     method: Vec<MethodName>,
     /// GRAPE's preference: selfish (the paper's GRAPE DA) or balanced.
-    #[arg(long, value_enum, default_value_t = Pref::Selfish)]
-    preference: Pref,
+    #[arg(long, value_parser = crate::choice::<Preference>(), default_value = "selfish")]
+    preference: Preference,
     /// The auction's least price increment ε (its result is within 2N·ε of the optimum).
     #[arg(long, default_value_t = 1e-3)]
     epsilon: f64,
@@ -97,68 +99,33 @@ enum MethodName {
     Auction,
 }
 
-#[derive(Clone, Copy, ValueEnum)]
-enum Pref {
-    Selfish,
-    Balanced,
-}
-
-impl From<Pref> for Preference {
-    fn from(p: Pref) -> Preference {
-        match p {
-            Pref::Selfish => Preference::Selfish,
-            Pref::Balanced => Preference::Balanced,
-        }
-    }
-}
-
-/// One cell of the grid: a method, an instance and a network, run over the seeds.
-struct Cell {
-    method: SwarmMethod,
-    instance: Instance,
-    network: Network,
-    /// Whether the crash round is left to mid-run.
-    crash_mid_run: bool,
-}
-
 /// Runs every combination and prints the table (or JSON), with the figure if asked.
 ///
 /// # Errors
 /// A knob out of range, an unreadable input, or a failed write.
 pub fn run(args: SwarmArgs) -> Result<()> {
-    let cells = cells(&args)?;
-    let seeds = args.seed..args.seed + args.seeds as u64;
-    let jobs: Vec<(usize, u64)> = (0..cells.len())
-        .flat_map(|c| seeds.clone().map(move |s| (c, s)))
-        .collect();
-    let bar = crate::progress(jobs.len() as u64, "swarm runs");
-    // One run alone shows its rounds as they go.
-    let single = jobs.len() == 1;
+    let grid = grid(&args)?;
+    let runs = grid.cells()?.len() * args.seeds;
+    let bar = afg_eval::report::progress(runs as u64, "swarm runs");
     let on_round = |round: u64| {
-        if single && round.is_multiple_of(100) {
+        if round.is_multiple_of(100) {
             bar.set_message(format!("swarm run, round {round}"));
         }
     };
-    let reports: Vec<(usize, SwarmReport)> = jobs
-        .par_iter()
-        .map(|&(c, seed)| {
-            let report = run_one(&args, &cells[c], seed, &on_round)?;
-            bar.inc(1);
-            Ok((c, report))
-        })
-        .collect::<Result<_>>()?;
+    let (cells, reports) = grid.run(|| bar.inc(1), &on_round)?;
     bar.finish_and_clear();
     if let Some(path) = &args.svg {
         let firsts: Vec<(String, SwarmReport)> = reports
             .iter()
             .filter(|(_, r)| r.seed == args.seed)
-            .map(|(c, r)| (label(&cells[*c]), r.clone()))
+            .map(|(c, r)| (cells[*c].label(), r.clone()))
             .collect();
         let title = format!(
             "Decentralised allocation over a failing network (GRAPE: {})",
-            preference_name(args.preference)
+            args.preference.name()
         );
-        crate::write_svg(path, &afg_eval::figures::swarm_svg(&firsts, &title)?)?;
+        let svg = afg_eval::figures::swarm_svg(&firsts, &title)?;
+        write_atomic_making_dirs(path, svg.as_bytes())?;
     }
     if args.json {
         for (_, report) in &reports {
@@ -170,17 +137,10 @@ pub fn run(args: SwarmArgs) -> Result<()> {
     Ok(())
 }
 
-fn preference_name(p: Pref) -> &'static str {
-    match p {
-        Pref::Selfish => "selfish",
-        Pref::Balanced => "balanced",
-    }
-}
-
-/// The grid: each method × instance × loss × failing share.
-fn cells(args: &SwarmArgs) -> Result<Vec<Cell>> {
+/// The grid the flags ask for: each method × instance × loss × failing share.
+fn grid(args: &SwarmArgs) -> Result<SwarmGrid> {
     let instances = match &args.input {
-        Some(path) => crate::solve::read_instances(path)?,
+        Some(path) => read_instances(path)?,
         None => args
             .robots
             .iter()
@@ -196,169 +156,37 @@ fn cells(args: &SwarmArgs) -> Result<Vec<Cell>> {
         (None, Some(k)) => GraphKind::Knn { k },
         (None, None) => GraphKind::default(),
     };
-    let methods: Vec<SwarmMethod> = args
+    let methods = args
         .method
         .iter()
         .map(|m| match m {
             MethodName::Grape => SwarmMethod::Grape {
-                preference: args.preference.into(),
+                preference: args.preference,
             },
             MethodName::Auction => SwarmMethod::Auction {
                 epsilon: args.epsilon,
             },
         })
         .collect();
-    let mut cells = Vec::new();
-    for (&method, instance) in methods
-        .iter()
-        .flat_map(|m| instances.iter().map(move |i| (m, i)))
-    {
-        for &loss in &args.loss {
-            for &fail in &args.fail {
-                let failure = (fail > 0.0).then(|| Failure {
-                    fraction: fail,
-                    at_round: args.fail_at.unwrap_or(1),
-                    detect_after: args.detect_after,
-                });
-                let network = Network {
-                    graph,
-                    loss,
-                    burst: args.burst,
-                    max_delay: args.delay,
-                    activation: args.activation,
-                    failure,
-                    partition_until: args.partition_until,
-                };
-                network.check()?;
-                cells.push(Cell {
-                    method,
-                    instance: instance.clone(),
-                    network,
-                    crash_mid_run: fail > 0.0 && args.fail_at.is_none(),
-                });
-            }
-        }
-    }
-    ensure!(!cells.is_empty(), "nothing to run");
-    Ok(cells)
-}
-
-/// One seed of one cell; a mid-run crash is placed at half the rounds of the same run
-/// without failures.
-fn run_one(
-    args: &SwarmArgs,
-    cell: &Cell,
-    seed: u64,
-    on_round: &(dyn Fn(u64) + Sync),
-) -> Result<SwarmReport> {
-    let swarm = |network: Network| {
-        let mut swarm = match cell.method {
-            SwarmMethod::Grape { preference } => Swarm::grape(preference, network, seed),
-            SwarmMethod::Auction { epsilon } => Swarm::auction(epsilon, network, seed),
-        };
-        swarm.max_rounds = args.max_rounds.unwrap_or(0);
-        swarm.trace = args.svg.is_some();
-        swarm
-    };
-    let mut network = cell.network.clone();
-    if cell.crash_mid_run {
-        let intact = Network {
-            failure: None,
-            ..network.clone()
-        };
-        let rounds = swarm(intact).run(&cell.instance)?.rounds;
-        if let Some(f) = network.failure.as_mut() {
-            f.at_round = (rounds / 2).max(1);
-        }
-    }
-    Ok(swarm(network).run_with(&cell.instance, on_round)?)
-}
-
-/// What a cell is, in a few words.
-fn label(cell: &Cell) -> String {
-    let network = &cell.network;
-    let method = match cell.method {
-        SwarmMethod::Grape { .. } => "GRAPE".to_string(),
-        SwarmMethod::Auction { epsilon } => format!("auction (ε = {epsilon})"),
-    };
-    let mut parts = vec![method, format!("N = {}", cell.instance.num_robots())];
-    match network.graph {
-        GraphKind::Radius { radius } => parts.push(format!("radius {radius}")),
-        GraphKind::Knn { k } if k != 10 => parts.push(format!("{k} nearest")),
-        _ => {}
-    }
-    parts.push(format!("loss {:.0} %", 100.0 * network.loss));
-    if let Some(b) = network.burst {
-        parts.push(format!("bursts of {b}"));
-    }
-    if network.max_delay > 0 {
-        parts.push(format!("delay ≤ {}", network.max_delay));
-    }
-    if network.activation < 1.0 {
-        parts.push(format!("async {}", network.activation));
-    }
-    if let Some(f) = network.failure {
-        parts.push(format!("{:.0} % fail", 100.0 * f.fraction));
-    }
-    if let Some(r) = network.partition_until {
-        parts.push(format!("split until {r}"));
-    }
-    parts.join(", ")
-}
-
-/// The Markdown table: one row per cell, means over its seeds.
-fn table(cells: &[Cell], reports: &[(usize, SwarmReport)]) -> String {
-    let mut out = String::from(
-        "| network | links added | runs converged | fail at | rounds | messages | MB (partitions) | MB (changes) | agreeing | % of OPT (survivors) | stable | NS_rate balanced | NS_rate selfish | time |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
-    );
-    for (c, cell) in cells.iter().enumerate() {
-        let runs: Vec<&SwarmReport> = reports
-            .iter()
-            .filter(|(k, _)| *k == c)
-            .map(|(_, r)| r)
-            .collect();
-        let mean = |f: &dyn Fn(&SwarmReport) -> f64| {
-            runs.iter().map(|r| f(r)).sum::<f64>() / runs.len() as f64
-        };
-        let count = |f: &dyn Fn(&SwarmReport) -> bool| runs.iter().filter(|r| f(r)).count();
-        let fail_at = cell.network.failure.map_or("–".to_string(), |_| {
-            let rounds: Vec<String> = runs
-                .iter()
-                .map(|r| r.network.failure.map_or(0, |f| f.at_round).to_string())
-                .collect();
-            rounds.join("/")
-        });
-        let percent = runs
-            .iter()
-            .map(|r| r.percent_of_opt)
-            .collect::<Option<Vec<f64>>>()
-            .map_or("–".to_string(), |p| {
-                format!("{:.2} %", p.iter().sum::<f64>() / p.len() as f64)
-            });
-        out += &format!(
-            "| {} | {:.0} | {}/{} | {} | {:.0} | {:.0} | {:.1} | {:.2} | {:.1} % | {} | {}/{} | {:.1} % | {:.1} % | {} |\n",
-            label(cell),
-            mean(&|r| r.added_edges as f64),
-            count(&|r| r.converged),
-            runs.len(),
-            fail_at,
-            mean(&|r| r.rounds as f64),
-            mean(&|r| r.messages as f64),
-            mean(&|r| r.bytes as f64) / 1e6,
-            mean(&|r| r.delta_bytes as f64) / 1e6,
-            100.0 * mean(&|r| r.agreeing),
-            percent,
-            count(&|r| r.stable),
-            runs.len(),
-            100.0 * mean(&|r| r.ns_rate_balanced),
-            100.0 * mean(&|r| r.ns_rate_selfish),
-            afg_eval::tables::duration(std::time::Duration::from_secs_f64(
-                mean(&|r| r.wall_time_s)
-            )),
-        );
-    }
-    out
+    Ok(SwarmGrid {
+        methods,
+        instances,
+        network: Network {
+            graph,
+            burst: args.burst,
+            max_delay: args.delay,
+            activation: args.activation,
+            partition_until: args.partition_until,
+            ..Network::default()
+        },
+        losses: args.loss.clone(),
+        failing: args.fail.clone(),
+        fail_at: args.fail_at,
+        detect_after: args.detect_after,
+        seeds: args.seed..args.seed + args.seeds as u64,
+        max_rounds: args.max_rounds.unwrap_or(0),
+        trace: args.svg.is_some(),
+    })
 }
 
 #[cfg(test)]

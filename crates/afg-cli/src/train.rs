@@ -5,10 +5,12 @@ use std::time::Duration;
 
 use afg_learn::{
     run::RunDir,
-    train::{Session, TrainConfig, TrainSettings},
+    train::{Session, TrainConfig},
 };
 use anyhow::{Context, Result, bail};
 use clap::Args;
+
+use crate::settings::TrainSettings;
 
 /// `afg train`: the training settings and the run directory.
 #[derive(Args, Default)]
@@ -33,15 +35,16 @@ impl TrainArgs {
     }
 }
 
-/// Trains (or resumes) a run, checkpointing as it goes.
+/// Trains (or resumes) a run, checkpointing as it goes. `program` is the command the
+/// user ran (`afg train` or `cargo xtask train`), for the advice in messages.
 ///
 /// # Errors
 /// Bad settings, a directory that already holds a run, a resume that cannot continue,
 /// or a failed write.
-pub fn run(args: TrainArgs) -> Result<()> {
+pub fn run(args: TrainArgs, program: &str) -> Result<()> {
     let mut session = match &args.resume {
         Some(dir) => {
-            check_resume(&args, dir)?;
+            check_resume(&args, dir, program)?;
             if let Some(line) = RunDir::new(dir).torn_log_line()? {
                 eprintln!("note: line {line} of the log was cut short by a crash; dropped");
             }
@@ -67,7 +70,7 @@ pub fn run(args: TrainArgs) -> Result<()> {
         config.algo.name(),
         config.robots
     );
-    let bar = crate::progress(config.steps, &name);
+    let bar = afg_eval::report::progress(config.steps, &name);
     bar.set_style(
         indicatif::ProgressStyle::with_template("{msg} [{bar:25}] {pos}/{len} {per_sec} eta {eta}")
             .expect("valid template")
@@ -108,14 +111,14 @@ pub fn run(args: TrainArgs) -> Result<()> {
 /// Refuses what `--resume DIR` cannot do, saying what to do instead: extend a finished
 /// run (its ε and learning-rate schedules are fixed by its budget), or change the
 /// settings of an unfinished one.
-fn check_resume(args: &TrainArgs, dir: &std::path::Path) -> Result<()> {
+fn check_resume(args: &TrainArgs, dir: &std::path::Path, program: &str) -> Result<()> {
     let run = RunDir::new(dir);
     let config = run.config()?;
     if run.has_weights() {
         bail!(
             "{} is a finished run ({} steps): a run cannot be extended, because its ε and \
              learning-rate schedules are fixed by its budget; start a new run from its \
-             weights instead: cargo xtask train --init-from {} --steps K --out NEW_DIR \
+             weights instead: {program} --init-from {} --steps K --out NEW_DIR \
              (with the run's other settings)",
             dir.display(),
             config.steps,
@@ -142,11 +145,11 @@ fn git_revision() -> Option<String> {
         .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_owned())
 }
 
-/// The `cargo xtask train` command line that reproduces a configuration (what a run's
-/// manifest records; `afg train` takes the same flags).
-pub fn command_line(config: &TrainConfig, dir: &std::path::Path) -> String {
+/// The command line of `program` (`afg train` or `cargo xtask train`, which take the
+/// same flags) that reproduces a configuration: what a run's manifest records.
+pub fn command_line(program: &str, config: &TrainConfig, dir: &std::path::Path) -> String {
     let settings = crate::command_args(&TrainSettings::from_config(config)).join(" ");
-    format!("cargo xtask train {settings} --out {}", dir.display())
+    format!("{program} {settings} --out {}", dir.display())
 }
 
 #[cfg(test)]
@@ -187,7 +190,7 @@ mod tests {
             let config = train_args(&format!("train {flags} --out models/x"))
                 .config()
                 .unwrap();
-            let line = command_line(&config, Path::new("models/x"));
+            let line = command_line("cargo xtask train", &config, Path::new("models/x"));
             let again = train_args(line.strip_prefix("cargo xtask ").unwrap());
             assert_eq!(again.config().unwrap(), config, "{line}");
             assert!(line.ends_with(" --out models/x"), "{line}");
@@ -203,7 +206,7 @@ mod tests {
                 continue; // a price model, or a run without a manifest
             };
             let dir = run.path().strip_prefix(&root).unwrap();
-            let line = command_line(&config, dir);
+            let line = command_line("cargo xtask train", &config, dir);
             assert_eq!(line, manifest.command, "{}", dir.display());
             checked += 1;
         }

@@ -23,21 +23,9 @@ pub enum EvalError {
         #[source]
         source: GameError,
     },
-    /// A trained model could not be loaded from its run directory.
-    #[error("loading the model in {path}: {source}")]
-    Model {
-        /// The run directory.
-        path: String,
-        /// What is wrong.
-        #[source]
-        source: LearnError,
-    },
     /// Options that do not apply to the model or method at hand.
     #[error("{0}")]
     BadOptions(&'static str),
-    /// Model options that do not go together, or not with the model found.
-    #[error(transparent)]
-    ModelOptions(#[from] crate::solve::OptionConflict),
     /// A training run's log lacks what is needed.
     #[error("{path}: the log has {what}")]
     Log {

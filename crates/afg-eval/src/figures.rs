@@ -1,6 +1,6 @@
 //! SVG figures: validation curves of training runs and maps of assignments.
 
-use afg_baseline::{Method, SwarmReport};
+use afg_baseline::{Allocator, Method, Optimum, SwarmReport};
 use afg_game::{Assignment, Instance};
 use plotters::prelude::*;
 
@@ -166,6 +166,45 @@ pub fn assignments_svg(
         root_area.present()?;
     }
     Ok(svg)
+}
+
+/// The validation curves of the training runs in `dirs` (each with a log), as
+/// [`curves_svg`] draws them: `afg plot-curves` and the paper's Fig. 1.
+///
+/// # Errors
+/// A run without a readable log, or [`EvalError::Figure`] if drawing fails.
+pub fn runs_curves_svg(dirs: &[std::path::PathBuf], title: &str) -> Result<String, EvalError> {
+    let curves = dirs
+        .iter()
+        .map(|d| crate::runs::read_curve(d))
+        .collect::<Result<Vec<_>, _>>()?;
+    curves_svg(&curves, title)
+}
+
+/// `assignment` (named `name`) drawn beside the exact optimum of `inst` (named
+/// `opt_name`), as [`assignments_svg`] draws them: the `--svg` map of `afg solve`.
+///
+/// # Errors
+/// The optimum's errors, and [`EvalError::Figure`] if drawing fails.
+///
+/// # Examples
+/// ```
+/// use afg_baseline::{Allocator, Greedy};
+/// use afg_game::GeneratorConfig;
+/// let inst = GeneratorConfig::paper(10, 3, 1).generate()?;
+/// let greedy = Greedy.allocate(&inst)?.assignment;
+/// let svg = afg_eval::figures::beside_optimum_svg(&inst, "OPT", "greedy", &greedy)?;
+/// assert!(svg.contains("greedy: welfare"));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn beside_optimum_svg(
+    inst: &Instance,
+    opt_name: &str,
+    name: &str,
+    assignment: &Assignment,
+) -> Result<String, EvalError> {
+    let opt = Optimum.allocate(inst)?.assignment;
+    assignments_svg(inst, &[(opt_name, &opt), (name, assignment)])
 }
 
 /// Swarm runs against rounds as an SVG of two panels: the welfare of the highest view

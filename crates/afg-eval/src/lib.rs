@@ -1,28 +1,23 @@
-//! Evaluation of allocators: the fixed test datasets ([`dataset`]), one way to score an
-//! allocation against the exact optimum ([`Score`], [`evaluate`]), the learned models
-//! of the paper's tables ([`ModelSpec`]), the numbers the paper reports ([`paper`]) and
-//! the tables themselves ([`tables`], with the price model's ablation in
-//! [`price_ablation`]).
+//! Evaluation of allocators, as the `afg` command line and the Python package call it:
+//! the fixed test datasets ([`dataset`]), one way to score an allocation against the
+//! exact optimum ([`Score`], [`evaluate`]), one allocator on a set of instances
+//! ([`solve`]), warm-start reallocation ([`realloc`]), the decentralised swarm's grid
+//! of runs ([`swarm`]), training runs' curves and summaries ([`runs`]), figures
+//! ([`figures`]) and progress bars and durations ([`report`]).
 //!
-//! Every command that prints "% of OPT" computes it here.
+//! Every command that prints "% of OPT" computes it here. The paper's tables, its
+//! numbers and the benchmarks live in the maintainer's `afg-repro`.
 
-pub mod bench;
 pub mod dataset;
 mod error;
 pub mod figures;
-pub mod markdown;
-mod model;
-pub mod paper;
-pub mod price_ablation;
 pub mod realloc;
-pub mod regret;
+pub mod report;
 pub mod runs;
-pub mod scale;
 mod score;
 pub mod solve;
-pub mod tables;
+pub mod swarm;
 
 pub use afg_baseline::percent_of_opt;
 pub use error::EvalError;
-pub use model::{Head, ModelSpec, PriceSpec, PriceTraining};
 pub use score::{Score, Summary, evaluate, optima, optimum_welfare};

@@ -159,39 +159,6 @@ pub fn after_removal(
     Ok((now, previous))
 }
 
-/// The removal study's Markdown table: the warm start (`dynamics` run from the old
-/// assignment) against the same dynamics and OPT from scratch, over `rows` (one per
-/// instance, none empty).
-pub fn study_markdown(rows: &[Reallocation], dynamics: &str) -> String {
-    let k = rows.len() as f64;
-    let mean = |f: &dyn Fn(&Reallocation) -> f64| rows.iter().map(f).sum::<f64>() / k;
-    let worst = |f: &dyn Fn(&Reallocation) -> f64| rows.iter().map(f).fold(f64::INFINITY, f64::min);
-    // An undefined % of OPT shows as NaN in the means it enters.
-    let pct = |p: Option<f64>| p.unwrap_or(f64::NAN);
-    let mut md = String::from(
-        "| method | survivors moved (mean) | % of OPT (mean / worst) | balanced-stable | time (ms, mean) |\n|---|---|---|---|---|\n",
-    );
-    md += &format!(
-        "| warm start ({dynamics} from the old assignment) | {:.1} | {:.3} / {:.3} | {} of {} | {:.2} |\n",
-        mean(&|r| r.moved as f64),
-        mean(&|r| pct(r.percent_of_opt)),
-        worst(&|r| pct(r.percent_of_opt)),
-        rows.iter().filter(|r| r.stable_balanced).count(),
-        rows.len(),
-        1e3 * mean(&|r| r.seconds)
-    );
-    md += &format!(
-        "| {dynamics} from scratch | {:.1} | {:.3} / {:.3} | – | – |\n",
-        mean(&|r| r.scratch_changes as f64),
-        mean(&|r| pct(r.scratch_percent_of_opt)),
-        worst(&|r| pct(r.scratch_percent_of_opt))
-    );
-    md + &format!(
-        "| OPT from scratch | {:.1} | 100 / 100 | – | – |\n",
-        mean(&|r| r.opt_changes as f64)
-    )
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -206,18 +173,6 @@ mod tests {
         assert!(percent > 99.0, "{percent}");
         assert!(r.moved < r.survivors / 5, "moved {}", r.moved);
         now.check(&r.assignment).unwrap();
-        // The study's table of two copies of it: means equal the row, worst too.
-        let md = study_markdown(&[r.clone(), r.clone()], "balanced DA");
-        let warm = md.lines().nth(2).unwrap();
-        let pct = format!("{percent:.3} / {percent:.3}");
-        assert!(warm.contains(&pct) && warm.contains("| 2 of 2 |"), "{md}");
-        assert!(
-            md.lines()
-                .nth(3)
-                .unwrap()
-                .starts_with("| balanced DA from scratch |")
-        );
-        assert_eq!(md.lines().count(), 5);
         let text = r.to_string();
         let moved = format!("survivors moved   {:>12}   of 270 (", r.moved);
         assert!(

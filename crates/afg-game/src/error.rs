@@ -153,4 +153,29 @@ pub enum GameError {
         #[source]
         source: std::io::Error,
     },
+    /// A name that is none of an enum's ([`crate::Named`]).
+    #[error("unknown {what} {name:?}: expected {expected}")]
+    UnknownName {
+        /// What was named ("preference").
+        what: &'static str,
+        /// The name given.
+        name: String,
+        /// The names there are.
+        expected: String,
+    },
+    /// An error in the named file.
+    #[error("{path}: {source}")]
+    InFile {
+        /// The file.
+        path: String,
+        /// What is wrong in it.
+        #[source]
+        source: Box<GameError>,
+    },
+    /// A file of instances that holds none.
+    #[error("{path} holds no instance")]
+    NoInstances {
+        /// The file.
+        path: String,
+    },
 }

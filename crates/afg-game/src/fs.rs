@@ -28,6 +28,29 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), GameError> {
     write_atomic_with(path, |f| f.write_all(bytes))
 }
 
+/// [`write_atomic`], creating the file's folder (and its parents) first: for outputs
+/// such as figures that a user names anywhere.
+///
+/// # Errors
+/// [`GameError::Io`] if the folder cannot be made or the file written.
+///
+/// # Examples
+/// ```
+/// let path = std::env::temp_dir().join(format!("afg-doc-dirs-{}/a/figure.svg", std::process::id()));
+/// afg_game::fs::write_atomic_making_dirs(&path, b"<svg/>")?;
+/// assert_eq!(std::fs::read(&path)?, b"<svg/>");
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn write_atomic_making_dirs(path: &Path, bytes: &[u8]) -> Result<(), GameError> {
+    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        fs::create_dir_all(parent).map_err(|source| GameError::Io {
+            path: parent.display().to_string(),
+            source,
+        })?;
+    }
+    write_atomic(path, bytes)
+}
+
 /// [`write_atomic`] with the contents written by `write` into the temporary file (for
 /// writers that stream, such as a model recorder).
 ///

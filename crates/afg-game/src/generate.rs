@@ -57,6 +57,71 @@ pub struct GeneratorConfig {
     pub capacity: Option<CapacityRange>,
 }
 
+/// The generator's knobs as a user gives them (`afg gen`, `afg.generate`, the gym
+/// environments): each `None` keeps the paper's default of [`GeneratorConfig::paper`].
+/// [`GeneratorKnobs::config`] checks them the same way for every front end.
+///
+/// # Examples
+/// ```
+/// use afg_game::GeneratorKnobs;
+/// let knobs = GeneratorKnobs { capacity_slack: Some(1.2), beta: Some(0.5), ..GeneratorKnobs::default() };
+/// let cfg = knobs.config(20, 4, 7)?;
+/// assert_eq!((cfg.beta, cfg.seed), (0.5, 7));
+/// assert!(cfg.capacity.is_some());
+/// let bad = GeneratorKnobs { capacity_slack: Some(0.5), ..GeneratorKnobs::default() };
+/// assert_eq!(
+///     bad.config(20, 4, 7).unwrap_err().to_string(),
+///     "invalid generator: capacity slack must be at least 1 (got 0.5)"
+/// );
+/// # Ok::<(), afg_game::GameError>(())
+/// ```
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GeneratorKnobs {
+    /// Capacities drawn from `ceil(N/M) ..= ceil(slack · N/M)` (slack ≥ 1); `None`: no
+    /// capacities.
+    pub capacity_slack: Option<f64>,
+    /// The base eps of every task's log (default `max(2, N/M)`).
+    pub eps: Option<f64>,
+    /// The distance penalty β (default 1).
+    pub beta: Option<f64>,
+    /// Initial rewards uniform in `[lo, hi]` (default `[N/M, 2N/M]`).
+    pub rewards: Option<(f64, f64)>,
+}
+
+impl GeneratorKnobs {
+    /// The configuration of `robots`, `tasks` and `seed` with these knobs.
+    ///
+    /// # Errors
+    /// [`GameError::InvalidGenerator`] for a capacity slack below 1 or not finite; the
+    /// other knobs are checked when the instance is drawn ([`GeneratorConfig::generate`]).
+    pub fn config(
+        &self,
+        robots: usize,
+        tasks: usize,
+        seed: u64,
+    ) -> Result<GeneratorConfig, GameError> {
+        let mut cfg = GeneratorConfig::paper(robots, tasks, seed);
+        if let Some(eps) = self.eps {
+            cfg.eps = eps;
+        }
+        if let Some(beta) = self.beta {
+            cfg.beta = beta;
+        }
+        if let Some((lo, hi)) = self.rewards {
+            (cfg.reward_min, cfg.reward_max) = (lo, hi);
+        }
+        if let Some(slack) = self.capacity_slack {
+            if !(slack.is_finite() && slack >= 1.0) {
+                return Err(GameError::InvalidGenerator(format!(
+                    "capacity slack must be at least 1 (got {slack})"
+                )));
+            }
+            cfg = cfg.with_capacity_slack(slack);
+        }
+        Ok(cfg)
+    }
+}
+
 impl GeneratorConfig {
     /// The paper's number of tasks in every experiment, M = 5.
     pub const PAPER_TASKS: usize = 5;

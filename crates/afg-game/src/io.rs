@@ -240,6 +240,48 @@ pub fn parse_instances(text: &str) -> Result<Vec<Instance>, GameError> {
     parse_dataset(text)
 }
 
+/// Reads a file of instances as [`parse_instances`] does (one instance document, or
+/// JSON Lines); the path `-` reads standard input. Every front end reads `--input` and
+/// Python's `read_jsonl` through this.
+///
+/// # Errors
+/// [`GameError::Io`] if the file cannot be read, [`GameError::InFile`] naming the file
+/// around a parse or validation error, and [`GameError::NoInstances`] for a file with
+/// none.
+///
+/// # Examples
+/// ```
+/// use afg_game::{GameError, GeneratorConfig, io};
+/// let dir = std::env::temp_dir().join(format!("afg-doc-read-{}", std::process::id()));
+/// std::fs::create_dir_all(&dir)?;
+/// let inst = GeneratorConfig::paper(5, 2, 1).generate()?;
+/// std::fs::write(dir.join("one.json"), inst.to_json())?;
+/// assert_eq!(io::read_instances(&dir.join("one.json"))?, vec![inst]);
+/// std::fs::write(dir.join("empty.jsonl"), "\n")?;
+/// let err = io::read_instances(&dir.join("empty.jsonl")).unwrap_err();
+/// assert!(matches!(err, GameError::NoInstances { .. }));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn read_instances(path: &Path) -> Result<Vec<Instance>, GameError> {
+    let name = path.display().to_string();
+    let text = if path.as_os_str() == "-" {
+        std::io::read_to_string(std::io::stdin()).map_err(|source| GameError::Io {
+            path: "standard input".into(),
+            source,
+        })?
+    } else {
+        read_to_string(path)?
+    };
+    let instances = parse_instances(&text).map_err(|source| GameError::InFile {
+        path: name.clone(),
+        source: Box::new(source),
+    })?;
+    if instances.is_empty() {
+        return Err(GameError::NoInstances { path: name });
+    }
+    Ok(instances)
+}
+
 /// Reads a JSON Lines dataset: one instance per non-empty line.
 ///
 /// # Errors

@@ -32,12 +32,14 @@ mod generate;
 mod ids;
 mod instance;
 pub mod io;
+mod named;
 pub mod realloc;
 mod stability;
 
 pub use assignment::Assignment;
 pub use error::GameError;
-pub use generate::{CapacityRange, GeneratorConfig};
+pub use generate::{CapacityRange, GeneratorConfig, GeneratorKnobs};
 pub use ids::{RobotId, TaskId};
 pub use instance::{GOLDEN_RATIO, Instance, MAX_VALUE, Point, Task};
+pub use named::Named;
 pub use stability::{Preference, TOLERANCE, strictly_better};

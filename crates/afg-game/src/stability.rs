@@ -31,6 +31,18 @@ pub enum Preference {
     Selfish,
 }
 
+impl crate::Named for Preference {
+    const ALL: &'static [Self] = &[Preference::Balanced, Preference::Selfish];
+    const WHAT: &'static str = "preference";
+
+    fn name(self) -> &'static str {
+        match self {
+            Preference::Balanced => "balanced",
+            Preference::Selfish => "selfish",
+        }
+    }
+}
+
 /// Whether score `a` is strictly better than `b` beyond the tolerance.
 ///
 /// # Examples

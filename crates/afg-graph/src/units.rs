@@ -40,32 +40,30 @@ use crate::RobotGraph;
 /// # Ok::<(), afg_game::GameError>(())
 /// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 pub enum Units {
     /// Welfare / mean initial reward; raw edge distances. The units of networks saved
     /// before units were recorded.
-    #[cfg_attr(
-        feature = "cli",
-        value(help = "welfare / the mean task reward, raw edge weights (the first models' units)")
-    )]
     MeanReward,
     /// Welfare / β; edge distances / the graph's mean edge length.
-    #[cfg_attr(
-        feature = "cli",
-        value(help = "welfare / β, edge weights / their mean: the same at every N")
-    )]
     ScaleFree,
     /// [`Units::ScaleFree`] with the value part of the task features capped. The
     /// default: every model trained since uses it.
     #[default]
-    #[cfg_attr(
-        feature = "cli",
-        value(
-            help = "scale-free, with the value part of the task features capped at 4 r_j/eps_j so that nearly empty tasks look alike at every N (the default)"
-        )
-    )]
     Bounded,
+}
+
+impl afg_game::Named for Units {
+    const ALL: &'static [Self] = &[Units::MeanReward, Units::ScaleFree, Units::Bounded];
+    const WHAT: &'static str = "units";
+
+    fn name(self) -> &'static str {
+        match self {
+            Units::MeanReward => "mean-reward",
+            Units::ScaleFree => "scale-free",
+            Units::Bounded => "bounded",
+        }
+    }
 }
 
 /// The smallest β, relative to the mean reward, that the scale-free units take as their

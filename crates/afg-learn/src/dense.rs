@@ -1,5 +1,5 @@
 //! Linear layers as plain row-major matrices, for the inference paths that leave Burn
-//! ([`crate::FastPolicy`], [`crate::PricePolicy`]).
+//! ([`crate::fast::FastPolicy`], [`crate::PricePolicy`]).
 
 use std::ops::Range;
 
@@ -94,7 +94,7 @@ pub(crate) fn task_mlp(
     [first, hidden, output]: [&Dense; 3],
     inputs: &[f32],
     shift: Option<&[f32]>,
-    activation: crate::Activation,
+    activation: crate::layers::Activation,
     (a, b): (&mut [f32], &mut [f32]),
     prices: &mut [f32],
 ) {

@@ -154,6 +154,41 @@ impl<'a> Env<'a> {
         self.next += 1;
         Ok((reward, self.actor().is_none()))
     }
+
+    /// [`Env::step`] with the reward shaped by `shaping`: the welfare change plus the
+    /// change of the shaping potential ([`Shaping::potential`]), so that a whole
+    /// episode's shaped return is its welfare minus the potential of the empty state.
+    /// [`Shaping::None`] gives [`Env::step`]'s reward.
+    ///
+    /// # Errors
+    /// As [`Env::step`].
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::{GeneratorConfig, TaskId};
+    /// use afg_learn::env::{Env, Shaping};
+    /// let inst = GeneratorConfig::paper(6, 2, 1).generate()?;
+    /// let mut env = Env::reset(&inst, afg_graph::Units::Bounded);
+    /// let start = Shaping::Greedy.potential(&inst, env.state().assignment());
+    /// let mut shaped = 0.0;
+    /// while env.actor().is_some() {
+    ///     shaped += env.step_shaped(TaskId(1), Shaping::Greedy).unwrap().0;
+    /// }
+    /// let welfare = inst.welfare(env.state().assignment());
+    /// assert!((shaped - (welfare - start)).abs() < 1e-9);
+    /// # Ok::<(), afg_game::GameError>(())
+    /// ```
+    pub fn step_shaped(
+        &mut self,
+        task: TaskId,
+        shaping: Shaping,
+    ) -> Result<(f64, bool), LearnError> {
+        let inst = self.state.instance();
+        let before = shaping.potential(inst, self.state.assignment());
+        let (reward, done) = self.step(task)?;
+        let after = shaping.potential(self.state.instance(), self.state.assignment());
+        Ok((reward + after - before, done))
+    }
 }
 
 /// The number t of robots that have acted in `assignment`, a state of the MDP: robots
@@ -180,33 +215,31 @@ fn acted(instance: &Instance, assignment: &Assignment) -> Result<usize, LearnErr
 /// while the values to learn become what an action gains over finishing by the rule.
 /// Not in the paper (ours).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum Shaping {
     /// The paper's reward, the welfare change (Φ = 0).
     #[default]
-    #[cfg_attr(
-        feature = "cli",
-        value(help = "the paper's reward, the welfare change")
-    )]
     None,
     /// Φ from one-pass greedy ([`afg_baseline::Greedy::complete`]), O(N M) per state.
-    #[cfg_attr(
-        feature = "cli",
-        value(help = "potential: the welfare a greedy completion would still add (the default)")
-    )]
     Greedy,
     /// Φ from the optimal completion ([`afg_baseline::Optimum::complete`]), one min-cost
     /// flow per state. Then Φ(s) = V*(s), so the shaped reward of one step is exactly
     /// the advantage `Q*(s, a) − V*(s)` ≤ 0 and the shaped optimal values are 0 along
     /// optimal play: the TD targets carry the oracle's values.
-    #[cfg_attr(
-        feature = "cli",
-        value(
-            help = "potential: the welfare the optimal completion would still add, one min-cost flow per state (ours)"
-        )
-    )]
     Optimal,
+}
+
+impl afg_game::Named for Shaping {
+    const ALL: &'static [Self] = &[Shaping::None, Shaping::Greedy, Shaping::Optimal];
+    const WHAT: &'static str = "shaping";
+
+    fn name(self) -> &'static str {
+        match self {
+            Shaping::None => "none",
+            Shaping::Greedy => "greedy",
+            Shaping::Optimal => "optimal",
+        }
+    }
 }
 
 impl Shaping {

@@ -81,4 +81,16 @@ pub enum LearnError {
         /// What is wrong.
         reason: String,
     },
+    /// Model options that do not go together, or not with the model found.
+    #[error(transparent)]
+    ModelOptions(#[from] crate::load::OptionConflict),
+    /// A trained model could not be loaded from its run directory.
+    #[error("loading the model in {path}: {source}")]
+    Model {
+        /// The run directory.
+        path: String,
+        /// What is wrong.
+        #[source]
+        source: Box<LearnError>,
+    },
 }

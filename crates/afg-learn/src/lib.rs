@@ -10,7 +10,7 @@
 //! |---|---|
 //! | [`nets`] | AFGNet and S2V (Burn), `NetworkConfig`, `QNetwork`, batches as tensors, weight files |
 //! | [`env`](mod@env) | the sequential allocation MDP (`Env`) and reward shaping |
-//! | [`train`] | DQN / Double DQN: `TrainConfig`, `TrainSettings`, `Trainer`, `Session`, the targets |
+//! | [`train`] | DQN / Double DQN: `TrainConfig`, `Trainer`, `Session`, the targets |
 //! | [`run`] | a training run's directory: `RunDir`, its log, manifest and lock; `migrate_run` for older formats |
 //! | [`policy`] | a trained network as an allocator (`LearnedPolicy`), rollouts, regret against Q* |
 //! | [`fast`] | the trained network exported to faer for fast exact rollouts (`FastPolicy`) |
@@ -21,7 +21,9 @@ mod dense;
 pub mod env;
 mod error;
 pub mod fast;
+mod format;
 mod layers;
+mod load;
 mod log_float;
 mod manifest;
 mod migrate;
@@ -48,31 +50,17 @@ pub mod nets {
     pub use crate::weights::{load_network, parameter_values, save_network};
 }
 
-/// A training run's directory: its files, typed log, manifest and lock.
+/// A training run's directory: its files, typed log, manifest and lock, and its trained
+/// model loaded as an allocator.
 pub mod run {
+    pub use crate::format::RUN_FORMAT_VERSION;
+    pub use crate::load::{ModelOptions, OptionConflict, load_model, load_q_network};
     pub use crate::manifest::{ModelKind, RunManifest, RunRecord};
-    pub use crate::migrate::{RUN_FORMAT_VERSION, migrate_run};
+    pub use crate::migrate::migrate_run;
     pub use crate::run_dir::{LogEvent, RunDir, RunLock, ValidationLine};
 }
 
 pub use error::LearnError;
-
-// Every module reaches the others' items from the crate root.
-pub(crate) use afgnet::AfgNetConfig;
-pub(crate) use env::{Env, Shaping, n_step_reward};
-pub(crate) use fast::{FastPolicy, FastRollout};
-pub(crate) use layers::Activation;
-pub(crate) use network::{Net, NetworkConfig, QNetwork};
-pub(crate) use price::PRICE_INPUTS;
-pub(crate) use regret::q_star;
-pub(crate) use rollout::greedy_rollouts;
-pub(crate) use run_dir::{LogEvent, RunDir, RunLock, ValidationLine};
-pub(crate) use targets::{double_dqn_target, dqn_target, masked_argmax};
-pub(crate) use tensors::GraphTensors;
-pub(crate) use train::{
-    Algo, Demonstrations, Preset, TrainConfig, Validation, checkpoint_dir, training_instance_seed,
-};
-pub(crate) use weights::{load_network, save_network};
 
 /// The CPU inference back end.
 pub type InferBackend = burn::backend::NdArray<f32>;

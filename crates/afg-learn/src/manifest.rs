@@ -83,7 +83,7 @@ impl RunManifest {
             RunRecord::PriceModel { .. } => vec![crate::price::PriceModel::FILE_NAME],
         };
         RunManifest {
-            version: crate::migrate::RUN_FORMAT_VERSION,
+            version: crate::format::RUN_FORMAT_VERSION,
             record,
             command,
             seed,

@@ -11,31 +11,10 @@ use std::path::{Path, PathBuf};
 
 use serde_json::{Map, Value, json};
 
-use crate::{LearnError, LogEvent, TrainConfig};
-
-/// The current format of a run directory's files.
-pub const RUN_FORMAT_VERSION: u32 = 2;
-
-/// What a reader says of a file in an older format.
-pub(crate) fn older_format_hint() -> String {
-    format!(
-        "written in an older format; run `afg migrate DIR` once to bring the run directory to format {RUN_FORMAT_VERSION}"
-    )
-}
-
-/// Whether the JSON text is a file of an older format than [`RUN_FORMAT_VERSION`]: an
-/// object that records no `version` (format 1 files other than weights headers
-/// recorded none) or a lower one. Asked before the file is read as the current format,
-/// so that an older file is named as such rather than as malformed; text that is not a
-/// JSON object (a truncated file) is not older, and its reader reports it.
-pub(crate) fn is_older(text: &str) -> bool {
-    #[derive(serde::Deserialize)]
-    struct Versioned {
-        version: Option<u64>,
-    }
-    serde_json::from_str::<Versioned>(text)
-        .is_ok_and(|v| v.version.is_none_or(|v| v < u64::from(RUN_FORMAT_VERSION)))
-}
+use crate::LearnError;
+use crate::format::RUN_FORMAT_VERSION;
+use crate::run_dir::LogEvent;
+use crate::train::TrainConfig;
 
 fn bad(path: &Path, reason: impl Into<String>) -> LearnError {
     LearnError::RunFile {
@@ -137,7 +116,7 @@ fn migrate_weights_header(path: &Path) -> Result<bool, LearnError> {
     }
     header["version"] = json!(RUN_FORMAT_VERSION);
     // Read back as the current format, so that what is written is what loads.
-    let network: crate::NetworkConfig = serde_json::from_value(header["network"].clone())
+    let network: crate::network::NetworkConfig = serde_json::from_value(header["network"].clone())
         .map_err(|e| bad(path, format!("not a network configuration: {e}")))?;
     let text = crate::weights::header_json(&network);
     write(path, &text)?;
@@ -257,7 +236,7 @@ pub fn migrate_run(dir: &Path) -> Result<Vec<PathBuf>, LearnError> {
 /// and a format-1 price run's `summary.json` (command, wall time, last round) made its
 /// `manifest.json`; the files rewritten, removed or made.
 fn migrate_manifest(dir: &Path) -> Result<Vec<PathBuf>, LearnError> {
-    let run = crate::RunDir::new(dir);
+    let run = crate::run_dir::RunDir::new(dir);
     let path = dir.join("manifest.json");
     let mut rewritten = Vec::new();
     if path.exists() {

@@ -12,14 +12,21 @@ use crate::tensors::GraphTensors;
 
 /// The kind of a Q network.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum Net {
     /// AFGNet (the paper's network).
-    #[cfg_attr(feature = "cli", value(name = "afgnet"))]
     AfgNet,
     /// Structure2Vec (the paper's comparison network).
     S2v,
+}
+
+impl afg_game::Named for Net {
+    const ALL: &'static [Self] = &[Net::AfgNet, Net::S2v];
+    const WHAT: &'static str = "network";
+
+    fn name(self) -> &'static str {
+        Net::name(self)
+    }
 }
 
 impl Net {

@@ -7,9 +7,12 @@ use afg_baseline::{AllocError, AllocStats, Allocation, Allocator, CentralisedDa}
 use afg_game::{Assignment, Instance, Preference};
 use afg_graph::{GraphKind, RobotGraph};
 
-use crate::{FastPolicy, InferBackend, LearnError, NetworkConfig, QNetwork, load_network};
+use crate::fast::FastPolicy;
+use crate::network::{NetworkConfig, QNetwork};
+use crate::weights::load_network;
+use crate::{InferBackend, LearnError};
 
-pub use crate::regret::{RegretStep, q_star, regret_trace};
+pub use crate::regret::{RegretStep, q_star, q_star_next, regret_trace};
 pub use crate::rollout::greedy_rollouts;
 
 /// A trained network used greedily: each robot in index order takes the task with the
@@ -168,7 +171,7 @@ impl LearnedPolicy {
             let out = self.fast.rollout(instance, &graph, block)?;
             (out.assignment, out.passes)
         } else {
-            let mut out = crate::greedy_rollouts(
+            let mut out = crate::rollout::greedy_rollouts(
                 &self.network,
                 self.config.tasks(),
                 std::slice::from_ref(instance),

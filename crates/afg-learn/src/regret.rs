@@ -12,7 +12,9 @@ use afg_game::{Assignment, Instance, RobotId, TaskId};
 use afg_graph::RobotGraph;
 use serde::Serialize;
 
-use crate::{FastPolicy, FastRollout, LearnError, masked_argmax};
+use crate::LearnError;
+use crate::fast::{FastPolicy, FastRollout};
+use crate::targets::masked_argmax;
 
 /// `Q*(s, a)` for robot `actor` acting in `assignment`, in raw welfare: for each task,
 /// the best final welfare with the robots assigned in `assignment` fixed and `actor` on
@@ -51,6 +53,39 @@ pub fn q_star(
         .action_values(instance, assignment, actor)
         .map_err(|e| LearnError::InvalidAction(e.to_string()))?;
     Ok(values.into_iter().map(|v| v.map(|w| w - now)).collect())
+}
+
+/// [`q_star`] of the next robot after `prefix`, the tasks of robots `0..t` in the
+/// sequential MDP (robots act in index order): the values of robot `t`'s actions.
+///
+/// # Errors
+/// [`LearnError::InvalidAction`] if every robot has acted; the game's error for a task
+/// out of range or over a capacity.
+///
+/// # Examples
+/// ```
+/// use afg_game::{GeneratorConfig, TaskId};
+/// use afg_learn::policy::{q_star, q_star_next};
+/// let inst = GeneratorConfig::paper(6, 2, 1).generate()?;
+/// let next = q_star_next(&inst, &[TaskId(1), TaskId(0)])?;
+/// assert_eq!(next.len(), 2);
+/// assert!(q_star_next(&inst, &[TaskId(0); 6]).is_err()); // no robot is left
+/// assert!(q_star_next(&inst, &[TaskId(7)]).is_err());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn q_star_next(instance: &Instance, prefix: &[TaskId]) -> Result<Vec<Option<f64>>, LearnError> {
+    let actor = prefix.len();
+    if actor >= instance.num_robots() {
+        return Err(LearnError::InvalidAction(
+            "every robot has acted: there is no next robot".into(),
+        ));
+    }
+    let mut assignment = Assignment::unassigned(instance.num_robots(), instance.num_tasks());
+    for (i, &task) in prefix.iter().enumerate() {
+        assignment.set(RobotId(i as u32), Some(task));
+    }
+    instance.check(&assignment)?;
+    q_star(instance, &assignment, RobotId(actor as u32))
 }
 
 /// One step of a rollout, seen through Q\*.

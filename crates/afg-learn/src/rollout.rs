@@ -5,7 +5,11 @@ use afg_game::{Assignment, Instance, TaskId};
 use afg_graph::{GraphKind, RobotGraph};
 use burn::tensor::backend::Backend;
 
-use crate::{Env, GraphTensors, LearnError, QNetwork, masked_argmax};
+use crate::LearnError;
+use crate::env::Env;
+use crate::network::QNetwork;
+use crate::targets::masked_argmax;
+use crate::tensors::GraphTensors;
 
 /// Greedy rollouts: each robot, in index order, takes the allowed task with the highest
 /// Q value. Instances may differ in N but must all have the network's M.

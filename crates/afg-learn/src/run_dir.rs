@@ -5,7 +5,7 @@
 //! | `config.json` | [`RunDir::create`] | the format version and the [`TrainConfig`] |
 //! | `log.jsonl` | [`RunDir::append`] | one [`LogEvent`] per line |
 //! | `checkpoint/` | [`Trainer::save_checkpoint`](crate::Trainer::save_checkpoint) | the resumable state |
-//! | `model.json`, `model.mpk` | [`save_network`](crate::save_network) at [`RunDir::weights`] | the final weights |
+//! | `model.json`, `model.mpk` | [`save_network`](crate::weights::save_network) at [`RunDir::weights`] | the final weights |
 //! | `manifest.json` | [`RunDir::write_manifest`] | a [`RunManifest`](crate::run::RunManifest): the kind of model, how to rerun it, what it cost |
 //! | `.lock` | [`RunDir::lock`] | held while a trainer writes into the directory |
 //!
@@ -19,7 +19,8 @@ use std::path::{Path, PathBuf};
 use afg_baseline::Method;
 use serde::{Deserialize, Serialize};
 
-use crate::{LearnError, TrainConfig, Validation};
+use crate::LearnError;
+use crate::train::{TrainConfig, Validation};
 
 /// One line of `log.jsonl`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -128,7 +129,7 @@ pub(crate) fn config_json(config: &TrainConfig) -> String {
     // `{` and the fields of the configuration, with the version first.
     format!(
         "{{\n  \"version\": {},{}",
-        crate::migrate::RUN_FORMAT_VERSION,
+        crate::format::RUN_FORMAT_VERSION,
         &json[1..]
     )
 }
@@ -263,7 +264,7 @@ impl RunDir {
         )
     }
 
-    /// The stem of the final weights (`model`, for [`crate::load_network`]).
+    /// The stem of the final weights (`model`, for [`crate::weights::load_network`]).
     pub fn weights(&self) -> PathBuf {
         self.path.join("model")
     }
@@ -285,7 +286,7 @@ impl RunDir {
 
     /// The checkpoint directory.
     pub fn checkpoint(&self) -> PathBuf {
-        crate::checkpoint_dir(&self.path)
+        crate::train::checkpoint_dir(&self.path)
     }
 
     pub(crate) fn file(&self, name: &str) -> PathBuf {
@@ -307,8 +308,8 @@ impl RunDir {
             reason,
         };
         let text = std::fs::read_to_string(&path).map_err(|e| bad(format!("{missing} ({e})")))?;
-        if crate::migrate::is_older(&text) {
-            return Err(bad(crate::migrate::older_format_hint()));
+        if crate::format::is_older(&text) {
+            return Err(bad(crate::format::older_format_hint()));
         }
         serde_json::from_str(&text).map_err(|e| bad(format!("not {kind}: {e}")))
     }
@@ -430,9 +431,9 @@ impl RunDir {
             .map(|(number, line)| {
                 let event = serde_json::from_str(line).map_err(|e| LearnError::RunFile {
                     path: format!("{}:{number}", path.display()),
-                    reason: if line.contains(r#""event":"start""#) && crate::migrate::is_older(line)
+                    reason: if line.contains(r#""event":"start""#) && crate::format::is_older(line)
                     {
-                        crate::migrate::older_format_hint()
+                        crate::format::older_format_hint()
                     } else {
                         format!("not a log event: {e}")
                     },

@@ -15,8 +15,9 @@ use burn::tensor::Tensor;
 use burn::tensor::backend::Backend;
 use serde::{Deserialize, Serialize};
 
+use crate::LearnError;
 use crate::network::QNetworkRecord;
-use crate::{LearnError, NetworkConfig, QNetwork};
+use crate::network::{NetworkConfig, QNetwork};
 
 fn weights_error(path: &Path, reason: impl Into<String>) -> LearnError {
     LearnError::Weights {
@@ -27,7 +28,7 @@ fn weights_error(path: &Path, reason: impl Into<String>) -> LearnError {
 
 const WEIGHTS_FORMAT: &str = "afg-weights";
 /// Format 2: the network configuration states every field ([`crate::run::migrate_run`]).
-const WEIGHTS_VERSION: u32 = crate::migrate::RUN_FORMAT_VERSION;
+const WEIGHTS_VERSION: u32 = crate::format::RUN_FORMAT_VERSION;
 
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -159,10 +160,10 @@ pub(crate) fn weights_are_finite<B: Backend>(network: &impl Module<B>) -> bool {
 fn read_header(header_path: &Path) -> Result<WeightsHeader, LearnError> {
     let text = std::fs::read_to_string(header_path)
         .map_err(|e| weights_error(header_path, e.to_string()))?;
-    if text.contains(WEIGHTS_FORMAT) && crate::migrate::is_older(&text) {
+    if text.contains(WEIGHTS_FORMAT) && crate::format::is_older(&text) {
         return Err(weights_error(
             header_path,
-            crate::migrate::older_format_hint(),
+            crate::format::older_format_hint(),
         ));
     }
     let header: WeightsHeader = serde_json::from_str(&text)

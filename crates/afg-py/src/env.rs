@@ -4,7 +4,7 @@
 
 use std::sync::Arc;
 
-use afg_game::{Assignment, Instance, TaskId};
+use afg_game::{Assignment, GeneratorKnobs, Instance, TaskId};
 use afg_graph::{StateParts, Units};
 use afg_learn::env::{Env, Shaping};
 use numpy::ndarray::{Array1, Array2, Array3};
@@ -14,12 +14,6 @@ use pyo3::prelude::*;
 use rayon::prelude::*;
 
 use crate::{PyInstance, value_error};
-
-/// A name of a serde enum (`"bounded"`, `"greedy"`, …) as its value.
-fn parse_name<T: serde::de::DeserializeOwned>(name: &str, what: &str) -> PyResult<T> {
-    serde_json::from_value(serde_json::Value::String(name.to_owned()))
-        .map_err(|_| PyValueError::new_err(format!("unknown {what} {name:?}")))
-}
 
 /// One episode: the instance, and the MDP's state between calls (the assignment so far
 /// and its features), the reward shaping.
@@ -81,17 +75,9 @@ impl Episode {
                 self.instance.num_tasks()
             )
         })?;
-        let before = self.shaping.potential(&self.instance, self.assignment());
-        let parts = self
-            .parts
-            .take()
-            .expect("an episode holds its state between calls");
-        let mut env = Env::from_parts(&self.instance, parts).expect("the episode's state is valid");
-        let result = env.step(task).map_err(|e| e.to_string());
-        self.parts = Some(env.into_parts());
-        let (reward, done) = result?;
-        let after = self.shaping.potential(&self.instance, self.assignment());
-        Ok((reward + after - before, done))
+        let shaping = self.shaping;
+        self.with_env(|env| env.step_shaped(task, shaping))
+            .map_err(|e| e.to_string())
     }
 
     /// Writes the observation into `nu` and `mu` (N×M each, zeroed) and `mask` (M):
@@ -137,8 +123,8 @@ impl EnvCore {
     fn py_new(instance: &PyInstance, units: &str, shaping: &str) -> PyResult<Self> {
         let episode = Episode::new(
             instance.inner.clone(),
-            parse_name(units, "units")?,
-            parse_name(shaping, "shaping")?,
+            crate::named::<Units>(units)?,
+            crate::named::<Shaping>(shaping)?,
         );
         Ok(EnvCore { episode })
     }
@@ -219,15 +205,13 @@ struct Draw {
 
 impl Draw {
     fn instance(&self, seed: u64) -> Result<Instance, afg_game::GameError> {
-        crate::generator(
-            self.robots,
-            self.tasks,
-            seed,
-            self.capacity_slack,
-            self.eps,
-            self.beta,
-            None,
-        )
+        GeneratorKnobs {
+            capacity_slack: self.capacity_slack,
+            eps: self.eps,
+            beta: Some(self.beta),
+            rewards: None,
+        }
+        .config(self.robots, self.tasks, seed)?
         .generate()
     }
 }
@@ -278,8 +262,8 @@ impl VecEnvCore {
         let first = Arc::new(draw.instance(0).map_err(crate::game_error)?);
         let episode = Episode::new(
             first,
-            parse_name(units, "units")?,
-            parse_name(shaping, "shaping")?,
+            crate::named::<Units>(units)?,
+            crate::named::<Shaping>(shaping)?,
         );
         Ok(VecEnvCore {
             episodes: vec![episode; num_envs],

@@ -2,10 +2,15 @@
 //! crate only converts types at the border (numpy arrays in and out, the crates' errors
 //! to Python exceptions) and releases the GIL around long calls.
 
+// PyO3's macros expand to unsafe code; nothing written here is unsafe.
+#![allow(unsafe_code)]
+
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use afg_game::{Assignment, GameError, GeneratorConfig, Instance, Point, Preference, Task, TaskId};
+use afg_game::{
+    Assignment, GameError, GeneratorKnobs, Instance, Named, Point, Preference, Task, TaskId,
+};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::{PyFileNotFoundError, PyValueError};
@@ -45,15 +50,10 @@ impl IntVector<'_> {
     }
 }
 
-/// The preference named `name` ("balanced" or "selfish").
-pub(crate) fn preference(name: &str) -> PyResult<Preference> {
-    match name {
-        "balanced" => Ok(Preference::Balanced),
-        "selfish" => Ok(Preference::Selfish),
-        other => Err(PyValueError::new_err(format!(
-            "unknown preference {other:?}: expected \"balanced\" or \"selfish\""
-        ))),
-    }
+/// The value a user named (`"balanced"`, `"bounded"`, …), or a `ValueError` listing the
+/// names there are.
+pub(crate) fn named<T: Named>(name: &str) -> PyResult<T> {
+    T::from_name(name).map_err(value_error)
 }
 
 /// One game: N robots, M tasks, the distance penalty beta (validated on construction).
@@ -282,14 +282,14 @@ impl PyInstance {
     /// Whether no robot strictly prefers another task ("balanced" or "selfish").
     #[pyo3(signature = (tasks, preference="balanced"))]
     fn is_stable(&self, tasks: IntVector<'_>, preference: &str) -> PyResult<bool> {
-        let pref = crate::preference(preference)?;
+        let pref = crate::named::<Preference>(preference)?;
         Ok(self.inner.is_stable(&self.assignment(&tasks)?, pref))
     }
 
     /// Share of robots (0..=1) that prefer no other task.
     #[pyo3(signature = (tasks, preference="balanced"))]
     fn ns_rate(&self, tasks: IntVector<'_>, preference: &str) -> PyResult<f64> {
-        let pref = crate::preference(preference)?;
+        let pref = crate::named::<Preference>(preference)?;
         Ok(self.inner.ns_rate(&self.assignment(&tasks)?, pref))
     }
 
@@ -310,14 +310,7 @@ impl PyInstance {
 /// Reads a JSON Lines dataset (or one instance document): a list of instances.
 #[pyfunction]
 fn read_jsonl(path: PathBuf) -> PyResult<Vec<PyInstance>> {
-    let text = std::fs::read_to_string(&path).map_err(|source| {
-        game_error(GameError::Io {
-            path: path.display().to_string(),
-            source,
-        })
-    })?;
-    let instances = afg_game::io::parse_instances(&text)
-        .map_err(|e| value_error(format!("{}: {e}", path.display())))?;
+    let instances = afg_game::io::read_instances(&path).map_err(game_error)?;
     Ok(instances.into_iter().map(PyInstance::new_from).collect())
 }
 
@@ -342,34 +335,17 @@ pub(crate) fn generate(
     beta: f64,
     rewards: Option<(f64, f64)>,
 ) -> PyResult<PyInstance> {
-    generator(robots, tasks, seed, capacity_slack, eps, beta, rewards)
-        .generate()
+    let knobs = GeneratorKnobs {
+        capacity_slack,
+        eps,
+        beta: Some(beta),
+        rewards,
+    };
+    knobs
+        .config(robots, tasks, seed)
+        .and_then(|cfg| cfg.generate())
         .map(PyInstance::new_from)
         .map_err(game_error)
-}
-
-/// The generator configuration of [`generate`]'s arguments.
-pub(crate) fn generator(
-    robots: usize,
-    tasks: usize,
-    seed: u64,
-    capacity_slack: Option<f64>,
-    eps: Option<f64>,
-    beta: f64,
-    rewards: Option<(f64, f64)>,
-) -> GeneratorConfig {
-    let mut cfg = GeneratorConfig::paper(robots, tasks, seed);
-    if let Some(slack) = capacity_slack {
-        cfg = cfg.with_capacity_slack(slack);
-    }
-    if let Some(eps) = eps {
-        cfg.eps = eps;
-    }
-    if let Some((lo, hi)) = rewards {
-        (cfg.reward_min, cfg.reward_max) = (lo, hi);
-    }
-    cfg.beta = beta;
-    cfg
 }
 
 /// The compiled core of the `afg` package.

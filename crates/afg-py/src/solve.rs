@@ -6,9 +6,10 @@ use std::time::Instant;
 
 use afg_baseline::{AllocStats, Allocator, Method};
 use afg_eval::Score;
-use afg_eval::solve::{ModelOptions, Row, load_model as load_dir};
+use afg_eval::solve::Row;
 use afg_game::realloc::PreviousAssignment;
 use afg_game::{RobotId, TaskId};
+use afg_learn::run::{ModelOptions, load_model as load_dir};
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::exceptions::{PyFileNotFoundError, PyValueError};
 use pyo3::prelude::*;
@@ -271,26 +272,27 @@ fn q_star<'py>(
     Ok(values.into_pyarray(py))
 }
 
-/// [`q_star`] as a vector; the prefix is padded with -1 to N.
+/// [`q_star`] as a vector: the robots that have acted are the entries before the first
+/// -1 (a whole assignment vector with -1 for the rest is accepted too).
 pub(crate) fn q_star_of(
     py: Python<'_>,
     instance: &PyInstance,
-    mut tasks: Vec<i64>,
+    tasks: Vec<i64>,
 ) -> PyResult<Vec<f64>> {
-    let n = instance.inner.num_robots();
-    if tasks.len() >= n && tasks.iter().all(|&t| t != -1) {
+    let acted = tasks.iter().take_while(|&&t| t != -1).count();
+    if tasks[acted..].iter().any(|&t| t != -1) {
         return Err(PyValueError::new_err(
-            "every robot has acted: there is no next robot",
+            "robots act in index order: no robot after a -1 may have a task",
         ));
     }
-    tasks.resize(n.max(tasks.len()), -1);
-    let assignment = instance.assignment(&IntVector::List(tasks))?;
+    let prefix = tasks[..acted]
+        .iter()
+        .map(|&t| u32::try_from(t).map(TaskId))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|_| PyValueError::new_err("a task is -1 or an index 0..M"))?;
     let inst = instance.inner.clone();
-    let env = afg_learn::env::Env::resume_at(&inst, assignment, afg_graph::Units::Bounded)
-        .map_err(value_error)?;
-    let actor = env.actor().expect("checked: a robot is left to act");
     let values = py
-        .detach(|| afg_learn::policy::q_star(&inst, env.state().assignment(), actor))
+        .detach(|| afg_learn::policy::q_star_next(&inst, &prefix))
         .map_err(value_error)?;
     Ok(values
         .into_iter()

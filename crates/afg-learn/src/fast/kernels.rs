@@ -8,7 +8,7 @@ use afg_game::{Assignment, RobotId};
 use afg_graph::RobotGraph;
 
 use super::net::FastAfgLayer;
-use crate::Activation;
+use crate::layers::Activation;
 
 /// Columns accumulated at once.
 const LANES: usize = 16;

@@ -46,8 +46,10 @@ mod passes;
 
 use net::{FastAfgLayer, FastAfgNet, FastNet, FastPriceHead, FastS2v, Head, one_hot_table};
 
+use crate::LearnError;
 use crate::dense::{Dense, side_by_side};
-use crate::{LearnError, NetworkConfig, QNetwork, masked_argmax};
+use crate::network::{NetworkConfig, QNetwork};
+use crate::targets::masked_argmax;
 
 /// A trained Q network in the form the fast rollout uses (see the module docs).
 ///

@@ -2,10 +2,10 @@
 
 use burn::tensor::backend::Backend;
 
-use crate::Activation;
-use crate::PRICE_INPUTS;
 use crate::dense::{Dense, task_mlp};
+use crate::layers::Activation;
 use crate::layers::QHead;
+use crate::price::PRICE_INPUTS;
 use crate::price::PriceNet;
 
 /// The Q head: `Q = out(σ(hidden [σ(θ7 pooled) || δ_actor]))`.

@@ -7,7 +7,7 @@
 //! ([`PriceMlp`]) reading per-task summaries of the state ([`PriceState`]): the task's
 //! members, reward and the demand of the robots still to act. The output layer starts
 //! at zero, so the untrained model is exactly Nearest. It is trained by regression on
-//! the exact `Q*` of the sequential MDP ([`crate::q_star`]), on states its own rollouts
+//! the exact `Q*` of the sequential MDP ([`crate::regret::q_star`]), on states its own rollouts
 //! visit (DAgger, Ross et al. 2011; [`PriceTrainer`]).
 //!
 //! Two ways to allocate ([`PriceMode`]):
@@ -36,7 +36,8 @@ use net::PriceScratch;
 pub use net::{PRICE_INPUTS, PriceMlp, PriceNet, PriceNetConfig};
 pub use train::{PriceRound, PriceTrainer};
 
-use crate::{LearnError, masked_argmax};
+use crate::LearnError;
+use crate::targets::masked_argmax;
 
 /// How a [`PricePolicy`] allocates (see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -131,7 +132,7 @@ pub const LOG_FILE_NAME: &str = "log.jsonl";
 
 impl PriceTrainer {
     /// Trains to the end with run directory `dir` (created if needed, then locked as a
-    /// [`RunDir`](crate::RunDir) is, so that a second trainer is refused): after each
+    /// [`RunDir`](crate::run_dir::RunDir) is, so that a second trainer is refused): after each
     /// round the log ([`LOG_FILE_NAME`], one [`PriceRound`] per line) is rewritten
     /// atomically and `on_round` called; at the end the run's manifest
     /// ([`RunManifest`](crate::run::RunManifest), with `command`) and then the model
@@ -153,7 +154,7 @@ impl PriceTrainer {
             path: dir.display().to_string(),
             source,
         })?;
-        let _lock = crate::RunDir::new(dir).lock()?;
+        let _lock = crate::run_dir::RunDir::new(dir).lock()?;
         let mut log = String::new();
         let mut last = None;
         while !self.is_finished() {
@@ -173,7 +174,7 @@ impl PriceTrainer {
             wall_time_s: Some(start.elapsed().as_secs_f64()),
             ..crate::run::RunManifest::new(command, model.training.seed, record)
         };
-        crate::RunDir::new(dir).write_manifest(&manifest)?;
+        crate::run_dir::RunDir::new(dir).write_manifest(&manifest)?;
         // The model last: a directory that holds one holds a whole run.
         model.save(&dir.join(PriceModel::FILE_NAME))?;
         Ok(manifest)
@@ -414,7 +415,7 @@ mod tests {
         let run = dir.join("run");
         // While another trainer holds the directory, a run into it is refused.
         std::fs::create_dir_all(&run).unwrap();
-        let held = crate::RunDir::new(&run).lock().unwrap();
+        let held = crate::run_dir::RunDir::new(&run).lock().unwrap();
         let refused =
             PriceTrainer::new(config.clone())
                 .unwrap()
@@ -428,7 +429,10 @@ mod tests {
             .unwrap()
             .run_in(&run, "train it".into(), |r| rounds.push(r.clone()))
             .unwrap();
-        assert_eq!(crate::RunDir::new(&run).manifest().unwrap(), manifest);
+        assert_eq!(
+            crate::run_dir::RunDir::new(&run).manifest().unwrap(),
+            manifest
+        );
         let crate::run::RunRecord::PriceModel { last_round, .. } = &manifest.record else {
             unreachable!("a price run")
         };
@@ -437,7 +441,7 @@ mod tests {
             ("train it", Some(&rounds[1]))
         );
         assert_eq!(
-            crate::RunDir::new(&run).kind().unwrap(),
+            crate::run_dir::RunDir::new(&run).kind().unwrap(),
             crate::run::ModelKind::PriceModel
         );
         let log = std::fs::read_to_string(run.join(LOG_FILE_NAME)).unwrap();

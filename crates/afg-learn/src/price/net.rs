@@ -9,8 +9,8 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::Activation;
 use crate::dense::{Dense, task_mlp};
+use crate::layers::Activation;
 use crate::layers::{linear_of_concat, seeded_linear, zero_linear};
 use afg_graph::{TASK_FEATURES, task_inputs};
 

@@ -2,7 +2,7 @@
 //! rollouts visit (DAgger).
 //!
 //! Each round rolls out `episodes_per_round` fresh instances. At every step the exact
-//! `Q*(s_t, a)` of every task is computed ([`crate::q_star`], one min-cost flow for all tasks), and the
+//! `Q*(s_t, a)` of every task is computed ([`crate::regret::q_star`], one min-cost flow for all tasks), and the
 //! acting robot follows the expert (the best Q\*) with probability `expert_decay^round`,
 //! otherwise the current model (with a random task instead in a share `explore` of the
 //! steps). Every visited state is kept (up to `buffer_states`, oldest dropped), and
@@ -22,8 +22,11 @@ use serde::{Deserialize, Serialize};
 use super::config::PriceTrainConfig;
 use super::net::{PRICE_INPUTS, PriceMlp, PriceNet, PriceScratch};
 use super::{PriceMode, PriceModel, PricePolicy};
+use crate::regret::q_star;
+use crate::targets::masked_argmax;
+use crate::train::training_instance_seed;
 use crate::train::validation_set;
-use crate::{LearnError, TrainBackend, masked_argmax, q_star, training_instance_seed};
+use crate::{LearnError, TrainBackend};
 use afg_graph::{PriceState, TASK_FEATURES, task_inputs};
 
 /// What one round did.

@@ -8,9 +8,11 @@ use rand::Rng;
 
 use super::Trainer;
 use super::replay::Episode;
-use crate::{
-    GraphTensors, InferBackend, LearnError, double_dqn_target, dqn_target, n_step_reward, q_star,
-};
+use crate::env::n_step_reward;
+use crate::regret::q_star;
+use crate::targets::{double_dqn_target, dqn_target};
+use crate::tensors::GraphTensors;
+use crate::{InferBackend, LearnError};
 
 impl Trainer {
     /// A sampled batch of states with the exact `Q*` of every task (the run's reward
@@ -40,7 +42,7 @@ impl Trainer {
 
     /// The exact `Q*(s_t, ·)` of episode `ep`'s step `t`, whose state is `a`, in the
     /// run's reward convention: minus the shaping potential Φ(s) of the run's
-    /// [`Shaping`](crate::Shaping), divided by the
+    /// [`Shaping`](crate::env::Shaping), divided by the
     /// welfare unit with `reward_scaling`; `None` where the task is full.
     fn q_star_labels(
         &self,
@@ -194,8 +196,9 @@ mod tests {
     use afg_baseline::{Allocator, Optimum};
 
     use super::*;
+    use crate::env::Shaping;
+    use crate::network::NetworkConfig;
     use crate::train::{Algo, TrainConfig};
-    use crate::{NetworkConfig, Shaping};
 
     /// Checks every step of every episode in the replay buffer of a small `QStar` run.
     fn replay_labels(shaping: Shaping, check: impl Fn(&Episode, usize, f32)) {
@@ -314,7 +317,8 @@ mod tests {
                     .unwrap();
                 for step in 0..6 {
                     let range = step * 3..(step + 1) * 3;
-                    let chosen = crate::masked_argmax(&q[range.clone()], &batch.mask[range]);
+                    let chosen =
+                        crate::targets::masked_argmax(&q[range.clone()], &batch.mask[range]);
                     hits += usize::from(chosen == Some(usize::from(ep.record.actions[step])));
                     total += 1;
                 }

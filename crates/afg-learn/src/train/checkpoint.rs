@@ -12,7 +12,8 @@ use serde::{Deserialize, Serialize};
 use super::replay::EpisodeRecord;
 use super::{TrainConfig, Trainer, optimizer};
 use crate::weights::write_record;
-use crate::{InferBackend, LearnError, TrainBackend, load_network, save_network};
+use crate::weights::{load_network, save_network};
+use crate::{InferBackend, LearnError, TrainBackend};
 
 /// The mutable state of a run, as written to `state.json` in a checkpoint.
 #[derive(Serialize, Deserialize)]
@@ -55,7 +56,7 @@ impl TrainerState {
 
 const STATE_FORMAT: &str = "afg-train-state";
 /// Format 2: the configuration inside states every field ([`crate::run::migrate_run`]).
-const STATE_VERSION: u32 = crate::migrate::RUN_FORMAT_VERSION;
+const STATE_VERSION: u32 = crate::format::RUN_FORMAT_VERSION;
 
 impl Trainer {
     /// Writes a checkpoint into `dir/checkpoint` atomically: everything goes to
@@ -140,8 +141,8 @@ impl Trainer {
             reason,
         };
         let text = std::fs::read_to_string(&state_path).map_err(|e| bad(e.to_string()))?;
-        if crate::migrate::is_older(&text) {
-            return Err(bad(crate::migrate::older_format_hint()));
+        if crate::format::is_older(&text) {
+            return Err(bad(crate::format::older_format_hint()));
         }
         let state: TrainerState =
             serde_json::from_str(&text).map_err(|e| bad(format!("corrupt or truncated: {e}")))?;

@@ -4,33 +4,34 @@ use afg_baseline::Allocator;
 use afg_game::{GeneratorConfig, Instance};
 use serde::{Deserialize, Serialize};
 
-use crate::{LearnError, NetworkConfig, Shaping};
+use crate::LearnError;
+use crate::env::Shaping;
+use crate::network::NetworkConfig;
 
 /// What the network's Q values are fitted to: a bootstrap rule, or the exact `Q*`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum Algo {
     /// `r + max_a Q_target(s', a)`.
-    #[cfg_attr(feature = "cli", value(help = "DQN (the paper's bootstrap rule)"))]
     Dqn,
     /// `r + Q_target(s', argmax_a Q_online(s', a))`.
-    #[cfg_attr(feature = "cli", value(help = "Double DQN (the paper's)"))]
     Ddqn,
     /// Every allowed action's value regressed on the exact `Q*(s, a)` of the sequential
-    /// MDP ([`crate::q_star`]), on the states the ε-greedy policy of the network visits
+    /// MDP ([`crate::regret::q_star`]), on the states the ε-greedy policy of the network visits
     /// (as in DAgger), in the run's reward convention: divided by the welfare unit with
     /// `reward_scaling`, minus the shaping potential of `shaping` (the exact
     /// value that the TD targets estimate). Supervised, not reinforcement learning, and
     /// not in the paper (ours).
-    #[cfg_attr(
-        feature = "cli",
-        value(
-            name = "qstar",
-            help = "regression on the exact Q* of every action (ours; not reinforcement learning)"
-        )
-    )]
     QStar,
+}
+
+impl afg_game::Named for Algo {
+    const ALL: &'static [Self] = &[Algo::Dqn, Algo::Ddqn, Algo::QStar];
+    const WHAT: &'static str = "algorithm";
+
+    fn name(self) -> &'static str {
+        Algo::name(self)
+    }
 }
 
 impl Algo {

@@ -9,7 +9,7 @@
 //!   error between `Q(s_t, a_t)` and the DQN or Double DQN target, the target network
 //!   synced every `target_sync` steps; or, with [`Algo::QStar`], between `Q(s_t, ·)`
 //!   and the exact `Q*(s_t, ·)` of every task with room (one optimal completion per
-//!   task, [`crate::q_star`]).
+//!   task, [`crate::regret::q_star`]).
 //! - **Determinism.** Everything random comes from one ChaCha8 generator seeded by
 //!   `seed`; a checkpoint stores its state, the replay records, the running episodes,
 //!   both networks and Adam's moments, so a resumed run ends with the same weights as
@@ -21,7 +21,6 @@ mod config;
 mod demos;
 mod replay;
 mod session;
-mod settings;
 
 use std::collections::VecDeque;
 
@@ -45,9 +44,11 @@ pub use config::{
 use demos::{demonstrations, large_margins};
 use replay::{Episode, EpisodeRecord};
 pub use session::Session;
-pub use settings::TrainSettings;
 
-use crate::{GraphTensors, InferBackend, LearnError, QNetwork, TrainBackend, greedy_rollouts};
+use crate::network::QNetwork;
+use crate::rollout::greedy_rollouts;
+use crate::tensors::GraphTensors;
+use crate::{InferBackend, LearnError, TrainBackend};
 
 /// What one call of [`Trainer::step`] did.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -125,8 +126,9 @@ impl Trainer {
         let online = match &config.init_from {
             None => config.network.init::<TrainBackend>(&device),
             Some(dir) => {
-                let stem = crate::RunDir::new(dir).weights();
-                let (network, weights) = crate::load_network::<TrainBackend>(&stem, &device)?;
+                let stem = crate::run_dir::RunDir::new(dir).weights();
+                let (network, weights) =
+                    crate::weights::load_network::<TrainBackend>(&stem, &device)?;
                 if !network.same_shape(&config.network) {
                     return Err(LearnError::Weights {
                         path: stem.display().to_string(),

@@ -8,7 +8,9 @@ use std::time::{Duration, Instant};
 use afg_baseline::Method;
 
 use super::{StepReport, TrainConfig, Trainer, Validation, validation_instances};
-use crate::{LearnError, LogEvent, RunDir, RunLock, ValidationLine, save_network};
+use crate::LearnError;
+use crate::run_dir::{LogEvent, RunDir, RunLock, ValidationLine};
+use crate::weights::save_network;
 
 /// A [`Trainer`] attached to its [`RunDir`], which it holds locked: [`Session::run`]
 /// logs the mean loss every ten steps and every validation to `log.jsonl`, writes a
@@ -38,7 +40,7 @@ impl Session {
         let (run, lock) = RunDir::create(dir, &config)?;
         let trainer = Trainer::new(config.clone())?;
         run.append(&LogEvent::Start {
-            version: crate::migrate::RUN_FORMAT_VERSION,
+            version: crate::format::RUN_FORMAT_VERSION,
             baselines: baselines(&config)?,
             config: Box::new(config),
             git_revision,

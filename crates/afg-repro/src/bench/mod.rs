@@ -23,8 +23,8 @@ use burn::optim::{AdamConfig, GradientsParams, Optimizer};
 use burn::tensor::Tensor;
 use rand::{Rng, SeedableRng};
 
-use crate::EvalError;
-use crate::tables::duration;
+use afg_eval::EvalError;
+use afg_eval::report::duration;
 
 /// Tasks of every instance and network timed here: the paper's M.
 const M: usize = GeneratorConfig::PAPER_TASKS;
@@ -34,8 +34,8 @@ use plain::PaddedGraph;
 ///
 /// # Examples
 /// ```
-/// afg_eval::bench::reset_peak_rss();
-/// let peak = afg_eval::bench::peak_rss_mib();
+/// afg_repro::bench::reset_peak_rss();
+/// let peak = afg_repro::bench::peak_rss_mib();
 /// assert!(peak.is_none_or(|mib| mib > 0.0));
 /// ```
 pub fn peak_rss_mib() -> Option<f64> {
@@ -52,6 +52,51 @@ pub fn reset_peak_rss() {
     let _ = std::fs::write("/proc/self/clear_refs", "5");
 }
 
+/// Repeats `run`, which returns how long it took and what it made, until `budget_s`
+/// seconds are spent or `max_repeats` runs are done (at least one run): the median
+/// time and the last run's output. Every benchmark's timing goes through this.
+///
+/// # Errors
+/// The first error of `run`.
+///
+/// # Examples
+/// ```
+/// use std::time::Duration;
+/// let mut k = 0;
+/// let (median, last) = afg_repro::bench::median_of(f64::INFINITY, 3, || {
+///     k += 1;
+///     Ok::<_, ()>((Duration::from_millis(k), k))
+/// })?;
+/// assert_eq!((median, last), (Duration::from_millis(2), 3));
+/// # Ok::<(), ()>(())
+/// ```
+pub fn median_of<T, E>(
+    budget_s: f64,
+    max_repeats: usize,
+    mut run: impl FnMut() -> Result<(Duration, T), E>,
+) -> Result<(Duration, T), E> {
+    let (mut times, mut spent) = (Vec::new(), 0.0);
+    loop {
+        let (took, out) = run()?;
+        spent += took.as_secs_f64();
+        times.push(took);
+        if spent >= budget_s || times.len() >= max_repeats.max(1) {
+            times.sort();
+            return Ok((times[times.len() / 2], out));
+        }
+    }
+}
+
+/// `job`'s output and how long it took on the wall clock.
+///
+/// # Errors
+/// `job`'s.
+pub fn clocked<T, E>(job: impl FnOnce() -> Result<T, E>) -> Result<(Duration, T), E> {
+    let start = Instant::now();
+    let out = job()?;
+    Ok((start.elapsed(), out))
+}
+
 /// Median wall time of `alloc` on `instance` over repeated runs (at least one, at most
 /// 20, until `budget_s` seconds are spent), and the welfare of its allocation.
 ///
@@ -62,17 +107,10 @@ pub fn allocator_time(
     instance: &Instance,
     budget_s: f64,
 ) -> Result<(Duration, f64), EvalError> {
-    let mut times = Vec::new();
-    let mut welfare = 0.0;
-    let mut spent = 0.0;
-    while times.is_empty() || (spent < budget_s && times.len() < 20) {
+    median_of(budget_s, 20, || {
         let out = alloc.allocate(instance)?;
-        welfare = instance.welfare(&out.assignment);
-        spent += out.stats.wall_time.as_secs_f64();
-        times.push(out.stats.wall_time);
-    }
-    times.sort();
-    Ok((times[times.len() / 2], welfare))
+        Ok((out.stats.wall_time, instance.welfare(&out.assignment)))
+    })
 }
 
 /// A batch of `size` states from random partial episodes on fresh instances of `n`
@@ -98,14 +136,7 @@ pub fn random_batch(n: usize, size: usize) -> Result<GraphBatch, EvalError> {
 
 /// Median wall time of `repeats` (at least one) calls of `f`.
 fn median<T, E>(repeats: usize, mut f: impl FnMut() -> Result<T, E>) -> Result<Duration, E> {
-    let mut times = Vec::with_capacity(repeats);
-    for _ in 0..repeats.max(1) {
-        let start = Instant::now();
-        f()?;
-        times.push(start.elapsed());
-    }
-    times.sort();
-    Ok(times[times.len() / 2])
+    median_of(f64::INFINITY, repeats, || clocked(&mut f)).map(|(time, _)| time)
 }
 
 /// Median time of one training step (forward, backward, Adam) on a fixed batch, with

@@ -8,7 +8,9 @@ use afg_game::Instance;
 use afg_learn::{policy::LearnedPolicy, train::Algo};
 use serde::Serialize;
 
-use crate::{EvalError, ModelSpec, PriceSpec, Summary, evaluate};
+use afg_eval::{EvalError, Summary, evaluate};
+
+use crate::{ModelSpec, PriceSpec};
 
 /// How a learned Q-network is run: one network pass per `block` robots, with or
 /// without balanced repair afterwards.
@@ -33,7 +35,7 @@ impl Run {
 /// # Examples
 /// ```
 /// use afg_baseline::Method;
-/// use afg_eval::{ModelSpec, tables::{RowId, Run}};
+/// use afg_repro::{ModelSpec, tables::{RowId, Run}};
 /// assert_eq!(RowId::Method(Method::Opt).label(), "OPT");
 /// let ddqn = ModelSpec::afgnet_ddqn(60);
 /// let own = RowId::Model { spec: ddqn, robots: 60, run: Run::AS_TRAINED };
@@ -153,7 +155,8 @@ pub(super) fn committed_model_row(
 ///
 /// # Examples
 /// ```
-/// use afg_eval::{optima, tables::classical_rows};
+/// use afg_eval::optima;
+/// use afg_repro::tables::classical_rows;
 /// use afg_game::GeneratorConfig;
 /// let insts: Vec<_> = (0..3).map(|s| GeneratorConfig::paper(20, 5, s).generate()).collect::<Result<_, _>>()?;
 /// let rows = classical_rows(&insts, &optima(&insts)?, 2)?;
@@ -251,9 +254,9 @@ mod tests {
     fn the_price_headed_rows_name_their_mode_and_scale() {
         let root = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."));
         let labels = |n: usize| -> Vec<String> {
-            let insts = crate::dataset::load(root, n).unwrap();
+            let insts = afg_eval::dataset::load(root, n).unwrap();
             let insts = &insts[..1];
-            let opt = crate::optima(insts).unwrap();
+            let opt = afg_eval::optima(insts).unwrap();
             price_headed_rows(root, insts, &opt)
                 .unwrap()
                 .into_iter()
@@ -271,8 +274,8 @@ mod tests {
         let at_500 = labels(500);
         assert!(at_500.iter().all(|l| l.contains("trained at N = 60")));
         // The price model: both modes, and prices once per N/100 robots from N = 500.
-        let insts = crate::dataset::load(root, 500).unwrap();
-        let opt = crate::optima(&insts[..1]).unwrap();
+        let insts = afg_eval::dataset::load(root, 500).unwrap();
+        let opt = afg_eval::optima(&insts[..1]).unwrap();
         let price = price_model_rows(root, &insts[..1], &opt).unwrap();
         assert_eq!(price.len(), 3);
         assert!(price[1].summary.method.contains("prices every 5 robots"));

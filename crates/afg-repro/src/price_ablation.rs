@@ -9,7 +9,9 @@ use afg_baseline::{Allocator, Method};
 use afg_learn::{price::PriceMode, run::RunDir};
 use serde::Serialize;
 
-use crate::{EvalError, PriceSpec, PriceTraining, dataset, evaluate};
+use afg_eval::{EvalError, dataset, evaluate};
+
+use crate::{PriceSpec, PriceTraining};
 
 /// The scales of the ablation table.
 pub const SIZES: [usize; 4] = [20, 60, 100, 1000];
@@ -87,7 +89,7 @@ pub fn price_ablation(root: &Path, instances: usize) -> Result<Vec<PriceAblation
 ///
 /// # Examples
 /// ```
-/// use afg_eval::price_ablation::{PriceAblationRow, price_ablation_markdown};
+/// use afg_repro::price_ablation::{PriceAblationRow, price_ablation_markdown};
 /// let row = PriceAblationRow {
 ///     method: "structure alone".into(),
 ///     command: None,

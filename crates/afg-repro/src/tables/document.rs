@@ -8,7 +8,9 @@ use afg_baseline::{Allocator, Method, Optimum};
 use afg_learn::policy::LearnedPolicy;
 
 use super::{Tables, headline, models_table};
-use crate::{EvalError, ModelSpec, dataset, figures};
+use afg_eval::{EvalError, dataset, figures};
+
+use crate::ModelSpec;
 
 /// The line before the tables in `docs/RESULTS.md` and `README.md`.
 pub const BEGIN: &str = "<!-- reproduce-tables:begin -->";
@@ -19,7 +21,7 @@ pub const END: &str = "<!-- reproduce-tables:end -->";
 ///
 /// # Examples
 /// ```
-/// use afg_eval::tables::{BEGIN, END, block, with_block};
+/// use afg_repro::tables::{BEGIN, END, block, with_block};
 /// let readme = format!("intro\n{BEGIN}\nold\n{END}\nrest\n");
 /// assert_eq!(block(&readme).as_deref(), Some("old\n"));
 /// let new = with_block(&readme, "| new |\n").unwrap();

@@ -1,5 +1,5 @@
-//! The settings a user gives for a training run ([`TrainSettings`]): a preset and the
-//! values that differ from it, turned into a [`TrainConfig`] and back.
+//! The flags of `afg train` ([`TrainSettings`]): a preset and the values that differ
+//! from it, turned into afg-learn's [`TrainConfig`] and back.
 
 use std::path::PathBuf;
 
@@ -7,19 +7,22 @@ use afg_game::GeneratorConfig;
 use afg_graph::Units;
 use serde::Serialize;
 
-use crate::{
-    AfgNetConfig, Algo, Demonstrations, LearnError, Net, NetworkConfig, Preset, Shaping,
-    TrainConfig,
-};
+use afg_learn::LearnError;
+use afg_learn::env::Shaping;
+use afg_learn::nets::{AfgNetConfig, Net, NetworkConfig};
+use afg_learn::train::{Algo, Demonstrations, Preset, TrainConfig};
+
+use crate::{choice, set_given};
 
 /// A training run as a user asks for it: the scale, the network and the algorithm, and
 /// only the settings that differ from the preset's defaults (`None` / `false`: the
-/// default). With the `cli` feature these are the flags of a `clap` command (each
-/// field's name in kebab case), as in `cargo xtask train`.
+/// default). These are the flags of `afg train` and `cargo xtask train` (each field's
+/// name in kebab case).
 ///
 /// # Examples
 /// ```
-/// use afg_learn::{nets::Net, train::{Algo, Preset, TrainSettings}};
+/// use afg_cli::settings::TrainSettings;
+/// use afg_learn::{nets::Net, train::{Algo, Preset}};
 ///
 /// let asked = TrainSettings { scale: Some(60), lr: Some(3e-4), ..TrainSettings::default() };
 /// let config = asked.to_config()?;
@@ -33,116 +36,122 @@ use crate::{
 /// assert!(TrainSettings::default().to_config().is_err()); // no scale
 /// # Ok::<(), afg_learn::LearnError>(())
 /// ```
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
-#[cfg_attr(feature = "cli", derive(clap::Args))]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, clap::Args)]
 pub struct TrainSettings {
     /// Robots per training instance N (defaults exist for 20, 60 and 100).
-    #[cfg_attr(feature = "cli", arg(long))]
+    #[arg(long)]
     pub scale: Option<usize>,
-    /// What the Q values are fitted to (default ddqn).
-    #[cfg_attr(feature = "cli", arg(long, value_enum))]
+    /// What the Q values are fitted to: dqn (the paper's bootstrap rule), ddqn (Double
+    /// DQN, the paper's; the default) or qstar (regression on the exact Q* of every
+    /// action; ours, not reinforcement learning).
+    #[arg(long, value_parser = choice::<Algo>())]
     pub algo: Option<Algo>,
-    /// Network (default afgnet).
-    #[cfg_attr(feature = "cli", arg(long, value_enum))]
+    /// Network: afgnet (the paper's; the default) or s2v (Structure2Vec, the paper's
+    /// comparison).
+    #[arg(long, value_parser = choice::<Net>())]
     pub net: Option<Net>,
     /// Gradient steps (default: the per-scale budget of about an hour on one core).
-    #[cfg_attr(feature = "cli", arg(long))]
+    #[arg(long)]
     pub steps: Option<u64>,
     /// Seed of everything random in the run (initial weights, instances, exploration).
-    #[cfg_attr(feature = "cli", arg(long))]
+    #[arg(long)]
     pub seed: Option<u64>,
     /// Tasks per training instance M (the network is built for this M) [default: 5,
     /// the paper's].
-    #[cfg_attr(feature = "cli", arg(long))]
+    #[arg(long)]
     pub tasks: Option<usize>,
     /// Transitions per gradient step.
-    #[cfg_attr(feature = "cli", arg(long))]
+    #[arg(long)]
     pub batch: Option<usize>,
     /// Adam learning rate (default 1e-3; the paper's is 1e-4).
-    #[cfg_attr(feature = "cli", arg(long))]
+    #[arg(long)]
     pub lr: Option<f64>,
     /// Keep the learning rate constant (by default it anneals linearly to a tenth of
     /// --lr over the run).
-    #[cfg_attr(feature = "cli", arg(long))]
+    #[arg(long)]
     pub constant_lr: bool,
     /// n-step returns (1 = the paper's one-step target).
-    #[cfg_attr(feature = "cli", arg(long))]
+    #[arg(long)]
     pub n_step: Option<usize>,
     /// Gradient steps between target-network syncs (default: the run's budget / 20,
     /// clamped to 10..=1000).
-    #[cfg_attr(feature = "cli", arg(long))]
+    #[arg(long)]
     pub target_sync: Option<u64>,
     /// Episodes run side by side (each acting step adds this many transitions).
-    #[cfg_attr(feature = "cli", arg(long))]
+    #[arg(long)]
     pub parallel_envs: Option<usize>,
     /// Instances in the fixed validation set (default 32); fewer make each validation
     /// cheaper at large N.
-    #[cfg_attr(feature = "cli", arg(long))]
+    #[arg(long)]
     pub validation_instances: Option<usize>,
     /// Gradient steps between validations (default: the run's budget / 40).
-    #[cfg_attr(feature = "cli", arg(long))]
+    #[arg(long)]
     pub validate_every: Option<u64>,
     /// Turn off the reward shaping. By default rewards are shaped with the potential
     /// "welfare a greedy completion would still add", so the network learns how much
     /// better than finishing greedily each action is (not in the paper; the optimal
     /// policy is unchanged; docs/training.md).
-    #[cfg_attr(feature = "cli", arg(long))]
+    #[arg(long)]
     pub no_shaping: bool,
-    /// The reward shaping (default greedy; with optimal the TD targets carry the exact
-    /// advantages). `--no-shaping` is `--shaping none`.
-    #[cfg_attr(feature = "cli", arg(long, value_enum, conflicts_with = "no_shaping"))]
+    /// The reward shaping: none (the paper's reward, the welfare change), greedy (the
+    /// potential is the welfare a greedy completion would still add; the default) or
+    /// optimal (the welfare the optimal completion would still add, one min-cost flow
+    /// per state, so the TD targets carry the exact advantages; ours). `--no-shaping` is
+    /// `--shaping none`.
+    #[arg(long, value_parser = choice::<Shaping>(), conflicts_with = "no_shaping")]
     pub shaping: Option<Shaping>,
-    /// Units of the network's inputs and rewards (default bounded).
-    #[cfg_attr(feature = "cli", arg(long, value_enum))]
+    /// Units of the network's inputs and rewards: mean-reward (welfare / the mean task
+    /// reward, raw edge weights: the first models' units), scale-free (welfare / β, edge
+    /// weights / their mean: the same at every N) or bounded (scale-free, with the value
+    /// part of the task features capped at 4 r_j/eps_j so that nearly empty tasks look
+    /// alike at every N; the default).
+    #[arg(long, value_parser = choice::<Units>())]
     pub units: Option<Units>,
     /// AFGNet only: add each action's immediate reward (the actor's join gain) to the
     /// Q values, so the network learns only the value of what follows (not in the
     /// paper; implies no shaping).
-    #[cfg_attr(feature = "cli", arg(long))]
+    #[arg(long)]
     pub gain_residual: bool,
     /// AFGNet only: the price structure Q(s, a) = π_a(s) − β d(t, a) + c_a(s), with a
     /// price head shared by all tasks that reads each task's summaries and the pooled
     /// embedding; the untrained network is Nearest (ours, not in the paper;
     /// docs/price.md).
-    #[cfg_attr(feature = "cli", arg(long))]
+    #[arg(long)]
     pub price_head: bool,
     /// With --price-head: weight of the one-shot price loss (ours, not in the paper):
     /// every step also fits the Q values of empty states, plus the actor's distance
     /// cost, to the instance's exact task prices (centred), so that the one-shot mode
     /// (every robot at once on the empty state's Q values) reproduces the optimum.
-    #[cfg_attr(
-        feature = "cli",
-        arg(long, value_name = "WEIGHT", requires = "price_head")
-    )]
+    #[arg(long, value_name = "WEIGHT", requires = "price_head")]
     pub price_loss: Option<f64>,
     /// Learn from demonstrations as in Deep Q-learning from Demonstrations (ours, not
     /// in the paper): this many expert episodes (each robot on its task in the exact
     /// optimum), a share of every batch drawn from them, and a large-margin loss on the
     /// expert's action. DQN and Double DQN only.
-    #[cfg_attr(feature = "cli", arg(long, value_name = "EPISODES"))]
+    #[arg(long, value_name = "EPISODES")]
     pub demos: Option<usize>,
     /// With --demos: share of each batch drawn from the demonstrations [default: 0.25].
-    #[cfg_attr(feature = "cli", arg(long, requires = "demos"))]
+    #[arg(long, requires = "demos")]
     pub demo_share: Option<f64>,
     /// With --demos: the margin by which the expert's action should lead, in the
     /// network's welfare unit (distance units with the default units) [default: 0.05].
-    #[cfg_attr(feature = "cli", arg(long, requires = "demos"))]
+    #[arg(long, requires = "demos")]
     pub demo_margin: Option<f64>,
     /// With --demos: weight of the large-margin loss [default: 1].
-    #[cfg_attr(feature = "cli", arg(long, requires = "demos"))]
+    #[arg(long, requires = "demos")]
     pub demo_weight: Option<f64>,
     /// The paper's settings where ours differ: squared loss, raw rewards, no clipping,
     /// target sync every 1000 steps, constant learning rate 1e-4 (an explicit --lr still
     /// wins).
-    #[cfg_attr(feature = "cli", arg(long))]
+    #[arg(long)]
     pub paper: bool,
     /// ε at the start (default 1.0, decaying to 0.05 over the first tenth of the run).
-    #[cfg_attr(feature = "cli", arg(long))]
+    #[arg(long)]
     pub eps_start: Option<f64>,
     /// Warm start: begin from the final weights of this run directory (same network and
     /// units) instead of fresh ones, e.g. a model trained at N = 60 for a run at N = 100.
     /// Not in the paper. Usually with a small --eps-start.
-    #[cfg_attr(feature = "cli", arg(long))]
+    #[arg(long)]
     pub init_from: Option<PathBuf>,
 }
 
@@ -193,23 +202,25 @@ impl TrainSettings {
         let algo = self.algo.unwrap_or(Algo::Ddqn);
         let mut c = TrainConfig::from_preset(preset, scale, algo, network, steps, seed);
         c.lr_decay &= !self.constant_lr;
-        c.batch = self.batch.unwrap_or(c.batch);
-        c.lr = self.lr.unwrap_or(c.lr);
-        c.n_step = self.n_step.unwrap_or(c.n_step);
-        c.target_sync = self.target_sync.unwrap_or(c.target_sync);
-        c.parallel_envs = self.parallel_envs.unwrap_or(c.parallel_envs);
-        c.validation_instances = self.validation_instances.unwrap_or(c.validation_instances);
-        c.validate_every = self.validate_every.unwrap_or(c.validate_every);
-        c.eps_start = self.eps_start.unwrap_or(c.eps_start);
+        set_given!(c;
+            batch = self.batch,
+            lr = self.lr,
+            n_step = self.n_step,
+            target_sync = self.target_sync,
+            parallel_envs = self.parallel_envs,
+            validation_instances = self.validation_instances,
+            validate_every = self.validate_every,
+            eps_start = self.eps_start,
+            price_loss = self.price_loss,
+            shaping = self.shaping,
+        );
         c.init_from.clone_from(&self.init_from);
-        c.price_loss = self.price_loss.unwrap_or(c.price_loss);
         c.demonstrations = self.demos.map(|episodes| Demonstrations {
             episodes,
             share: self.demo_share.unwrap_or(0.25),
             margin: self.demo_margin.unwrap_or(0.05),
             weight: self.demo_weight.unwrap_or(1.0),
         });
-        c.shaping = self.shaping.unwrap_or(c.shaping);
         // The gain residual adds the unshaped reward to Q: it implies no shaping.
         if self.no_shaping || self.gain_residual {
             c.shaping = Shaping::None;

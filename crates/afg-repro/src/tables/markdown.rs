@@ -8,28 +8,10 @@ use afg_baseline::Method;
 use afg_learn::run::RunRecord;
 
 use super::{RowId, Run, Scale};
-use crate::{EvalError, ModelSpec, Summary, dataset, paper};
+use afg_eval::report::duration;
+use afg_eval::{EvalError, Summary, dataset};
 
-/// A duration with three significant digits and a unit: `12.3 µs`, `4.56 ms`, `7.89 s`.
-///
-/// # Examples
-/// ```
-/// use std::time::Duration;
-/// use afg_eval::tables::duration;
-/// assert_eq!(duration(Duration::from_nanos(12_345)), "12.3 µs");
-/// assert_eq!(duration(Duration::from_micros(4_560)), "4.56 ms");
-/// assert_eq!(duration(Duration::from_millis(7_890)), "7.89 s");
-/// ```
-pub fn duration(d: Duration) -> String {
-    let s = d.as_secs_f64();
-    if s < 1e-3 {
-        format!("{:.1} µs", s * 1e6)
-    } else if s < 1.0 {
-        format!("{:.2} ms", s * 1e3)
-    } else {
-        format!("{s:.2} s")
-    }
-}
+use crate::{ModelSpec, paper};
 
 /// The measured cells both tables share: welfare, % of OPT, the two NS_rates and the
 /// time per instance.

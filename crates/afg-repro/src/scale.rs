@@ -15,70 +15,39 @@ use afg_learn::{
 };
 use serde::{Deserialize, Serialize};
 
-use crate::EvalError;
-use crate::tables::duration;
+use afg_eval::EvalError;
+use afg_eval::report::duration;
 
-/// What to measure: every size and task count, and the learned models to run. With
-/// the `cli` feature, the flags of a `clap` command (`cargo xtask bench-scale`), with
-/// its defaults.
+/// What to measure: every size and task count, and the learned models to run (the
+/// flags of `cargo xtask bench-scale`).
 #[derive(Clone, Debug)]
-#[cfg_attr(feature = "cli", derive(clap::Args))]
 pub struct Plan {
     /// Robot counts N.
-    #[cfg_attr(
-        feature = "cli",
-        arg(long, value_delimiter = ',', default_value = "100,1000,10000,100000")
-    )]
     pub sizes: Vec<usize>,
     /// Task counts M.
-    #[cfg_attr(
-        feature = "cli",
-        arg(long, value_delimiter = ',', default_value = "5,50")
-    )]
     pub tasks: Vec<usize>,
     /// Numbers of network passes to try per rollout (block B = ⌈N / passes⌉), besides
     /// the exact rollout (B = 1).
-    #[cfg_attr(
-        feature = "cli",
-        arg(long, value_delimiter = ',', default_value = "1000,100,10")
-    )]
     pub passes: Vec<usize>,
     /// Skip learned runs with more than this many robot-passes (N × passes), e.g. the
     /// exact rollout above N = 1000.
-    #[cfg_attr(feature = "cli", arg(long, default_value_t = 20_000_000))]
     pub max_work: usize,
     /// Run the Burn reference path up to this N (M = 5 only).
-    #[cfg_attr(feature = "cli", arg(long, default_value_t = 1000))]
     pub burn_up_to: usize,
     /// Run GRAPE's decentralised simulation (da-decentralised) up to this N: its
     /// synchronous rounds take time about quadratic in N (every change floods the graph).
-    #[cfg_attr(feature = "cli", arg(long, default_value_t = 1000))]
     pub decentralised_up_to: usize,
     /// Trained run directory of the learned policy at M = 5; other M use untrained
     /// weights (timing only).
-    #[cfg_attr(
-        feature = "cli",
-        arg(long, default_value = "models/paper/afgnet_ddqn_n20")
-    )]
     pub model: PathBuf,
     /// Price model (ours), run at every M in both modes without repair; skipped if the
     /// directory holds no price file.
-    #[cfg_attr(feature = "cli", arg(long, default_value = "models/ours/price_n60"))]
     pub price_model: PathBuf,
     /// AFGNet with a price head (ours): run directories, each used at the M its network
     /// was built for, without repair, with 10 network passes and in one pass
     /// (one-shot); a directory that holds no model is skipped.
-    #[cfg_attr(
-        feature = "cli",
-        arg(
-            long,
-            value_delimiter = ',',
-            default_value = "models/ours/afgnet_qstar_price_n60,models/ours/afgnet_qstar_price_m50_n60"
-        )
-    )]
     pub price_headed: Vec<PathBuf>,
     /// Seed of the instances (one per N and M).
-    #[cfg_attr(feature = "cli", arg(long, default_value_t = 0))]
     pub seed: u64,
 }
 
@@ -167,7 +136,7 @@ pub fn run_case(case: Case) -> Result<Outcome, EvalError> {
         }
         (None, None) => {
             let policy = match &case.model {
-                Some(dir) => crate::solve::load_learned(dir)?,
+                Some(dir) => afg_learn::run::load_q_network(dir)?,
                 None => LearnedPolicy::new(NetworkConfig::afgnet(case.tasks, 0)),
             };
             let policy = if case.exact_burn {

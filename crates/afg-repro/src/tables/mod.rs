@@ -12,12 +12,14 @@ use std::path::Path;
 use serde::Serialize;
 
 pub use document::{BEGIN, END, RunInfo, assignment_map_svg, block, results_document, with_block};
-pub use markdown::{duration, headline, models_table, table1_markdown, table2_markdown};
+pub use markdown::{headline, models_table, table1_markdown, table2_markdown};
 use rows::committed_model_row;
 pub use rows::{Row, RowId, Run, classical_rows, price_headed_rows, price_model_rows};
 
 use crate::price_ablation::{PriceAblationRow, price_ablation, price_ablation_markdown};
-use crate::{EvalError, Head, ModelSpec, dataset};
+use afg_eval::{EvalError, dataset};
+
+use crate::{Head, ModelSpec};
 
 /// The rows of one N.
 #[derive(Clone, Debug, PartialEq, Serialize)]

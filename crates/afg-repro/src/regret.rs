@@ -12,7 +12,7 @@ use afg_graph::{GraphKind, RobotGraph};
 use afg_learn::{LearnError, fast::FastPolicy, policy::regret_trace, run::RunDir};
 use serde::Serialize;
 
-use crate::EvalError;
+use afg_eval::EvalError;
 
 /// What the regret diagnosis reports for one model on one dataset.
 #[derive(Clone, Debug, Serialize)]
@@ -64,7 +64,7 @@ pub fn summarise(
     }
     let run = RunDir::new(dir);
     let config = run.config()?;
-    let policy = crate::solve::load_learned(dir)?;
+    let policy = afg_learn::run::load_q_network(dir)?;
     let fast = FastPolicy::from_network(policy.config(), policy.network());
     let (mut by_decile, mut total_regret) = ([0.0f64; 10], 0.0);
     let (mut gaps, mut sq_error, mut wrong, mut steps) = (Vec::new(), 0.0, 0usize, 0usize);
@@ -76,7 +76,7 @@ pub fn summarise(
             RobotGraph::build(inst.robots(), GraphKind::default()).map_err(LearnError::from)?;
         let (trace, final_assignment) = regret_trace(&fast, inst, &graph)?;
         let opt = inst.welfare(&Optimum.allocate(inst)?.assignment);
-        pct += crate::percent_of_opt(inst.welfare(&final_assignment), opt)
+        pct += afg_eval::percent_of_opt(inst.welfare(&final_assignment), opt)
             .ok_or(EvalError::PercentUndefined)?;
         mean_reward += afg_graph::feature_scale(inst);
         share += *final_assignment.sizes().iter().max().unwrap_or(&0) as f64 / n as f64;

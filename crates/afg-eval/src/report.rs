@@ -1,0 +1,65 @@
+//! What a long command shows while it runs and how it prints times: a progress bar on
+//! stderr and durations with a unit.
+
+use std::time::Duration;
+
+/// A duration with three significant digits and a unit: `12.3 µs`, `4.56 ms`, `7.89 s`.
+///
+/// # Examples
+/// ```
+/// use std::time::Duration;
+/// use afg_eval::report::duration;
+/// assert_eq!(duration(Duration::from_nanos(12_345)), "12.3 µs");
+/// assert_eq!(duration(Duration::from_micros(4_560)), "4.56 ms");
+/// assert_eq!(duration(Duration::from_millis(7_890)), "7.89 s");
+/// ```
+pub fn duration(d: Duration) -> String {
+    let s = d.as_secs_f64();
+    if s < 1e-3 {
+        format!("{:.1} µs", s * 1e6)
+    } else if s < 1.0 {
+        format!("{:.2} ms", s * 1e3)
+    } else {
+        format!("{s:.2} s")
+    }
+}
+
+/// A progress bar on stderr (hidden when stderr is not a terminal).
+///
+/// # Examples
+/// ```
+/// let bar = afg_eval::report::progress(10, "solving");
+/// bar.inc(1);
+/// bar.finish_and_clear();
+/// ```
+pub fn progress(len: u64, message: &str) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(len);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} ({eta})")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    bar.set_message(message.to_owned());
+    bar
+}
+
+/// The exit status of a command line that ran `result`: 0, or 1 after printing the error
+/// and its causes on one line of stderr (`error: what failed: why`), whatever
+/// `RUST_BACKTRACE` says. Usage errors exit with 2 before this (clap).
+///
+/// # Examples
+/// ```
+/// fn main() -> std::process::ExitCode {
+///     afg_eval::report::exit_code(std::fs::read("/no/such/file").map(drop))
+/// }
+/// # let _ = main; // prints `error: No such file or directory (os error 2)`, exits 1
+/// ```
+pub fn exit_code<E: std::fmt::Display>(result: Result<(), E>) -> std::process::ExitCode {
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(error) => {
+            eprintln!("error: {error:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,22 @@
+//! The paper's reproduction and our measurements: the learned models of the paper's
+//! tables ([`ModelSpec`]), the numbers the paper reports ([`paper`]), the tables
+//! themselves ([`tables`], with the price model's ablation in [`price_ablation`] and
+//! the comparison of two renderings in [`markdown`]), the benchmarks ([`bench`],
+//! [`scale`]), the regret study ([`regret`]) and the removal study
+//! ([`realloc_study`]).
+//!
+//! Only the maintainer's `cargo xtask` depends on this crate: the `afg` command line
+//! and the Python package call `afg-eval`, so neither compiles the tables, the paper's
+//! numbers or the benchmarks.
+
+pub mod bench;
+pub mod markdown;
+mod model;
+pub mod paper;
+pub mod price_ablation;
+pub mod realloc_study;
+pub mod regret;
+pub mod scale;
+pub mod tables;
+
+pub use model::{Head, ModelSpec, PriceSpec, PriceTraining};
