@@ -61,7 +61,7 @@ impl FromStr for Case {
             .split_once('x')
             .ok_or_else(|| format!("`{text}`: write a size as NxM, e.g. 1000x5"))?;
         let count = |s: &str| match s.parse::<usize>() {
-            Ok(0) => Err(format!("`{text}`: sizes must be at least 1")),
+            Ok(0) => Err(format!("`{text}`: must be at least 1")),
             Ok(k) => Ok(k),
             Err(e) => Err(format!("`{text}`: {e}")),
         };

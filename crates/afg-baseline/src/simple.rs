@@ -1,4 +1,10 @@
 //! Honest trivial baselines: greedy, nearest, random, blind.
+//!
+//! # Complexity
+//! Each is one pass over the robots that looks at every task once per robot: O(N M)
+//! time and O(N + M) memory beside the assignment. Greedy and nearest place an
+//! uncapped instance's robots on all cores (each robot's choice is then independent
+//! of the others').
 
 use afg_game::{Assignment, Instance, Point, TaskId};
 use rand::{Rng, SeedableRng};

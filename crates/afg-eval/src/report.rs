@@ -24,7 +24,8 @@ pub fn duration(d: Duration) -> String {
     }
 }
 
-/// A progress bar on stderr (hidden when stderr is not a terminal).
+/// A progress bar on stderr (hidden when stderr is not a terminal). With the
+/// `progress` feature, which the command lines turn on.
 ///
 /// # Examples
 /// ```
@@ -32,6 +33,7 @@ pub fn duration(d: Duration) -> String {
 /// bar.inc(1);
 /// bar.finish_and_clear();
 /// ```
+#[cfg(feature = "progress")]
 pub fn progress(len: u64, message: &str) -> indicatif::ProgressBar {
     let bar = indicatif::ProgressBar::new(len);
     bar.set_style(

@@ -11,6 +11,10 @@ use serde::{Deserialize, Serialize};
 
 /// A linear layer as a row-major `[inputs, outputs]` matrix and a bias (`x W + b`,
 /// Burn's convention).
+///
+/// # Shapes
+/// `weight`: `[inputs, outputs]` (row-major), `bias`: `[outputs]`; applied to rows
+/// `x`: `[rows, inputs]` → `[rows, outputs]`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub(crate) struct Dense {
     pub(crate) weight: Vec<f32>,

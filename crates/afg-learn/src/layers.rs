@@ -25,6 +25,9 @@ pub enum Activation {
 
 impl Activation {
     /// Applies σ elementwise.
+    ///
+    /// # Shapes
+    /// Any `[d_1, …, d_D]` in, the same shape out.
     pub fn apply<B: Backend, const D: usize>(self, x: Tensor<B, D>) -> Tensor<B, D> {
         match self {
             Activation::Relu => relu(x),

@@ -19,6 +19,12 @@
 //! subsample, down to a few hundred robots solved from zero prices. The subsample's
 //! prices are near the full problem's, so only a few units per task move at each level,
 //! and almost all the work is reading the N × M costs once.
+//!
+//! # Complexity
+//! O(N M) to read the costs and place every robot at its minimum, at each of the
+//! log₈(N) levels (a geometric sum: O(N M) in all), plus O(M² log M) for one
+//! Dijkstra over the M + 1 nodes per routed unit, of which warm prices leave a few per
+//! task and level. Memory O(N M) for the costs; nothing of size N × N.
 
 use std::cmp::{Ordering, Reverse};
 use std::collections::BinaryHeap;

@@ -29,6 +29,14 @@
 //! first record of the new epoch a robot hears makes it restart too; older epochs'
 //! records lose to any of the new one.
 //!
+//! # Complexity
+//! Every robot keeps a table of the places bid on so far, at most P = Σ_j cap_j (P = N
+//! when uncapped, since a task never needs more places than robots): O(N·P) memory at
+//! worst. A round costs O(P) per awake bidder (its best and second-best place) and
+//! O(P) per table merged from a neighbour, so O(N·k·P) for a round in which every robot
+//! hears its k neighbours. The rounds grow with the graph's diameter and with the
+//! number of ε-increments the prices climb.
+//!
 //! Like GRAPE's simulation, only messages that can change their receiver are
 //! simulated: a robot keeps sending a place's record while some neighbour holds a
 //! lower one; every broadcast is counted.

@@ -11,6 +11,14 @@
 //! (evolution, stamp), so a view no higher than the receiver's is a heartbeat, counted
 //! in `messages` and `bytes` but not delivered. A robot keeps sending (every round, as
 //! in GRAPE) while some neighbour holds a lower view, so a lost message is sent again.
+//!
+//! # Complexity
+//! A round costs O(A·M + D·s) for A awake robots that best-respond (O(M) each), D
+//! deliveries of a higher view and the s-step path copy each adoption makes (views are
+//! persistent, s ≈ log N); heartbeats cost O(1). GRAPE's mutex keeps one chain of
+//! changes, so the rounds grow about as N and the work as N² over a run (about 10⁹
+//! robot-steps at N = 10 000, docs/swarm.md). Memory O(N·k) for the links and the
+//! messages in flight, plus the views' shared trees.
 
 use std::rc::Rc;
 

@@ -6,7 +6,11 @@
 //! weights, and the parity tests check that both paths give the same Q values and the
 //! same actions on every step of full rollouts.
 //!
-//! # What one evaluation costs (AFGNet, N robots, width d, L layers)
+//! # Complexity
+//!
+//! One network evaluation of AFGNet (N robots, width d, L layers) costs O(L·N·d²)
+//! time; an exact rollout is N evaluations, O(L·N²·d²), and a block rollout N/B of
+//! them. Memory is O(N·(d + M) + edges). Where that cost comes from:
 //!
 //! A robot's move changes its own ν (so the neighbour messages η of the robots around
 //! it) and one column of μ for *every* robot, so every δ changes and a full pass is
@@ -30,7 +34,7 @@
 //! N/B passes replace N.
 //!
 //! The loops over the graph's edges live in `kernels` (vectorised at run time).
-//! Nothing inside the step loop allocates; memory is O(N·(d + M) + edges).
+//! Nothing inside the step loop allocates.
 
 use std::time::{Duration, Instant};
 

@@ -345,7 +345,7 @@ pub fn networks_markdown(
     }
     md += "\nAFGNet's training step against the plain model of the first Burn notes of this project \
            (neighbours padded to the largest degree, gather + reshape + sum; same parameters, \
-           same Q values: tested in crates/afg-eval/src/bench/plain.rs), in the same run:\n\n\
+           same Q values: tested in crates/afg-repro/src/bench/plain.rs), in the same run:\n\n\
            | N | train step, plain (padded gather) | train step, ours (dense) | speed-up |\n|---|---|---|---|\n";
     for (n, plain, ours) in plain_timings(sizes, batch, repeats)? {
         let (p, o, x) = (duration(plain), duration(ours), ratio(plain, ours));
