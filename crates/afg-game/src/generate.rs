@@ -71,7 +71,7 @@ pub struct GeneratorConfig {
 /// let bad = GeneratorKnobs { capacity_slack: Some(0.5), ..GeneratorKnobs::default() };
 /// assert_eq!(
 ///     bad.config(20, 4, 7).unwrap_err().to_string(),
-///     "invalid generator: capacity slack must be at least 1 (got 0.5)"
+///     "invalid generator parameter: capacity slack must be at least 1 (got 0.5)"
 /// );
 /// # Ok::<(), afg_game::GameError>(())
 /// ```

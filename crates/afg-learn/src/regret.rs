@@ -59,8 +59,8 @@ pub fn q_star(
 /// sequential MDP (robots act in index order): the values of robot `t`'s actions.
 ///
 /// # Errors
-/// [`LearnError::InvalidAction`] if every robot has acted; the game's error for a task
-/// out of range or over a capacity.
+/// [`LearnError::InvalidAction`] if every robot has acted or a task is out of range;
+/// the game's error for a task over its capacity.
 ///
 /// # Examples
 /// ```
@@ -82,6 +82,12 @@ pub fn q_star_next(instance: &Instance, prefix: &[TaskId]) -> Result<Vec<Option<
     }
     let mut assignment = Assignment::unassigned(instance.num_robots(), instance.num_tasks());
     for (i, &task) in prefix.iter().enumerate() {
+        if task.index() >= instance.num_tasks() {
+            return Err(LearnError::InvalidAction(format!(
+                "robot {i} has task {task}, but the instance has {} tasks",
+                instance.num_tasks()
+            )));
+        }
         assignment.set(RobotId(i as u32), Some(task));
     }
     instance.check(&assignment)?;
