@@ -134,7 +134,7 @@ def test_bad_input_raises_with_a_message(tmp_path: Path) -> None:
     # The generator's knobs are checked as `afg gen` checks them, with its message.
     with pytest.raises(ValueError, match=r"capacity slack must be at least 1 \(got 0.5\)"):
         afg.generate(robots=10, tasks=3, capacity_slack=0.5)
-    with pytest.raises(ValueError, match="unknown units 'metres': expected mean-reward, scale-free or bounded"):
+    with pytest.raises(ValueError, match='unknown units "metres": expected mean-reward, scale-free or bounded'):
         AllocationVectorEnv(num_envs=1, robots=5, units="metres")
     with pytest.raises(ValueError, match="1e15"):
         afg.Instance(inst.robots * 1e300, inst.tasks, inst.rewards, inst.eps)

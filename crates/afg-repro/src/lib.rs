@@ -1,7 +1,7 @@
 //! The paper's reproduction and our measurements: the learned models of the paper's
 //! tables ([`ModelSpec`]), the numbers the paper reports ([`paper`]), the tables
 //! themselves ([`tables`], with the price model's ablation in [`price_ablation`] and
-//! the comparison of two renderings in [`markdown`]), the benchmarks ([`bench`],
+//! the comparison of two renderings in [`markdown`]), the benchmarks ([`bench`](mod@bench),
 //! [`scale`]), the regret study ([`regret`]) and the removal study
 //! ([`realloc_study`]).
 //!
