@@ -245,7 +245,8 @@ mod tests {
         let err = afg(&format!("train --resume {out} --steps 500")).unwrap_err();
         let message = err.to_string();
         assert!(
-            message.contains("finished run (120 steps)") && message.contains("--init-from"),
+            message.contains("finished run (120 steps)")
+                && message.contains("afg train --init-from"),
             "{message}"
         );
         assert_eq!(std::fs::read(run_dir.join("model.mpk")).unwrap(), before);

@@ -47,21 +47,71 @@ pub fn progress(len: u64, message: &str) -> indicatif::ProgressBar {
 
 /// The exit status of a command line that ran `result`: 0, or 1 after printing the error
 /// and its causes on one line of stderr (`error: what failed: why`), whatever
-/// `RUST_BACKTRACE` says. Usage errors exit with 2 before this (clap).
+/// `RUST_BACKTRACE` says. A cause whose text the line already holds is not repeated.
+/// Usage errors exit with 2 before this (clap).
 ///
 /// # Examples
 /// ```
 /// fn main() -> std::process::ExitCode {
-///     afg_eval::report::exit_code(std::fs::read("/no/such/file").map(drop))
+///     let read = std::fs::read("/no/such/file").map(drop);
+///     afg_eval::report::exit_code(read.map_err(Box::<dyn std::error::Error + Send + Sync>::from))
 /// }
 /// # let _ = main; // prints `error: No such file or directory (os error 2)`, exits 1
 /// ```
-pub fn exit_code<E: std::fmt::Display>(result: Result<(), E>) -> std::process::ExitCode {
+pub fn exit_code<E>(result: Result<(), E>) -> std::process::ExitCode
+where
+    E: AsRef<dyn std::error::Error + Send + Sync + 'static>,
+{
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(error) => {
-            eprintln!("error: {error:#}");
+            eprintln!("error: {}", one_line(error.as_ref()));
             std::process::ExitCode::FAILURE
         }
+    }
+}
+
+/// An error and its causes joined by `: `, each cause left out where the text so far
+/// already holds it (errors that print their source in their own message).
+fn one_line(error: &(dyn std::error::Error + 'static)) -> String {
+    let mut line = error.to_string();
+    let mut cause = error.source();
+    while let Some(c) = cause {
+        let text = c.to_string();
+        if !line.contains(&text) {
+            line = format!("{line}: {text}");
+        }
+        cause = c.source();
+    }
+    line
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Debug, thiserror::Error)]
+    #[error("{path}: {source}")]
+    struct InFile {
+        path: &'static str,
+        #[source]
+        source: std::io::Error,
+    }
+
+    #[derive(Debug, thiserror::Error)]
+    #[error("reading the instances")]
+    struct Reading(#[source] InFile);
+
+    #[test]
+    fn causes_join_on_one_line_without_repeats() {
+        let io = std::io::Error::other("no such file");
+        let error = Reading(InFile {
+            path: "x.json",
+            source: io,
+        });
+        assert_eq!(
+            one_line(&error),
+            "reading the instances: x.json: no such file"
+        );
     }
 }
