@@ -6,6 +6,7 @@
 //! | command | what it does | module |
 //! |---|---|---|
 //! | `afg solve` | one allocator (or a trained model) on your instances or a committed dataset | [`solve`] |
+//! | `afg score` | anyone's assignment against the game: % of OPT, stability, who would move | [`score`] |
 //! | `afg gen` | your own instances from the paper's distribution | [`generate`] |
 //! | `afg swarm` | GRAPE and a decentralised auction over a failing network | [`swarm`] |
 //! | `afg train` | a Q network by DQN or Double DQN, resumable | [`train`] |
@@ -30,6 +31,7 @@ pub mod generate;
 pub mod migrate;
 pub mod price;
 pub mod realloc;
+pub mod score;
 pub mod settings;
 pub mod solve;
 pub mod swarm;
@@ -57,6 +59,8 @@ pub struct Cli {
 pub enum Command {
     /// Solve an instance or a dataset with one allocator and print welfare, % of OPT, NS_rate.
     Solve(solve::SolveArgs),
+    /// Score any assignment file against its instances: welfare, % of OPT, coalitions, stability, who would move.
+    Score(score::ScoreArgs),
     /// Draw your own instances (the paper's distribution, every knob) into a JSON Lines file.
     Gen(generate::GenArgs),
     /// GRAPE and a decentralised auction over a lossy, late, range-limited network where robots fail mid-run.
@@ -81,6 +85,7 @@ impl Command {
     pub fn run(self) -> Result<()> {
         match self {
             Command::Solve(args) => solve::run(args),
+            Command::Score(args) => score::run(args),
             Command::Gen(args) => generate::run(args),
             Command::Swarm(args) => swarm::run(args),
             Command::Train(args) => train::run(args, "afg train"),

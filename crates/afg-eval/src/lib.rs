@@ -15,6 +15,7 @@ pub mod realloc;
 pub mod report;
 pub mod runs;
 mod score;
+pub mod scorecard;
 pub mod solve;
 pub mod swarm;
 

@@ -5,12 +5,14 @@ use std::str::FromStr;
 use std::time::Instant;
 
 use afg_baseline::{AllocStats, Allocator, Method};
-use afg_eval::Score;
+use afg_eval::scorecard::{Scorecard, scorecard};
 use afg_eval::solve::Row;
+use afg_game::Preference;
 use afg_game::realloc::PreviousAssignment;
 use afg_game::{RobotId, TaskId};
 use afg_learn::run::{ModelOptions, load_model as load_dir};
-use numpy::{IntoPyArray, PyArray1};
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pyo3::exceptions::{PyFileNotFoundError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -21,7 +23,7 @@ use crate::{IntVector, PyInstance, task_ids, task_indices, value_error};
 #[pyclass(name = "Result", module = "afg", frozen)]
 pub struct SolveResult {
     tasks: Vec<i64>,
-    score: Score,
+    card: Scorecard,
     /// Extra figures, by name (the allocator's statistics, or a reallocation's).
     stats: Vec<(&'static str, f64)>,
 }
@@ -45,27 +47,69 @@ impl SolveResult {
     /// Welfare of the allocation.
     #[getter]
     fn welfare(&self) -> f64 {
-        self.score.welfare
+        self.card.score.welfare
     }
     /// Welfare of the exact optimum.
     #[getter]
     fn opt_welfare(&self) -> f64 {
-        self.score.opt_welfare
+        self.card.score.opt_welfare
     }
     /// 100 · welfare / opt_welfare; None when the optimum's welfare is not positive.
     #[getter]
     fn percent_of_opt(&self) -> Option<f64> {
-        self.score.percent_of_opt
+        self.card.score.percent_of_opt
     }
     /// Share of robots (0..=1) with no strictly preferred move, balanced preference.
     #[getter]
     fn ns_rate_balanced(&self) -> f64 {
-        self.score.ns_rate_balanced
+        self.card.score.ns_rate_balanced
     }
     /// The same under the selfish (GRAPE) preference.
     #[getter]
     fn ns_rate_selfish(&self) -> f64 {
-        self.score.ns_rate_selfish
+        self.card.score.ns_rate_selfish
+    }
+    /// Robots in each task's coalition, shape (M,), int64.
+    #[getter]
+    fn coalition_sizes<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+        let sizes: Vec<i64> = self
+            .card
+            .coalition_sizes
+            .iter()
+            .map(|&n| n as i64)
+            .collect();
+        sizes.into_pyarray(py)
+    }
+    /// Robots in no coalition.
+    #[getter]
+    fn unassigned(&self) -> usize {
+        self.card.unassigned
+    }
+    /// Whether no robot would move under the balanced preference (Def. 3).
+    #[getter]
+    fn stable_balanced(&self) -> bool {
+        self.card.stable_balanced
+    }
+    /// Whether no robot would move under the selfish (GRAPE) preference.
+    #[getter]
+    fn stable_selfish(&self) -> bool {
+        self.card.stable_selfish
+    }
+    /// The robots that would move under `preference` ("balanced" or "selfish"), shape
+    /// (K, 3), int64: each row a robot, its task now (-1: none) and the task it would
+    /// take.
+    #[pyo3(signature = (preference="balanced"))]
+    fn moves<'py>(&self, py: Python<'py>, preference: &str) -> PyResult<Bound<'py, PyArray2<i64>>> {
+        let moves = match crate::named::<Preference>(preference)? {
+            Preference::Balanced => &self.card.moves_balanced,
+            Preference::Selfish => &self.card.moves_selfish,
+        };
+        let rows: Vec<i64> = moves
+            .iter()
+            .flat_map(|m| [i64::from(m.robot), m.from, m.to])
+            .collect();
+        let array = Array2::from_shape_vec((moves.len(), 3), rows).expect("three columns a move");
+        Ok(array.into_pyarray(py))
     }
     /// What the allocator reported (iterations, rounds, messages, wall_time_s; core_s:
     /// the crates' whole part of a solve, the method and the optimum), or a
@@ -80,12 +124,13 @@ impl SolveResult {
     }
     fn __repr__(&self) -> String {
         let pct = self
+            .card
             .score
             .percent_of_opt
             .map_or("None".to_owned(), |p| format!("{p:.2}"));
         format!(
             "Result(welfare={:.4}, opt_welfare={:.4}, percent_of_opt={pct})",
-            self.score.welfare, self.score.opt_welfare
+            self.card.score.welfare, self.card.score.opt_welfare
         )
     }
 }
@@ -148,7 +193,7 @@ fn run(py: Python<'_>, instance: &PyInstance, allocator: &dyn Allocator) -> PyRe
     Ok(SolveResult {
         tasks: task_indices(&assignment),
         stats,
-        score: row.score,
+        card: Scorecard::with_score(&inst, &assignment, row.score),
     })
 }
 
@@ -187,20 +232,18 @@ fn solve(
     }
 }
 
-/// Scores a given assignment (`tasks[i]` = robot i's task) against the exact optimum.
+/// Scores a given assignment (`tasks[i]` = robot i's task) against the exact optimum,
+/// as `afg score` does: the same scorecard, coalitions and moves included.
 #[pyfunction]
 fn score(py: Python<'_>, instance: &PyInstance, tasks: IntVector<'_>) -> PyResult<SolveResult> {
     let assignment = instance.assignment(&tasks)?;
     let inst = instance.inner.clone();
-    let score = py
-        .detach(|| {
-            let opt = afg_eval::optimum_welfare(&inst)?;
-            Score::of("the assignment", &inst, &assignment, opt)
-        })
+    let card = py
+        .detach(|| scorecard(&inst, &assignment))
         .map_err(value_error)?;
     Ok(SolveResult {
         tasks: task_indices(&assignment),
-        score,
+        card,
         stats: Vec::new(),
     })
 }
@@ -242,11 +285,11 @@ fn reallocate(
     let r = py
         .detach(|| afg_eval::realloc::reallocate(&inst, &previous, preference))
         .map_err(value_error)?;
-    let score =
-        Score::of("the reallocation", &inst, &r.assignment, r.opt_welfare).map_err(value_error)?;
+    let score = afg_eval::Score::of("the reallocation", &inst, &r.assignment, r.opt_welfare)
+        .map_err(value_error)?;
     Ok(SolveResult {
         tasks: task_indices(&r.assignment),
-        score,
+        card: Scorecard::with_score(&inst, &r.assignment, score),
         stats: vec![
             ("survivors", r.survivors as f64),
             ("moved", r.moved as f64),

@@ -101,6 +101,25 @@ def test_reallocation_keeps_survivors_and_settles() -> None:
         afg.reallocate(now, previous, left_robots=[0, 1], method="greedy")
 
 
+def test_score_lists_exactly_the_robots_that_would_move() -> None:
+    inst = afg.generate(robots=12, tasks=3, seed=4)
+    tasks = afg.solve(inst, method="opt").tasks.copy()
+    tasks[0] = (tasks[0] + 1) % 3
+    card = afg.score(inst, tasks)
+    assert card.coalition_sizes.sum() == 12 and card.unassigned == 0
+    for pref in ("balanced", "selfish"):
+        moves = card.moves(pref)
+        assert moves.shape[1] == 3
+        assert (moves[:, 1] == tasks[moves[:, 0]]).all()  # each row starts where the robot is
+        rate = card.ns_rate_balanced if pref == "balanced" else card.ns_rate_selfish
+        assert rate == pytest.approx(1 - len(moves) / 12)
+        stable = card.stable_balanced if pref == "balanced" else card.stable_selfish
+        assert stable == (len(moves) == 0)
+    assert not card.stable_balanced
+    with pytest.raises(ValueError, match="unknown preference"):
+        card.moves("kind")
+
+
 def test_bad_input_raises_with_a_message(tmp_path: Path) -> None:
     inst = afg.generate(robots=10, tasks=3, seed=1)
     with pytest.raises(ValueError, match="unknown method 'nope'"):
