@@ -156,6 +156,7 @@ impl Allocator for CentralisedDa {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
+        crate::paper_game_only(instance, self)?;
         let (result, wall_time) = timed(|| {
             let n = instance.num_robots();
             if let Some(i) = self.schedule.iter().find(|i| i.index() >= n) {
@@ -282,6 +283,7 @@ impl Allocator for DecentralisedDa {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
+        crate::paper_game_only(instance, self)?;
         self.run(instance).map(|r| r.allocation)
     }
 }

@@ -142,6 +142,15 @@ pub enum AllocError {
     /// A method parameter is out of range.
     #[error("invalid parameter: {0}")]
     InvalidParameter(String),
+    /// The instance allows the void task (GRAPE's game), which this method does not
+    /// handle yet: its answer would put every robot in a coalition.
+    #[error(
+        "{method} solves the paper's game only: this instance allows the void task (\"allow_void\": true)"
+    )]
+    VoidNotSupported {
+        /// The method's name.
+        method: String,
+    },
     /// A method defined outside this crate failed.
     #[error("{method}: {message}")]
     Failed {
@@ -164,6 +173,31 @@ pub enum AllocError {
         /// The bound that was hit.
         rounds: u64,
     },
+}
+
+/// Refuses an instance that allows the void task for a method that solves the paper's
+/// game only ([`AllocError::VoidNotSupported`]), rather than answering a different game.
+///
+/// # Errors
+/// [`AllocError::VoidNotSupported`] naming `method`.
+///
+/// # Examples
+/// ```
+/// use afg_baseline::{Allocator, Greedy};
+/// use afg_game::{Instance, Point, Task};
+/// let task = Task { position: Point::new(0.0, 0.0), reward: 1.0, eps: 2.0, capacity: None };
+/// let inst = Instance::with_void(vec![Point::new(1.0, 0.0)], vec![task], 1.0)?;
+/// let err = Greedy.allocate(&inst).unwrap_err();
+/// assert!(err.to_string().starts_with("greedy solves the paper's game only"));
+/// # Ok::<(), afg_game::GameError>(())
+/// ```
+pub fn paper_game_only(instance: &Instance, method: &dyn Allocator) -> Result<(), AllocError> {
+    if instance.allows_void() {
+        return Err(AllocError::VoidNotSupported {
+            method: method.name(),
+        });
+    }
+    Ok(())
 }
 
 /// The built-in methods, by command-line name.

@@ -81,6 +81,7 @@ impl Allocator for Greedy {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
+        crate::paper_game_only(instance, self)?;
         let empty = Assignment::unassigned(instance.num_robots(), instance.num_tasks());
         let (assignment, wall_time) = timed(|| self.complete(instance, &empty));
         Ok(pass_allocation(instance, assignment, wall_time, None))
@@ -113,6 +114,7 @@ impl Allocator for Nearest {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
+        crate::paper_game_only(instance, self)?;
         let positions = task_positions(instance);
         // The first nearest task among those `open` says have room.
         let nearest = |robot: Point, open: &dyn Fn(usize) -> bool| {
@@ -178,6 +180,7 @@ impl Allocator for RandomAllocator {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
+        crate::paper_game_only(instance, self)?;
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
         let mut room: Vec<TaskId> = Vec::with_capacity(instance.num_tasks());
         Ok(one_pass(instance, Some(self.seed), |a, i| {
@@ -219,6 +222,7 @@ impl Allocator for Blind {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
+        crate::paper_game_only(instance, self)?;
         Ok(one_pass(instance, None, |a, i| {
             instance
                 .task_ids()

@@ -35,6 +35,11 @@ pub struct GenArgs {
     /// Initial rewards uniform in [LO, HI] (default [N/M, 2N/M]), e.g. `--rewards 12,24`.
     #[arg(long, value_delimiter = ',', num_args = 1, value_names = ["LO,HI"])]
     rewards: Option<Vec<f64>>,
+    /// Instances of GRAPE's game: a robot may join the void task (no coalition,
+    /// utility 0) instead of a task, e.g. when every task would cost it more than it
+    /// brings ("allow_void": true in each instance).
+    #[arg(long)]
+    allow_void: bool,
     /// Output JSON Lines file (one instance per line, generator parameters inside).
     #[arg(long)]
     out: PathBuf,
@@ -55,6 +60,7 @@ pub fn generate(args: &GenArgs) -> Result<Vec<Instance>> {
         eps: args.eps,
         beta: args.beta,
         rewards,
+        allow_void: args.allow_void,
     };
     (0..args.count as u64)
         .map(|i| {

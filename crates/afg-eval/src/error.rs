@@ -34,6 +34,14 @@ pub enum EvalError {
         /// What is missing.
         what: &'static str,
     },
+    /// A robot in no coalition, where the instance does not allow the void task.
+    #[error(
+        "robot {robot} has no task (-1), but the instance is the paper's game, where every robot joins a coalition (\"allow_void\": true allows the void task)"
+    )]
+    Unplaced {
+        /// The robot.
+        robot: usize,
+    },
     /// A figure could not be drawn.
     #[error("drawing a figure: {0}")]
     Figure(String),

@@ -12,9 +12,9 @@ use crate::{EvalError, Score, optimum_welfare};
 pub struct Move {
     /// The robot.
     pub robot: u32,
-    /// Its task now (−1: none).
+    /// Its task now (−1: none, the void task in GRAPE's game).
     pub from: i64,
-    /// The task it would move to.
+    /// The task it would move to (−1: the void task).
     pub to: i64,
 }
 
@@ -60,8 +60,9 @@ impl Scorecard {
 /// The scorecard of `assignment` on `instance`, solving the exact optimum.
 ///
 /// # Errors
-/// The optimum's errors, and [`EvalError::BeatsOptimum`] if the assignment scores above
-/// it (then the optimum is wrong).
+/// [`EvalError::Unplaced`] for a robot in no coalition where the instance does not
+/// allow the void task; the optimum's errors, and [`EvalError::BeatsOptimum`] if the
+/// assignment scores above it (then the optimum is wrong).
 ///
 /// # Examples
 /// ```
@@ -78,6 +79,11 @@ impl Scorecard {
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn scorecard(instance: &Instance, assignment: &Assignment) -> Result<Scorecard, EvalError> {
+    if !instance.allows_void()
+        && let Some(robot) = assignment.tasks().iter().position(Option::is_none)
+    {
+        return Err(EvalError::Unplaced { robot });
+    }
     let opt = optimum_welfare(instance)?;
     let score = Score::of("the assignment", instance, assignment, opt)?;
     Ok(Scorecard::with_score(instance, assignment, score))
@@ -89,11 +95,11 @@ fn moves(instance: &Instance, assignment: &Assignment, pref: Preference) -> Vec<
     instance
         .robot_ids()
         .filter_map(|robot: RobotId| {
-            let to = instance.best_response(assignment, robot, pref)?;
+            let to = instance.best_move(assignment, robot, pref)?;
             Some(Move {
                 robot: robot.0,
                 from: index(assignment.task_of(robot)),
-                to: index(Some(to)),
+                to: index(to),
             })
         })
         .collect()
@@ -192,5 +198,9 @@ mod tests {
         let text = card.to_string();
         assert!(text.contains("would move: robot 0"), "{text}");
         assert_eq!(card.unassigned, 0);
+        // A robot with no task is refused in the paper's game.
+        a.set(RobotId(3), None);
+        let err = scorecard(&inst, &a).unwrap_err();
+        assert!(err.to_string().contains("robot 3 has no task"), "{err}");
     }
 }

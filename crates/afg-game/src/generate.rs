@@ -55,6 +55,10 @@ pub struct GeneratorConfig {
     /// Capacity range; `None` for unbounded tasks.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub capacity: Option<CapacityRange>,
+    /// GRAPE's game: robots may join the void task ([`Instance::with_void`]). Absent
+    /// (false) in the paper's game, so the committed datasets read as before.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub allow_void: bool,
 }
 
 /// The generator's knobs as a user gives them (`afg gen`, `afg.generate`, the gym
@@ -86,6 +90,8 @@ pub struct GeneratorKnobs {
     pub beta: Option<f64>,
     /// Initial rewards uniform in `[lo, hi]` (default `[N/M, 2N/M]`).
     pub rewards: Option<(f64, f64)>,
+    /// Draw instances of GRAPE's game, where robots may join the void task.
+    pub allow_void: bool,
 }
 
 impl GeneratorKnobs {
@@ -101,6 +107,7 @@ impl GeneratorKnobs {
         seed: u64,
     ) -> Result<GeneratorConfig, GameError> {
         let mut cfg = GeneratorConfig::paper(robots, tasks, seed);
+        cfg.allow_void = self.allow_void;
         if let Some(eps) = self.eps {
             cfg.eps = eps;
         }
@@ -139,6 +146,7 @@ impl GeneratorConfig {
             eps: per_task.max(2.0),
             beta: 1.0,
             capacity: None,
+            allow_void: false,
         }
     }
 
@@ -193,6 +201,11 @@ impl GeneratorConfig {
                 }
             })
             .collect();
-        Ok(Instance::new(robots, tasks, self.beta)?.with_generator(self.clone()))
+        let instance = if self.allow_void {
+            Instance::with_void(robots, tasks, self.beta)?
+        } else {
+            Instance::new(robots, tasks, self.beta)?
+        };
+        Ok(instance.with_generator(self.clone()))
     }
 }

@@ -98,6 +98,8 @@ pub struct Instance {
     tasks: Vec<Task>,
     beta: f64,
     generator: Option<GeneratorConfig>,
+    /// Whether robots may join the void task (GRAPE's game).
+    allow_void: bool,
     /// 1 / ln(eps_j), cached because F_j is evaluated in every inner loop.
     inv_ln_eps: Vec<f64>,
 }
@@ -112,6 +114,37 @@ impl Instance {
     /// [`GameError::CostTooLarge`] (β times the extent of the points above
     /// [`MAX_VALUE`]) or [`GameError::CapacityTooSmall`].
     pub fn new(robots: Vec<Point>, tasks: Vec<Task>, beta: f64) -> Result<Self, GameError> {
+        Self::build(robots, tasks, beta, false)
+    }
+
+    /// The same game in GRAPE's wider form: a robot may join the **void task** (no
+    /// task at all, utility 0) instead of a coalition, so total capacity may be below
+    /// N and robots for whom every task would be a loss may stay out. The paper's game
+    /// ([`Instance::new`]) puts every robot in a coalition.
+    ///
+    /// # Errors
+    /// As [`Instance::new`], but for [`GameError::CapacityTooSmall`].
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::{Instance, Point, Task};
+    /// let robots = vec![Point::new(0.0, 0.0), Point::new(9.0, 0.0)];
+    /// let task = Task { position: Point::new(0.0, 0.0), reward: 1.0, eps: 2.0, capacity: Some(1) };
+    /// assert!(Instance::new(robots.clone(), vec![task.clone()], 1.0).is_err()); // room for one of two
+    /// let inst = Instance::with_void(robots, vec![task], 1.0)?;
+    /// assert!(inst.allows_void());
+    /// # Ok::<(), afg_game::GameError>(())
+    /// ```
+    pub fn with_void(robots: Vec<Point>, tasks: Vec<Task>, beta: f64) -> Result<Self, GameError> {
+        Self::build(robots, tasks, beta, true)
+    }
+
+    fn build(
+        robots: Vec<Point>,
+        tasks: Vec<Task>,
+        beta: f64,
+        allow_void: bool,
+    ) -> Result<Self, GameError> {
         if robots.is_empty() {
             return Err(GameError::NoRobots);
         }
@@ -168,7 +201,7 @@ impl Instance {
                 limit: MAX_VALUE,
             });
         }
-        if tasks.iter().all(|t| t.capacity.is_some()) {
+        if !allow_void && tasks.iter().all(|t| t.capacity.is_some()) {
             let total = tasks
                 .iter()
                 .map(|t| t.capacity.unwrap_or(0))
@@ -186,6 +219,7 @@ impl Instance {
             tasks,
             beta,
             generator: None,
+            allow_void,
             inv_ln_eps,
         })
     }
@@ -194,6 +228,13 @@ impl Instance {
     pub fn with_generator(mut self, generator: GeneratorConfig) -> Self {
         self.generator = Some(generator);
         self
+    }
+
+    /// Whether a robot may join the void task (GRAPE's game, [`Instance::with_void`]);
+    /// `false` for the paper's game, where every robot joins a coalition.
+    #[inline]
+    pub fn allows_void(&self) -> bool {
+        self.allow_void
     }
 
     /// Number of robots N.

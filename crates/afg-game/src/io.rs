@@ -4,9 +4,12 @@
 //! An instance file is one JSON object:
 //! `{"format": "afg-instance", "version": 1, "beta": 1.0, "robots": [{"x":..,"y":..}, ..],
 //!   "tasks": [{"position": {..}, "reward": .., "eps": .., "capacity": ..}, ..],
-//!   "generator": {..}}` (`capacity` and `generator` optional).
+//!   "allow_void": true, "generator": {..}}` (`capacity`, `allow_void` and `generator`
+//!   optional; `allow_void`, absent in the paper's game, lets robots join the void task
+//!   of GRAPE's game).
 //! A dataset is a JSON Lines file with one such object per line.
-//! An assignment file is `{"format": "afg-assignment", "version": 1, "tasks": [0, 3, null, ..]}`,
+//! An assignment file is `{"format": "afg-assignment", "version": 1, "tasks": [0, 3, -1, ..]}`
+//! (−1: no task; files of older versions of afg wrote `null`, which reads the same),
 //! with three optional fields: `summary` (any JSON object: what the solver reports
 //! beside it, ignored when read), and `left_robots` / `left_tasks` (robot and task
 //! indices of this assignment that are gone, for a warm start on a changed instance:
@@ -35,6 +38,10 @@ pub(crate) struct InstanceFile {
     beta: f64,
     robots: Vec<Point>,
     tasks: Vec<Task>,
+    /// GRAPE's game: robots may join the void task. Absent (false) in the paper's game,
+    /// so files of the paper's game read and write as before.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    allow_void: bool,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     generator: Option<GeneratorConfig>,
 }
@@ -60,7 +67,11 @@ impl TryFrom<InstanceFile> for Instance {
     type Error = GameError;
     fn try_from(f: InstanceFile) -> Result<Self, GameError> {
         check_header(&f.format, f.version, INSTANCE_FORMAT)?;
-        let inst = Instance::new(f.robots, f.tasks, f.beta)?;
+        let inst = if f.allow_void {
+            Instance::with_void(f.robots, f.tasks, f.beta)?
+        } else {
+            Instance::new(f.robots, f.tasks, f.beta)?
+        };
         Ok(match f.generator {
             Some(g) => inst.with_generator(g),
             None => inst,
@@ -76,6 +87,7 @@ impl From<Instance> for InstanceFile {
             beta: inst.beta(),
             robots: inst.robots().to_vec(),
             tasks: inst.tasks().to_vec(),
+            allow_void: inst.allows_void(),
             generator: inst.generator().cloned(),
         }
     }
@@ -86,6 +98,9 @@ impl From<Instance> for InstanceFile {
 pub(crate) struct AssignmentFile {
     format: String,
     version: u32,
+    /// Each robot's task; −1 (or `null`) for none: the void task in GRAPE's game, a
+    /// robot yet to act in a partial assignment.
+    #[serde(with = "minus_one_for_none")]
     pub(crate) tasks: Vec<Option<TaskId>>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub(crate) left_robots: Vec<RobotId>,
@@ -101,6 +116,43 @@ impl AssignmentFile {
             serde_json::from_str(strip_bom(text)).map_err(json_error(line))?;
         check_header(&file.format, file.version, ASSIGNMENT_FORMAT)?;
         Ok(file)
+    }
+}
+
+/// Task lists as files write them: a task index, or −1 for none (`null`, which older
+/// files wrote, reads the same).
+mod minus_one_for_none {
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    use crate::TaskId;
+
+    pub(super) fn serialize<S: Serializer>(
+        tasks: &[Option<TaskId>],
+        serializer: S,
+    ) -> Result<S::Ok, S::Error> {
+        let indices: Vec<i64> = tasks
+            .iter()
+            .map(|t| t.map_or(-1, |t| i64::from(t.0)))
+            .collect();
+        indices.serialize(serializer)
+    }
+
+    pub(super) fn deserialize<'de, D: Deserializer<'de>>(
+        deserializer: D,
+    ) -> Result<Vec<Option<TaskId>>, D::Error> {
+        let indices = Vec::<Option<i64>>::deserialize(deserializer)?;
+        indices
+            .into_iter()
+            .enumerate()
+            .map(|(robot, t)| match t {
+                None | Some(-1) => Ok(None),
+                Some(t) => u32::try_from(t).map(|t| Some(TaskId(t))).map_err(|_| {
+                    serde::de::Error::custom(format!(
+                        "robot {robot} has task {t}: a task is an index 0..M, or -1 for none"
+                    ))
+                }),
+            })
+            .collect()
     }
 }
 
@@ -167,7 +219,7 @@ impl Assignment {
     /// let inst = GeneratorConfig::paper(2, 2, 1).generate()?;
     /// let mut a = Assignment::unassigned(2, 2);
     /// a.set(RobotId(1), Some(TaskId(0)));
-    /// assert_eq!(a.to_json(), r#"{"format":"afg-assignment","version":1,"tasks":[null,0]}"#);
+    /// assert_eq!(a.to_json(), r#"{"format":"afg-assignment","version":1,"tasks":[-1,0]}"#);
     /// assert_eq!(Assignment::from_json(&a.to_json(), &inst)?, a);
     /// # Ok::<(), afg_game::GameError>(())
     /// ```

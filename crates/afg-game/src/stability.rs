@@ -9,7 +9,11 @@
 //!   the two scores;
 //! - selfish: `u_i(j, m + 1) = F_j(m + 1) / (m + 1) - beta d(i, j)`, its own utility.
 //!
-//! An unassigned robot scores −∞ where it is, so it prefers any task with room.
+//! An unassigned robot scores −∞ where it is, so it prefers any task with room. In
+//! GRAPE's game ([`Instance::allows_void`]) a robot in no coalition is in the **void
+//! task** and scores 0 there (both preferences: it adds nothing and gets nothing), and
+//! leaving for the void is a move like any other ([`Instance::best_move`]): a robot
+//! whose place scores below 0 prefers to stay out.
 //! A robot strictly prefers a task when its score there exceeds its current score
 //! by more than [`TOLERANCE`] × max(1, |either score|): differences below that are
 //! floating-point noise, not preferences.
@@ -83,13 +87,62 @@ impl Instance {
         value - self.cost(robot, task)
     }
 
-    /// Score of `robot` where it is now; −∞ when unassigned.
+    /// Score of `robot` where it is now; for a robot in no coalition, 0 (the void task)
+    /// where the instance allows the void, −∞ otherwise.
     #[inline]
     pub fn current_score(&self, assignment: &Assignment, robot: RobotId, pref: Preference) -> f64 {
         match assignment.task_of(robot) {
             Some(task) => self.score(assignment, robot, task, pref),
-            None => f64::NEG_INFINITY,
+            None => self.outside_score(),
         }
+    }
+
+    /// The score of being in no coalition: the void task's 0 where the instance allows
+    /// it, else −∞ (a robot yet to be placed).
+    #[inline]
+    fn outside_score(&self) -> f64 {
+        if self.allows_void() {
+            0.0
+        } else {
+            f64::NEG_INFINITY
+        }
+    }
+
+    /// Where `robot` would move, if it strictly prefers another place to its own:
+    /// `Some(Some(task))` for a task, `Some(None)` for the void task (only where the
+    /// instance allows it: when its place scores below 0 and no task with room scores 0
+    /// or more), `None` to stay. In the paper's game this is
+    /// [`Instance::best_response`].
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::{Assignment, Instance, Point, Preference, RobotId, Task, TaskId};
+    /// let far = Task { position: Point::new(5.0, 0.0), reward: 1.0, eps: 2.0, capacity: None };
+    /// let robots = vec![Point::new(0.0, 0.0)];
+    /// let mut a = Assignment::unassigned(1, 1);
+    /// a.set(RobotId(0), Some(TaskId(0)));
+    /// // The task is worth 1 and 5 away: in GRAPE's game the robot would rather stay out.
+    /// let grape = Instance::with_void(robots.clone(), vec![far], 1.0)?;
+    /// assert_eq!(grape.best_move(&a, RobotId(0), Preference::Selfish), Some(None));
+    /// let paper = Instance::new(robots, vec![far], 1.0)?;
+    /// assert_eq!(paper.best_move(&a, RobotId(0), Preference::Selfish), None);
+    /// # Ok::<(), afg_game::GameError>(())
+    /// ```
+    pub fn best_move(
+        &self,
+        assignment: &Assignment,
+        robot: RobotId,
+        pref: Preference,
+    ) -> Option<Option<TaskId>> {
+        let current = assignment.task_of(robot);
+        if let Some(task) = self.best_response(assignment, robot, pref) {
+            // The task beats where the robot is; the void beats it only when it scores < 0.
+            let s = self.score(assignment, robot, task, pref);
+            let void_better = self.allows_void() && current.is_some() && s < 0.0;
+            return Some(if void_better { None } else { Some(task) });
+        }
+        let here = self.current_score(assignment, robot, pref);
+        (self.allows_void() && current.is_some() && strictly_better(0.0, here)).then_some(None)
     }
 
     /// The task `robot` most prefers to move to, if it strictly prefers any over where it is.
@@ -154,7 +207,7 @@ impl Instance {
             }
         }
         let (task, s) = best?;
-        let here = current.map_or(f64::NEG_INFINITY, |c| {
+        let here = current.map_or(self.outside_score(), |c| {
             self.score_among(robot, c, others(c), pref)
         });
         strictly_better(s, here).then_some(task)
@@ -162,7 +215,7 @@ impl Instance {
 
     /// Whether `robot` has no strictly preferred move (Def. 3 for one robot).
     pub fn is_satisfied(&self, assignment: &Assignment, robot: RobotId, pref: Preference) -> bool {
-        self.best_response(assignment, robot, pref).is_none()
+        self.best_move(assignment, robot, pref).is_none()
     }
 
     /// Whether no robot strictly prefers another task (Def. 3). Unassigned robots

@@ -210,6 +210,7 @@ impl Draw {
             eps: self.eps,
             beta: Some(self.beta),
             rewards: None,
+            allow_void: false,
         }
         .config(self.robots, self.tasks, seed)?
         .generate()

@@ -131,7 +131,7 @@ impl PyInstance {
     /// Builds and validates an instance from arrays: robot positions (N, 2), task
     /// positions (M, 2), rewards (M,), eps (M,), optional capacities (M,; -1 = none).
     #[new]
-    #[pyo3(signature = (robots, tasks, rewards, eps, capacities=None, beta=1.0))]
+    #[pyo3(signature = (robots, tasks, rewards, eps, capacities=None, beta=1.0, allow_void=false))]
     fn py_new(
         robots: PyReadonlyArray2<'_, f64>,
         tasks: PyReadonlyArray2<'_, f64>,
@@ -139,6 +139,7 @@ impl PyInstance {
         eps: Vec<f64>,
         capacities: Option<IntVector<'_>>,
         beta: f64,
+        allow_void: bool,
     ) -> PyResult<Self> {
         let positions = points(&tasks, "tasks")?;
         let m = positions.len();
@@ -169,7 +170,13 @@ impl PyInstance {
                 })
             })
             .collect::<PyResult<Vec<_>>>()?;
-        let inst = Instance::new(points(&robots, "robots")?, tasks, beta).map_err(game_error)?;
+        let robots = points(&robots, "robots")?;
+        let inst = if allow_void {
+            Instance::with_void(robots, tasks, beta)
+        } else {
+            Instance::new(robots, tasks, beta)
+        }
+        .map_err(game_error)?;
         Ok(Self::new_from(inst))
     }
 
@@ -274,6 +281,13 @@ impl PyInstance {
         self.inner.beta()
     }
 
+    /// Whether a robot may join the void task (GRAPE's game; -1 in `tasks` vectors is
+    /// then a robot in no coalition, utility 0). False for the paper's game.
+    #[getter]
+    fn allow_void(&self) -> bool {
+        self.inner.allows_void()
+    }
+
     /// Welfare of an assignment (`tasks[i]` = robot i's task, -1 for none).
     fn welfare(&self, tasks: IntVector<'_>) -> PyResult<f64> {
         Ok(self.inner.welfare(&self.assignment(&tasks)?))
@@ -323,9 +337,12 @@ fn write_jsonl(path: PathBuf, instances: Vec<PyRef<'_, PyInstance>>) -> PyResult
 }
 
 /// Draws an instance from the paper's distribution (uniform positions, rewards in
-/// [N/M, 2N/M], eps = max(2, N/M), beta = 1), with the generator's knobs.
+/// [N/M, 2N/M], eps = max(2, N/M), beta = 1), with the generator's knobs;
+/// `allow_void=True` draws GRAPE's game, where robots may join the void task.
 #[pyfunction]
-#[pyo3(signature = (robots, tasks=5, seed=0, capacity_slack=None, eps=None, beta=1.0, rewards=None))]
+#[pyo3(signature = (robots, tasks=5, seed=0, capacity_slack=None, eps=None, beta=1.0, rewards=None, allow_void=false))]
+// Python's keyword arguments, one per knob.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn generate(
     robots: usize,
     tasks: usize,
@@ -334,12 +351,14 @@ pub(crate) fn generate(
     eps: Option<f64>,
     beta: f64,
     rewards: Option<(f64, f64)>,
+    allow_void: bool,
 ) -> PyResult<PyInstance> {
     let knobs = GeneratorKnobs {
         capacity_slack,
         eps,
         beta: Some(beta),
         rewards,
+        allow_void,
     };
     knobs
         .config(robots, tasks, seed)

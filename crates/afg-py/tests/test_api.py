@@ -120,6 +120,25 @@ def test_score_lists_exactly_the_robots_that_would_move() -> None:
         card.moves("kind")
 
 
+def test_grapes_game_lets_robots_stay_out_and_methods_not_ready_say_so() -> None:
+    inst = afg.generate(robots=6, tasks=2, seed=3, allow_void=True)
+    assert inst.allow_void and not afg.generate(robots=6, tasks=2, seed=3).allow_void
+    again = afg.Instance.parse(inst.to_json())
+    assert again.allow_void
+    tasks = np.array([0, 1, -1, -1, 0, 1])
+    # Scoring needs the exact optimum of this game, which is not there yet: a clear error.
+    with pytest.raises(ValueError, match="paper's game only"):
+        afg.score(inst, tasks)
+    with pytest.raises(ValueError, match="paper's game only"):
+        afg.solve(inst, method="greedy")
+    assert inst.welfare(tasks) == pytest.approx(
+        afg.generate(robots=6, tasks=2, seed=3).welfare(tasks)
+    )
+    paper = afg.generate(robots=6, tasks=2, seed=3)
+    with pytest.raises(ValueError, match="robot 2 has no task"):
+        afg.score(paper, tasks)
+
+
 def test_bad_input_raises_with_a_message(tmp_path: Path) -> None:
     inst = afg.generate(robots=10, tasks=3, seed=1)
     with pytest.raises(ValueError, match="unknown method 'nope'"):

@@ -82,6 +82,7 @@ impl Optimum {
         instance: &Instance,
         partial: &Assignment,
     ) -> Result<Assignment, AllocError> {
+        crate::paper_game_only(instance, self)?;
         check_partial(instance, partial)?;
         Ok(augmenting::solved(instance, partial.clone(), None).assignment)
     }
@@ -247,6 +248,7 @@ impl Allocator for Optimum {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
+        crate::paper_game_only(instance, self)?;
         let (solution, wall_time) = timed(|| transport::solve(instance));
         Ok(Allocation {
             assignment: assignment_of(instance, &solution.task_of),

@@ -293,6 +293,11 @@ impl Swarm {
         instance: &Instance,
         on_round: impl FnMut(u64),
     ) -> Result<SwarmReport, AllocError> {
+        if instance.allows_void() {
+            return Err(AllocError::VoidNotSupported {
+                method: "the swarm".into(),
+            });
+        }
         let limit = self.round_limit(instance.num_robots());
         let (outcome, wall_time) = timed(|| match self.method {
             SwarmMethod::Grape { preference } => {

@@ -315,6 +315,7 @@ impl Allocator for PricePolicy {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
+        afg_baseline::paper_game_only(instance, self)?;
         let start = std::time::Instant::now();
         let state = self.rollout(instance)?;
         Ok(Allocation {
