@@ -3,6 +3,11 @@
 //!
 //! Both start with every robot unassigned. A *change* is one robot switching to its
 //! most preferred task (strictly better than where it is, [`Instance::best_response`]).
+//! Where the instance allows the void task (GRAPE's game), an unassigned robot is in
+//! the void, worth 0: it joins a task only for a positive score, and leaves for the
+//! void when its place scores below 0 ([`Instance::best_move`]). Selfish, that is
+//! GRAPE's clipping of utilities at 0; balanced, it leaves when its marginal welfare is
+//! negative.
 //!
 //! **Decentralised.** Each robot keeps a local view of the partition with an
 //! evolution number (how many changes it has seen) and a random time stamp. In a
@@ -67,11 +72,12 @@ impl CentralisedDa {
         }
     }
 
-    /// One turn: `robot` moves to its best response if that is strictly better.
+    /// One turn: `robot` makes its best move if that is strictly better
+    /// ([`Instance::best_move`]: to a task, or to the void where the instance allows it).
     fn turn(&self, instance: &Instance, a: &mut Assignment, robot: RobotId) -> bool {
-        match instance.best_response(a, robot, self.preference) {
-            Some(j) => {
-                a.set(robot, Some(j));
+        match instance.best_move(a, robot, self.preference) {
+            Some(place) => {
+                a.set(robot, place);
                 true
             }
             None => false,
@@ -156,7 +162,6 @@ impl Allocator for CentralisedDa {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
-        crate::paper_game_only(instance, self)?;
         let (result, wall_time) = timed(|| {
             let n = instance.num_robots();
             if let Some(i) = self.schedule.iter().find(|i| i.index() >= n) {
@@ -283,7 +288,6 @@ impl Allocator for DecentralisedDa {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
-        crate::paper_game_only(instance, self)?;
         self.run(instance).map(|r| r.allocation)
     }
 }

@@ -142,10 +142,11 @@ pub enum AllocError {
     /// A method parameter is out of range.
     #[error("invalid parameter: {0}")]
     InvalidParameter(String),
-    /// The instance allows the void task (GRAPE's game), which this method does not
-    /// handle yet: its answer would put every robot in a coalition.
+    /// The instance allows the void task (GRAPE's game), which this method has no
+    /// action for (a Q network trained on the paper's game): its answer would put every
+    /// robot in a coalition.
     #[error(
-        "{method} solves the paper's game only: this instance allows the void task (\"allow_void\": true)"
+        "{method} solves the paper's game only, with no action for the void task, and this instance allows it (\"allow_void\": true)"
     )]
     VoidNotSupported {
         /// The method's name.
@@ -187,8 +188,9 @@ pub enum AllocError {
 /// use afg_game::{Instance, Point, Task};
 /// let task = Task { position: Point::new(0.0, 0.0), reward: 1.0, eps: 2.0, capacity: None };
 /// let inst = Instance::with_void(vec![Point::new(1.0, 0.0)], vec![task], 1.0)?;
-/// let err = Greedy.allocate(&inst).unwrap_err();
+/// let err = afg_baseline::paper_game_only(&inst, &Greedy).unwrap_err();
 /// assert!(err.to_string().starts_with("greedy solves the paper's game only"));
+/// assert!(Greedy.allocate(&inst).is_ok()); // greedy itself plays GRAPE's game
 /// # Ok::<(), afg_game::GameError>(())
 /// ```
 pub fn paper_game_only(instance: &Instance, method: &dyn Allocator) -> Result<(), AllocError> {

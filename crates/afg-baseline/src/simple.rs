@@ -1,5 +1,10 @@
 //! Honest trivial baselines: greedy, nearest, random, blind.
 //!
+//! Where the instance allows the void task (GRAPE's game), each has a rule for staying
+//! out, given on its type: greedy and nearest when the place they would take adds
+//! less than nothing, random as one more equally likely choice, and every method when
+//! no task has room.
+//!
 //! # Complexity
 //! Each is one pass over the robots that looks at every task once per robot: O(N M)
 //! time and O(N + M) memory beside the assignment. Greedy and nearest place an
@@ -17,7 +22,9 @@ use crate::{AllocError, AllocStats, Allocation, Allocator, timed};
 const PARALLEL_PAIRS: usize = 1 << 16;
 
 /// Robots in index order each join the task with the best marginal welfare that has
-/// room (the balanced score on the partial assignment); one pass, no revisions.
+/// room (the balanced score on the partial assignment); one pass, no revisions. Where
+/// the instance allows the void task, a robot whose best marginal welfare is below 0
+/// stays out.
 ///
 /// # Examples
 /// ```
@@ -31,7 +38,8 @@ pub struct Greedy;
 
 impl Greedy {
     /// Completes `partial`: its unassigned robots, in index order, each join the task
-    /// with the best marginal welfare that has room; assigned robots stay. O(N M).
+    /// with the best marginal welfare that has room (or stay out, see [`Greedy`]);
+    /// assigned robots stay. O(N M).
     ///
     /// # Examples
     /// ```
@@ -67,6 +75,9 @@ impl Greedy {
                     (best, score) = (j, s);
                 }
             }
+            if instance.allows_void() && score < 0.0 {
+                continue; // −∞ too: no task has room
+            }
             let task = TaskId(best as u32);
             a.set(i, Some(task));
             gain[best] = next(&a, task);
@@ -81,7 +92,6 @@ impl Allocator for Greedy {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
-        crate::paper_game_only(instance, self)?;
         let empty = Assignment::unassigned(instance.num_robots(), instance.num_tasks());
         let (assignment, wall_time) = timed(|| self.complete(instance, &empty));
         Ok(pass_allocation(instance, assignment, wall_time, None))
@@ -93,7 +103,9 @@ fn task_positions(instance: &Instance) -> Vec<Point> {
     instance.tasks().iter().map(|t| t.position).collect()
 }
 
-/// Each robot, in index order, joins its nearest task that still has room.
+/// Each robot, in index order, joins its nearest task that still has room. Where the
+/// instance allows the void task, it stays out when that task's next member is worth
+/// less than its travel cost (marginal value − β d < 0).
 ///
 /// # Examples
 /// ```
@@ -114,42 +126,44 @@ impl Allocator for Nearest {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
-        crate::paper_game_only(instance, self)?;
         let positions = task_positions(instance);
-        // The first nearest task among those `open` says have room.
+        // The first nearest task among those `open` says have room, and its distance.
         let nearest = |robot: Point, open: &dyn Fn(usize) -> bool| {
-            let (mut best, mut distance) = (0, f64::INFINITY);
+            let (mut best, mut distance) = (None, f64::INFINITY);
             for (j, &p) in positions.iter().enumerate() {
                 let d = robot.distance(p);
                 if d < distance && open(j) {
-                    (best, distance) = (j, d);
+                    (best, distance) = (Some(TaskId(j as u32)), d);
                 }
             }
-            Some(TaskId(best as u32))
+            best.map(|j| (j, distance))
         };
         let uncapped = instance
             .task_ids()
             .all(|j| instance.capacity(j) == usize::MAX);
-        if !uncapped {
+        if !uncapped || instance.allows_void() {
             return Ok(one_pass(instance, None, |a, i| {
                 let open = |j: usize| a.has_room(instance, i, TaskId(j as u32));
-                nearest(instance.robots()[i.index()], &open)
+                let (j, d) = nearest(instance.robots()[i.index()], &open)?;
+                let worth = instance.marginal_value(j, a.size(j) + 1) - instance.beta() * d;
+                (!instance.allows_void() || worth >= 0.0).then_some(j)
             }));
         }
-        // No capacities: robots do not interact, so they are placed on all cores.
+        // No capacities and no void: robots do not interact, so they are placed on all
+        // cores.
         let (assignment, wall_time) = timed(|| {
             let tasks: Vec<Option<TaskId>> =
                 if instance.num_robots() * positions.len() >= PARALLEL_PAIRS {
                     instance
                         .robots()
                         .par_iter()
-                        .map(|&r| nearest(r, &|_| true))
+                        .map(|&r| nearest(r, &|_| true).map(|(j, _)| j))
                         .collect()
                 } else {
                     instance
                         .robots()
                         .iter()
-                        .map(|&r| nearest(r, &|_| true))
+                        .map(|&r| nearest(r, &|_| true).map(|(j, _)| j))
                         .collect()
                 };
             Assignment::from_tasks(instance, tasks).expect("uncapped tasks take any robot")
@@ -159,6 +173,8 @@ impl Allocator for Nearest {
 }
 
 /// Each robot, in index order, joins a task drawn uniformly from those with room.
+/// Where the instance allows the void task, the void is one more choice, as likely as
+/// each task (the uniform policy over GRAPE's M + 1 actions).
 ///
 /// # Examples
 /// ```
@@ -180,13 +196,16 @@ impl Allocator for RandomAllocator {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
-        crate::paper_game_only(instance, self)?;
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
-        let mut room: Vec<TaskId> = Vec::with_capacity(instance.num_tasks());
+        let mut room: Vec<Option<TaskId>> = Vec::with_capacity(instance.num_tasks() + 1);
         Ok(one_pass(instance, Some(self.seed), |a, i| {
             room.clear();
-            room.extend(instance.task_ids().filter(|&j| a.has_room(instance, i, j)));
-            Some(room[rng.random_range(0..room.len())])
+            let open = instance.task_ids().filter(|&j| a.has_room(instance, i, j));
+            room.extend(open.map(Some));
+            if instance.allows_void() {
+                room.push(None);
+            }
+            room[rng.random_range(0..room.len())]
         }))
     }
 }
@@ -201,7 +220,8 @@ impl Allocator for RandomAllocator {
 /// exchangeable, a choice that ignores them leaves every robot's expected distance
 /// unchanged, so in expectation over instances only the coalition sizes matter, and
 /// the concave `F_j` is best served by equal sizes: no blind policy beats this one on
-/// average. O(N M).
+/// average. O(N M). Where the instance allows the void task, a robot stays out only
+/// when no task has room.
 ///
 /// # Examples
 /// ```
@@ -222,7 +242,6 @@ impl Allocator for Blind {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
-        crate::paper_game_only(instance, self)?;
         Ok(one_pass(instance, None, |a, i| {
             instance
                 .task_ids()
@@ -232,7 +251,8 @@ impl Allocator for Blind {
     }
 }
 
-/// Assigns robots in index order to `choose`'s task; one iteration per robot.
+/// Assigns robots in index order to `choose`'s task (`None`: the void); one iteration
+/// per robot.
 fn one_pass(
     instance: &Instance,
     seed: Option<u64>,
@@ -242,7 +262,10 @@ fn one_pass(
         let mut a = Assignment::unassigned(instance.num_robots(), instance.num_tasks());
         for i in instance.robot_ids() {
             let task = choose(&a, i);
-            debug_assert!(task.is_some(), "capacities hold every robot");
+            debug_assert!(
+                task.is_some() || instance.allows_void(),
+                "capacities hold every robot"
+            );
             a.set(i, task);
         }
         a

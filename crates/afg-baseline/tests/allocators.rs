@@ -11,7 +11,7 @@ use afg_graph::{GraphKind, RobotGraph};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use common::small_instance;
+use common::{small_instance, small_void_instance};
 
 fn dataset(n: usize) -> Vec<Instance> {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../../datasets/n{n}.jsonl"));
@@ -370,4 +370,94 @@ fn blind_beats_random_where_tasks_can_be_left_empty() {
     };
     let (blind, random) = (mean(Method::Blind), mean(Method::Random));
     assert!(blind > random + 1.0, "blind {blind}, random {random}");
+}
+
+/// Robot by robot in index order, what the one-pass rule `rule` says robot i does given
+/// the places of robots 0..i in `a`; panics where `a` differs.
+fn replay(
+    inst: &Instance,
+    a: &Assignment,
+    why: &str,
+    rule: impl Fn(&Assignment, RobotId) -> Option<TaskId>,
+) {
+    let mut partial = Assignment::unassigned(inst.num_robots(), inst.num_tasks());
+    for i in inst.robot_ids() {
+        assert_eq!(a.task_of(i), rule(&partial, i), "{why}: robot {i}");
+        partial.set(i, a.task_of(i));
+    }
+}
+
+/// GRAPE's game: every method's assignment fits and is at most the void optimum; each
+/// stays out by its own rule (greedy and nearest replayed here); the dynamics end
+/// stable with the void move and the decentralised run equals its centralised twin;
+/// and every method leaves robots out somewhere.
+#[test]
+fn every_method_plays_grapes_game() {
+    let mut rng = ChaCha8Rng::seed_from_u64(2032);
+    let mut out = [0usize; Method::ALL.len()];
+    for case in 0..300 {
+        let inst = small_void_instance(&mut rng, case);
+        let best = inst.welfare(&Optimum.allocate(&inst).unwrap().assignment);
+        for (k, method) in Method::ALL.iter().enumerate() {
+            let a = method
+                .allocator(case as u64)
+                .allocate(&inst)
+                .unwrap()
+                .assignment;
+            inst.check(&a).unwrap();
+            let w = inst.welfare(&a);
+            assert!(
+                w <= best + 1e-9 * best.abs().max(1.0),
+                "case {case} {method}: {w} > {best}"
+            );
+            out[k] += inst.num_robots() - a.num_assigned();
+        }
+        let why = format!("case {case}");
+        let greedy = Method::Greedy
+            .allocator(0)
+            .allocate(&inst)
+            .unwrap()
+            .assignment;
+        replay(&inst, &greedy, &why, |p, i| {
+            let (mut best, mut score) = (None, f64::NEG_INFINITY);
+            for j in inst.task_ids().filter(|&j| p.has_room(&inst, i, j)) {
+                let s = inst.score(p, i, j, Preference::Balanced);
+                if s > score {
+                    (best, score) = (Some(j), s);
+                }
+            }
+            best.filter(|_| score >= 0.0)
+        });
+        let nearest = Method::Nearest
+            .allocator(0)
+            .allocate(&inst)
+            .unwrap()
+            .assignment;
+        replay(&inst, &nearest, &why, |p, i| {
+            let j = inst
+                .task_ids()
+                .filter(|&j| p.has_room(&inst, i, j))
+                .min_by(|&x, &y| inst.distance(i, x).total_cmp(&inst.distance(i, y)))?;
+            let worth = inst.marginal_value(j, p.size(j) + 1) - inst.cost(i, j);
+            (worth >= 0.0).then_some(j)
+        });
+        for pref in [Preference::Selfish, Preference::Balanced] {
+            let central = CentralisedDa::new(pref).allocate(&inst).unwrap().assignment;
+            assert!(inst.is_stable(&central, pref), "{why} {pref:?}");
+            let run = DecentralisedDa::new(pref, case as u64).run(&inst).unwrap();
+            assert!(
+                inst.is_stable(&run.allocation.assignment, pref),
+                "{why} {pref:?}"
+            );
+            let twin = CentralisedDa {
+                preference: pref,
+                schedule: run.chain.clone(),
+            };
+            let twin = twin.allocate(&inst).unwrap().assignment;
+            assert_eq!(twin, run.allocation.assignment, "{why} {pref:?}");
+        }
+    }
+    for (k, method) in Method::ALL.iter().enumerate() {
+        assert!(out[k] > 0, "{method} never left a robot out");
+    }
 }

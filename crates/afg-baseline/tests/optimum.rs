@@ -8,9 +8,10 @@ use afg_game::{Assignment, GOLDEN_RATIO, GeneratorConfig, Instance, RobotId, Tas
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use common::small_instance;
+use common::{into_void, small_instance, small_void_instance};
 
-/// The best welfare over all M^N assignments that respect capacities.
+/// The best welfare over all M^N assignments that respect capacities ((M + 1)^N where
+/// the instance allows the void task).
 fn brute_force(inst: &Instance) -> f64 {
     brute_force_completion(
         inst,
@@ -21,7 +22,13 @@ fn brute_force(inst: &Instance) -> f64 {
 /// The best welfare over all complete assignments that respect capacities and keep
 /// the robots assigned in `partial` where they are.
 fn brute_force_completion(inst: &Instance, partial: &Assignment) -> f64 {
+    brute_force_fixing(inst, partial, None)
+}
+
+/// [`brute_force_completion`] with robot `out`, if any, in the void.
+fn brute_force_fixing(inst: &Instance, partial: &Assignment, out: Option<RobotId>) -> f64 {
     let (n, m) = (inst.num_robots(), inst.num_tasks());
+    let places = m + usize::from(inst.allows_void());
     let mut best = f64::NEG_INFINITY;
     let mut code = vec![0usize; n];
     'outer: loop {
@@ -29,9 +36,13 @@ fn brute_force_completion(inst: &Instance, partial: &Assignment) -> f64 {
             .iter()
             .enumerate()
             .map(|(i, &j)| {
-                partial
-                    .task_of(RobotId(i as u32))
-                    .or(Some(TaskId(j as u32)))
+                let robot = RobotId(i as u32);
+                let place = (j < m).then_some(TaskId(j as u32));
+                if Some(robot) == out {
+                    None
+                } else {
+                    partial.task_of(robot).or(place)
+                }
             })
             .collect();
         if let Ok(a) = Assignment::from_tasks(inst, tasks) {
@@ -39,7 +50,7 @@ fn brute_force_completion(inst: &Instance, partial: &Assignment) -> f64 {
         }
         for digit in code.iter_mut() {
             *digit += 1;
-            if *digit < m {
+            if *digit < places {
                 continue 'outer;
             }
             *digit = 0;
@@ -91,7 +102,8 @@ fn completion_equals_brute_force_with_fixed_prefixes() {
     }
 }
 
-/// A random prefix of robots 0..k on random tasks with room, as in the MDP.
+/// A random prefix of robots 0..k on random tasks with room, as in the MDP (where every
+/// task is full, in GRAPE's game, the robot stays free).
 fn random_prefix(rng: &mut ChaCha8Rng, inst: &Instance, k: usize) -> Assignment {
     let mut partial = Assignment::unassigned(inst.num_robots(), inst.num_tasks());
     for i in 0..k {
@@ -100,7 +112,9 @@ fn random_prefix(rng: &mut ChaCha8Rng, inst: &Instance, k: usize) -> Assignment 
             .task_ids()
             .filter(|&j| partial.has_room(inst, robot, j))
             .collect();
-        partial.set(robot, Some(open[rng.random_range(0..open.len())]));
+        if !open.is_empty() {
+            partial.set(robot, Some(open[rng.random_range(0..open.len())]));
+        }
     }
     partial
 }
@@ -361,4 +375,131 @@ fn optimum_from_prices_is_deterministic() {
     let (b, q) = one.install(|| Optimum.with_prices(&inst));
     assert_eq!(a, b);
     assert_eq!(p, q);
+}
+
+/// GRAPE's game against brute force over the (M + 1)^N assignments: the optimum (from
+/// prices and robot by robot), its certificate, the completions and the action values
+/// with the void as one more action; and the void is used.
+#[test]
+fn optimum_with_the_void_equals_brute_force() {
+    let mut rng = ChaCha8Rng::seed_from_u64(2030);
+    let close = |a: f64, b: f64| (a - b).abs() < 1e-9 * b.abs().max(1.0);
+    let mut stayed_out = 0;
+    for case in 0..800 {
+        let inst = small_void_instance(&mut rng, case);
+        let (n, m) = (inst.num_robots(), inst.num_tasks());
+        let best = brute_force(&inst);
+        let (opt, prices) = Optimum.with_prices(&inst);
+        assert!(
+            close(inst.welfare(&opt), best),
+            "case {case}: {} vs {best}",
+            inst.welfare(&opt)
+        );
+        verify_optimal(&inst, &opt, &prices).unwrap();
+        let empty = Assignment::unassigned(n, m);
+        let reference = Optimum.complete(&inst, &empty).unwrap();
+        assert!(
+            close(inst.welfare(&reference), best),
+            "case {case}: reference"
+        );
+        stayed_out += usize::from(opt.num_assigned() < n);
+        // Robots 0..t fixed on random tasks (none stays out: unassigned is free).
+        let t = rng.random_range(0..n);
+        let partial = random_prefix(&mut rng, &inst, t);
+        let done = Optimum.complete(&inst, &partial).unwrap();
+        assert!(close(
+            inst.welfare(&done),
+            brute_force_completion(&inst, &partial)
+        ));
+        let actor = RobotId(t as u32);
+        let values = Optimum.action_values(&inst, &partial, actor).unwrap();
+        assert_eq!(values.len(), m + 1);
+        for (a, got) in values.iter().enumerate() {
+            let want = if a == m {
+                Some(brute_force_fixing(&inst, &partial, Some(actor)))
+            } else {
+                let j = TaskId(a as u32);
+                partial.has_room(&inst, actor, j).then(|| {
+                    let mut forced = partial.clone();
+                    forced.set(actor, Some(j));
+                    brute_force_completion(&inst, &forced)
+                })
+            };
+            match (*got, want) {
+                (Some(got), Some(want)) => {
+                    assert!(close(got, want), "case {case}, action {a}: {got} vs {want}")
+                }
+                (got, want) => assert_eq!(got, want, "case {case}, action {a}"),
+            }
+        }
+    }
+    assert!(
+        stayed_out > 200,
+        "the void was used in {stayed_out} cases only"
+    );
+}
+
+/// Weak duality in GRAPE's game: any assignment (robots out included) and any prices
+/// give a bound at least the brute-forced optimum; zero prices start the solver from
+/// the nearest places and still reach it.
+#[test]
+fn certificates_with_the_void_bound_the_optimum() {
+    let mut rng = ChaCha8Rng::seed_from_u64(2031);
+    let mut rejected = 0;
+    for case in 0..400 {
+        let inst = small_void_instance(&mut rng, case);
+        let (n, m) = (inst.num_robots(), inst.num_tasks());
+        let best = brute_force(&inst);
+        let tol = 1e-9 * best.abs().max(1.0);
+        let (cold, prices) = Optimum.with_prices_from(&inst, &vec![0.0; m]).unwrap();
+        assert!((inst.welfare(&cold) - best).abs() <= tol, "case {case}");
+        verify_optimal(&inst, &cold, &prices).unwrap();
+        let tasks = (0..n)
+            .map(|_| {
+                let j = rng.random_range(0..=m as u32);
+                (j < m as u32).then_some(TaskId(j))
+            })
+            .collect();
+        let Ok(any) = Assignment::from_tasks(&inst, tasks) else {
+            continue;
+        };
+        let shaken: Vec<f64> = prices
+            .iter()
+            .map(|p| p + rng.random_range(-1.0..1.0))
+            .collect();
+        match verify_optimal(&inst, &any, &shaken) {
+            Ok(proof) => assert!(
+                proof.welfare >= best - tol,
+                "case {case}: accepted below OPT"
+            ),
+            Err(AllocError::NotOptimal { upper_bound, .. }) => {
+                assert!(upper_bound >= best - tol, "case {case}: bound below OPT");
+                rejected += 1;
+            }
+            Err(e) => panic!("case {case}: {e}"),
+        }
+    }
+    assert!(rejected > 100, "only {rejected} rejections");
+}
+
+/// In GRAPE's game the optimum from prices (subsample levels from N = 2 048 on) reaches
+/// the robot by robot reference, and its prices prove it.
+#[test]
+fn optimum_with_the_void_across_levels() {
+    let mut rng = ChaCha8Rng::seed_from_u64(32);
+    for case in 0..16 {
+        let n = rng.random_range(300..=4_000);
+        let m = rng.random_range(1..=24);
+        let paper = scaled_instance(&mut rng, case, n, m);
+        let inst = into_void(&mut rng, case, &paper);
+        let (opt, prices) = Optimum.with_prices(&inst);
+        let empty = Assignment::unassigned(n, m);
+        let reference = inst.welfare(&Optimum.complete(&inst, &empty).unwrap());
+        let got = inst.welfare(&opt);
+        assert!(
+            (got - reference).abs() <= 1e-9 * reference.abs().max(1.0),
+            "case {case} (N = {n}, M = {m}): {got} vs reference {reference}"
+        );
+        verify_optimal(&inst, &opt, &prices).unwrap();
+    }
 }

@@ -2,6 +2,8 @@
 //! every run repeats per seed, and whatever the network does, the survivors end on
 //! one stable partition that places no crashed robot.
 
+mod common;
+
 use afg_baseline::{
     AllocError, Allocator, DecentralisedDa, Failure, Network, Optimum, Swarm, SwarmReport,
 };
@@ -446,4 +448,46 @@ fn the_auction_repeats_per_seed_and_refuses_a_bad_increment() {
             .unwrap_err();
         assert!(err.to_string().contains("increment"), "{err}");
     }
+}
+
+/// GRAPE's game on every network: GRAPE's survivors end on one partition that is stable
+/// with the void move (on the perfect network, decentralised GRAPE's), the auction's
+/// within 2N·ε of the void optimum; and robots stay out.
+#[test]
+fn the_swarm_plays_grapes_game() {
+    let (mut rng, epsilon, mut out) = (ChaCha8Rng::seed_from_u64(34), 1e-3, 0);
+    for (idx, paper) in instances(10, 80, 35).iter().enumerate() {
+        let inst = common::into_void(&mut rng, idx, paper);
+        let pref = [Preference::Selfish, Preference::Balanced][idx % 2];
+        let seed = idx as u64;
+        let plain = DecentralisedDa::new(pref, seed).run(&inst).unwrap();
+        let perfect = Swarm::grape(pref, Network::default(), seed)
+            .run(&inst)
+            .unwrap();
+        assert_eq!(
+            perfect.assignment.as_ref(),
+            Some(&plain.allocation.assignment)
+        );
+        for (name, network) in networks() {
+            let why = format!("#{idx} N={} {name}", inst.num_robots());
+            let grape = Swarm::grape(pref, network.clone(), seed)
+                .run(&inst)
+                .unwrap();
+            assert!(grape.converged && grape.stable, "{why}");
+            assert_eq!(grape.agreeing, 1.0, "{why}");
+            let auction = Swarm::auction(epsilon, network, seed).run(&inst).unwrap();
+            assert!(auction.converged, "{why}");
+            assert_eq!(auction.agreeing, 1.0, "{why}");
+            let bound = 2.0 * auction.survivors as f64 * epsilon;
+            assert!(
+                auction.welfare >= auction.opt_welfare - bound - 1e-9,
+                "{why}"
+            );
+            for report in [&grape, &auction] {
+                let a = report.assignment.as_ref().unwrap();
+                out += report.survivors - a.num_assigned();
+            }
+        }
+    }
+    assert!(out > 0, "nobody stayed out");
 }

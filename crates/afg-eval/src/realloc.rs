@@ -150,7 +150,7 @@ pub fn after_removal(
         .filter(|(i, _)| !left.contains(&RobotId(*i as u32)))
         .map(|(_, p)| *p)
         .collect();
-    let now = Instance::new(robots, old.tasks().to_vec(), old.beta())?;
+    let now = old.with_robots(robots)?;
     let previous = PreviousAssignment {
         tasks: opt.tasks().to_vec(),
         left_robots: left,

@@ -224,6 +224,25 @@ impl Instance {
         })
     }
 
+    /// The same game — tasks, β and the void option — with other robots (survivors,
+    /// newcomers, robots that have moved). The generator record is not kept.
+    ///
+    /// # Errors
+    /// As [`Instance::new`] (or [`Instance::with_void`]) for the new robots.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::{Instance, Point, Task};
+    /// let task = Task { position: Point::new(0.0, 0.0), reward: 1.0, eps: 2.0, capacity: Some(1) };
+    /// let inst = Instance::with_void(vec![Point::new(1.0, 0.0)], vec![task], 1.0)?;
+    /// let more = inst.with_robots(vec![Point::new(1.0, 0.0), Point::new(2.0, 0.0)])?;
+    /// assert!(more.allows_void() && more.num_robots() == 2);
+    /// # Ok::<(), afg_game::GameError>(())
+    /// ```
+    pub fn with_robots(&self, robots: Vec<Point>) -> Result<Self, GameError> {
+        Self::build(robots, self.tasks.clone(), self.beta, self.allow_void)
+    }
+
     /// Records the generator parameters that produced this instance.
     pub fn with_generator(mut self, generator: GeneratorConfig) -> Self {
         self.generator = Some(generator);

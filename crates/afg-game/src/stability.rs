@@ -134,14 +134,43 @@ impl Instance {
         robot: RobotId,
         pref: Preference,
     ) -> Option<Option<TaskId>> {
-        let current = assignment.task_of(robot);
-        if let Some(task) = self.best_response(assignment, robot, pref) {
+        self.best_move_given(robot, assignment.task_of(robot), assignment.sizes(), pref)
+    }
+
+    /// [`Instance::best_move`] from the task `robot` is in (`current`) and the
+    /// coalition sizes, as [`Instance::best_response_given`].
+    ///
+    /// # Panics
+    /// If `sizes` has fewer than M entries.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::{Instance, Point, Preference, RobotId, Task, TaskId};
+    /// let far = Task { position: Point::new(5.0, 0.0), reward: 1.0, eps: 2.0, capacity: None };
+    /// let grape = Instance::with_void(vec![Point::new(0.0, 0.0)], vec![far], 1.0)?;
+    /// let out = grape.best_move_given(RobotId(0), Some(TaskId(0)), &[1], Preference::Selfish);
+    /// assert_eq!(out, Some(None));
+    /// // Already out, it stays out.
+    /// assert_eq!(grape.best_move_given(RobotId(0), None, &[0], Preference::Selfish), None);
+    /// # Ok::<(), afg_game::GameError>(())
+    /// ```
+    pub fn best_move_given(
+        &self,
+        robot: RobotId,
+        current: Option<TaskId>,
+        sizes: &[usize],
+        pref: Preference,
+    ) -> Option<Option<TaskId>> {
+        let others = |task: TaskId| sizes[task.index()] - usize::from(current == Some(task));
+        if let Some(task) = self.best_response_given(robot, current, sizes, pref) {
             // The task beats where the robot is; the void beats it only when it scores < 0.
-            let s = self.score(assignment, robot, task, pref);
+            let s = self.score_among(robot, task, others(task), pref);
             let void_better = self.allows_void() && current.is_some() && s < 0.0;
             return Some(if void_better { None } else { Some(task) });
         }
-        let here = self.current_score(assignment, robot, pref);
+        let here = current.map_or(self.outside_score(), |c| {
+            self.score_among(robot, c, others(c), pref)
+        });
         (self.allows_void() && current.is_some() && strictly_better(0.0, here)).then_some(None)
     }
 
@@ -218,8 +247,9 @@ impl Instance {
         self.best_move(assignment, robot, pref).is_none()
     }
 
-    /// Whether no robot strictly prefers another task (Def. 3). Unassigned robots
-    /// always prefer a task, so only a complete assignment can be stable.
+    /// Whether no robot strictly prefers another task (Def. 3), or the void where the
+    /// instance allows it. In the paper's game unassigned robots always prefer a task,
+    /// so only a complete assignment can be stable.
     pub fn is_stable(&self, assignment: &Assignment, pref: Preference) -> bool {
         self.robot_ids()
             .all(|i| self.is_satisfied(assignment, i, pref))

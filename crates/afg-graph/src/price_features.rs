@@ -55,6 +55,8 @@ pub struct PriceState<'a> {
     demand_nearest: Vec<f64>,
     /// Soft demands of robots not yet placed: `[2, M]`.
     demand_soft: Vec<f64>,
+    /// Per robot, whether it was placed or left out.
+    decided: Vec<bool>,
     unassigned: usize,
     eps_total: f64,
 }
@@ -125,6 +127,7 @@ impl<'a> PriceState<'a> {
             soft,
             demand_nearest,
             demand_soft,
+            decided: vec![false; n],
             unassigned: n,
             eps_total: instance.tasks().iter().map(|t| t.eps).sum(),
         }
@@ -169,17 +172,47 @@ impl<'a> PriceState<'a> {
         self.unit
     }
 
-    /// Places `robot` (not yet placed) in `task`.
+    /// Places `robot` (not yet placed or left out) in `task`.
     ///
     /// # Panics
-    /// If `robot` is already placed.
+    /// If `robot` is already placed or left out.
     pub fn assign(&mut self, robot: RobotId, task: TaskId) {
+        self.decide(robot);
+        self.assignment.set(robot, Some(task));
+    }
+
+    /// Leaves `robot` (not yet placed or left out) in the void task, where the
+    /// instance allows it: it no longer counts among the robots still to place.
+    ///
+    /// # Panics
+    /// If `robot` is already placed or left out.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::{Instance, Point, RobotId, Task};
+    /// use afg_graph::{PriceState, TASK_FEATURES};
+    /// let task = Task { position: Point::new(0.0, 0.0), reward: 1.0, eps: 2.0, capacity: None };
+    /// let robots = vec![Point::new(1.0, 0.0), Point::new(9.0, 0.0)];
+    /// let inst = Instance::with_void(robots, vec![task], 1.0)?;
+    /// let mut state = PriceState::new(&inst);
+    /// state.leave_out(RobotId(1));
+    /// let mut f = vec![0.0; TASK_FEATURES];
+    /// state.features(&mut f);
+    /// assert_eq!(f[3], 0.5); // one robot left to place, over Σ eps = 2
+    /// assert_eq!(state.assignment().num_assigned(), 0);
+    /// # Ok::<(), afg_game::GameError>(())
+    /// ```
+    pub fn leave_out(&mut self, robot: RobotId) {
+        self.decide(robot);
+    }
+
+    /// Takes `robot` out of the robots still to place and their demands.
+    fn decide(&mut self, robot: RobotId) {
         assert!(
-            self.assignment.task_of(robot).is_none(),
-            "robot {robot} is already placed"
+            !std::mem::replace(&mut self.decided[robot.index()], true),
+            "robot {robot} is already placed or left out"
         );
         let m = self.instance.num_tasks();
-        self.assignment.set(robot, Some(task));
         self.unassigned -= 1;
         self.demand_nearest[self.nearest[robot.index()] as usize] -= 1.0;
         let soft = &self.soft[robot.index() * 2 * m..(robot.index() + 1) * 2 * m];

@@ -120,17 +120,29 @@ def test_score_lists_exactly_the_robots_that_would_move() -> None:
         card.moves("kind")
 
 
-def test_grapes_game_lets_robots_stay_out_and_methods_not_ready_say_so() -> None:
+def test_grapes_game_lets_robots_stay_out() -> None:
     inst = afg.generate(robots=6, tasks=2, seed=3, allow_void=True)
     assert inst.allow_void and not afg.generate(robots=6, tasks=2, seed=3).allow_void
     again = afg.Instance.parse(inst.to_json())
     assert again.allow_void
     tasks = np.array([0, 1, -1, -1, 0, 1])
-    # Scoring needs the exact optimum of this game, which is not there yet: a clear error.
-    with pytest.raises(ValueError, match="paper's game only"):
-        afg.score(inst, tasks)
-    with pytest.raises(ValueError, match="paper's game only"):
-        afg.solve(inst, method="greedy")
+    card = afg.score(inst, tasks)
+    assert card.unassigned == 2 and card.percent_of_opt <= 100.0 + 1e-9
+    opt = afg.solve(inst, method="opt")
+    assert afg.score(inst, opt.tasks).percent_of_opt == pytest.approx(100.0)
+    for method in ["da", "da-balanced", "greedy", "nearest", "random"]:
+        result = afg.solve(inst, method=method)
+        assert result.welfare <= opt.welfare + 1e-9
+        assert set(result.tasks.tolist()) <= {-1, 0, 1}
+    # Far-away robots: the optimum leaves some out.
+    far = afg.Instance(
+        robots=np.array([[0.0, 0.0], [50.0, 0.0]]),
+        tasks=np.array([[0.0, 0.0]]),
+        rewards=np.array([1.0]),
+        eps=np.array([2.0]),
+        allow_void=True,
+    )
+    assert afg.solve(far, method="opt").tasks.tolist() == [0, -1]
     assert inst.welfare(tasks) == pytest.approx(
         afg.generate(robots=6, tasks=2, seed=3).welfare(tasks)
     )

@@ -19,8 +19,9 @@ use super::movers::{Movers, NOWHERE};
 
 pub(super) struct Solver<'a> {
     inst: &'a Instance,
+    /// Nodes: the M tasks, then the void where the instance allows it.
     m: usize,
-    /// `costs[i * m + j] = beta d(i, j)`.
+    /// `costs[i * m + j] = beta d(i, j)`; 0 at the void.
     costs: Vec<f64>,
     pub assignment: Assignment,
     /// The task of every robot the solver placed; `NOWHERE` for fixed and free robots.
@@ -40,10 +41,12 @@ pub(super) struct Solver<'a> {
 impl<'a> Solver<'a> {
     /// A solver holding `partial` (robots assigned there are fixed: never in a heap).
     fn new(inst: &'a Instance, partial: Assignment) -> Self {
-        let (n, m) = (inst.num_robots(), inst.num_tasks());
+        let n = inst.num_robots();
+        let m = inst.num_tasks() + usize::from(inst.allows_void());
+        let void = inst.allows_void().then_some(0.0);
         let costs: Vec<f64> = inst
             .robot_ids()
-            .flat_map(|i| inst.task_ids().map(move |j| inst.cost(i, j)))
+            .flat_map(|i| inst.task_ids().map(move |j| inst.cost(i, j)).chain(void))
             .collect();
         let placed = vec![NOWHERE; n];
         Solver {
@@ -65,10 +68,14 @@ impl<'a> Solver<'a> {
         self.costs[robot * self.m + task]
     }
 
+    /// The task of node `j`; `None` for the void.
+    fn task(&self, j: usize) -> Option<TaskId> {
+        (j < self.inst.num_tasks()).then_some(TaskId(j as u32))
+    }
+
     /// Puts `robot` in `task` (moving it if the solver placed it before).
     fn place(&mut self, robot: usize, task: usize) {
-        self.assignment
-            .set(RobotId(robot as u32), Some(TaskId(task as u32)));
+        self.assignment.set(RobotId(robot as u32), self.task(task));
         let from = std::mem::replace(&mut self.placed[robot], task as u32);
         if from != NOWHERE {
             let (placed, costs) = (&self.placed, &self.costs);
@@ -122,21 +129,22 @@ impl<'a> Solver<'a> {
     /// cost minus the member's marginal value), the change in `−welfare` of the
     /// augmentation.
     pub fn best_end(&self) -> (usize, f64) {
-        let total = |j: usize| {
-            let task = TaskId(j as u32);
-            self.dist[j] + self.potential[j]
-                - self
-                    .inst
+        // The void's next member is worth 0.
+        let next = |j: usize| {
+            self.task(j).map_or(0.0, |task| {
+                self.inst
                     .marginal_value(task, self.assignment.size(task) + 1)
+            })
         };
+        let total = |j: usize| self.dist[j] + self.potential[j] - next(j);
         (0..self.m)
             .filter(|&j| {
-                let task = TaskId(j as u32);
-                self.assignment.size(task) < self.inst.capacity(task)
+                self.task(j)
+                    .is_none_or(|task| self.assignment.size(task) < self.inst.capacity(task))
             })
             .map(|j| (j, total(j)))
             .min_by(|a, b| a.1.total_cmp(&b.1))
-            .expect("capacities hold every robot (checked by Instance::new)")
+            .expect("capacities or the void hold every robot (checked by Instance::new)")
     }
 
     /// Adds `robot` along a shortest augmenting path and updates the potentials.

@@ -10,6 +10,11 @@
 //! much welfare any other assignment could add. It is zero exactly when every robot
 //! is at a minimum of `c_ij − π_j` and every task's count is consistent with its
 //! marginal values (complementary slackness).
+//!
+//! Where the instance allows the void task, it is one more place with cost 0 and price
+//! 0 (so μ = 0: the prices have no free offset), every member worth 0, and room for all:
+//! a robot's term is `max(max_j (π_j − c_ij), 0)`, the void adds no task term, and an
+//! assignment that leaves robots out is complete.
 
 use afg_game::{Assignment, Instance, TaskId};
 
@@ -38,12 +43,12 @@ impl Certificate {
 
 /// Checks in O(N M) that `prices` prove `assignment` optimal for `instance`, and
 /// returns the bound they give. Prices may carry any common offset (the best one is
-/// used), so [`Optimum::with_prices`](super::Optimum::with_prices) or any other
+/// used; none where the instance allows the void task, whose price is 0), so [`Optimum::with_prices`](super::Optimum::with_prices) or any other
 /// solver's duals are accepted.
 ///
 /// # Errors
 /// [`AllocError::InvalidParameter`] if the assignment does not fit the instance, is
-/// incomplete or above a capacity, or if `prices` are not M finite numbers;
+/// incomplete (in the paper's game) or above a capacity, or if `prices` are not M finite numbers;
 /// [`AllocError::NotOptimal`] if the duality gap is above 1e-9 of the welfare's scale
 /// (the task values plus the travel costs).
 ///
@@ -72,17 +77,20 @@ pub fn verify_optimal(
 ) -> Result<Certificate, AllocError> {
     check_inputs(instance, assignment, prices)?;
     let n = instance.num_robots();
+    // The void's reduced cost, 0, where it is a place; above every task's otherwise.
+    let outside = if instance.allows_void() {
+        0.0
+    } else {
+        f64::INFINITY
+    };
     let mut robot_gap = 0.0;
     let mut costs = 0.0;
     for i in instance.robot_ids() {
-        let own = assignment.task_of(i).expect("checked complete");
         let reduced = |j: TaskId| instance.cost(i, j) - prices[j.index()];
-        let cheapest = instance
-            .task_ids()
-            .map(reduced)
-            .fold(f64::INFINITY, f64::min);
-        robot_gap += reduced(own) - cheapest;
-        costs += instance.cost(i, own);
+        let cheapest = instance.task_ids().map(reduced).fold(outside, f64::min);
+        let own = assignment.task_of(i);
+        robot_gap += own.map_or(outside, reduced) - cheapest;
+        costs += own.map_or(0.0, |j| instance.cost(i, j));
     }
     let offset = offset(instance, assignment, prices);
     let mut task_gap = 0.0;
@@ -126,7 +134,7 @@ fn check_inputs(
     instance.check(assignment)?;
     if let Some(i) = instance
         .robot_ids()
-        .find(|&i| assignment.task_of(i).is_none())
+        .find(|&i| !instance.allows_void() && assignment.task_of(i).is_none())
     {
         return Err(AllocError::InvalidParameter(format!(
             "robot {i} is unassigned: only complete assignments can be optimal"
@@ -138,8 +146,12 @@ fn check_inputs(
 
 /// The offset μ that zeroes every task's term when the counts are consistent with the
 /// prices: the largest `π_j − (F_j(n_j) − F_j(n_j − 1))` over tasks with members.
-/// Any offset gives a valid bound; this one is tight at an optimum.
+/// Any offset gives a valid bound; this one is tight at an optimum. Where the instance
+/// allows the void, its price 0 fixes the offset at 0.
 fn offset(instance: &Instance, assignment: &Assignment, prices: &[f64]) -> f64 {
+    if instance.allows_void() {
+        return 0.0;
+    }
     instance
         .task_ids()
         .filter(|&j| assignment.size(j) > 0)

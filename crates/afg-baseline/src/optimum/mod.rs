@@ -58,6 +58,8 @@ pub struct Optimum;
 impl Optimum {
     /// The best complete assignment that keeps every robot assigned in `partial` where
     /// it is (its optimal completion). With an empty `partial` this is the optimum.
+    /// Where the instance allows the void task, the robots without a task in `partial`
+    /// are the free ones, and some may stay out.
     ///
     /// # Errors
     /// [`AllocError::InvalidParameter`] if `partial` has another N or M than the
@@ -82,7 +84,6 @@ impl Optimum {
         instance: &Instance,
         partial: &Assignment,
     ) -> Result<Assignment, AllocError> {
-        crate::paper_game_only(instance, self)?;
         check_partial(instance, partial)?;
         Ok(augmenting::solved(instance, partial.clone(), None).assignment)
     }
@@ -93,6 +94,10 @@ impl Optimum {
     /// `F_j(n_j + 1) − F_j(n_j) ≤ π_j ≤ F_j(n_j) − F_j(n_j − 1)` (LP duality for the
     /// min-cost flow). Robots whose minimum is unique sit exactly where argmin sends
     /// them; ties are settled by the counts.
+    ///
+    /// Where the instance allows the void task, it is one more place at cost 0 and
+    /// price 0: robots whose every `β d(i, j) − π_j` is above 0 stay out. The prices
+    /// then have no free offset.
     ///
     /// # Examples
     /// ```
@@ -110,11 +115,15 @@ impl Optimum {
     /// ```
     pub fn with_prices(&self, instance: &Instance) -> (Assignment, Vec<f64>) {
         let solution = transport::solve(instance);
-        (assignment_of(instance, &solution.task_of), solution.prices)
+        (
+            assignment_of(instance, &solution.task_of),
+            task_prices(instance, solution.prices),
+        )
     }
 
-    /// [`Optimum::with_prices`] started from `prices` (one per task, any common offset)
-    /// instead of from a subsample's: every robot starts at its cheapest task under
+    /// [`Optimum::with_prices`] started from `prices` (one per task, any common offset;
+    /// where the instance allows the void, measured from the void's 0) instead of from
+    /// a subsample's: every robot starts at its cheapest task under
     /// them and only what is out of balance is routed. Good prices — a previous
     /// optimum's after robots left or joined, or a learned model's — leave little to
     /// route; zero prices start from the nearest-task assignment.
@@ -140,12 +149,21 @@ impl Optimum {
         prices: &[f64],
     ) -> Result<(Assignment, Vec<f64>), AllocError> {
         check_prices(instance, prices)?;
-        let solution = transport::solve_from(instance, prices);
-        Ok((assignment_of(instance, &solution.task_of), solution.prices))
+        let mut columns = prices.to_vec();
+        if instance.allows_void() {
+            columns.push(0.0);
+        }
+        let solution = transport::solve_from(instance, &columns);
+        Ok((
+            assignment_of(instance, &solution.task_of),
+            task_prices(instance, solution.prices),
+        ))
     }
 
     /// For every task a, the best final welfare with the robots assigned in `partial`
     /// fixed and `actor` (unassigned there) on a; `None` where a has no room for it.
+    /// Where the instance allows the void task, one more entry last: the actor staying
+    /// out.
     /// The same numbers as one [`Optimum::complete`] per task, from one completion:
     /// the others are completed without the actor, then the actor on a is one more
     /// unit entering at task a, and (by the successive-shortest-path argument) the
@@ -190,19 +208,30 @@ impl Optimum {
         }
         let mut s = augmenting::solved(instance, partial.clone(), Some(actor.index()));
         let others = instance.welfare(&s.assignment);
-        Ok(instance
-            .task_ids()
+        let m = instance.num_tasks();
+        let void = instance.allows_void().then_some(m);
+        Ok((0..m)
+            .chain(void)
             .map(|a| {
-                if !partial.has_room(instance, actor, a) {
+                if a < m && !partial.has_room(instance, actor, TaskId(a as u32)) {
                     return None;
                 }
                 s.dist.fill(f64::INFINITY);
-                s.dist[a.index()] = s.cost(actor.index(), a.index());
+                s.dist[a] = s.cost(actor.index(), a);
                 s.shortest_paths();
                 Some(others - s.best_end().1)
             })
             .collect())
     }
+}
+
+/// The tasks' prices among a solver's column prices (all measured from the sink's
+/// potential). Where the instance allows the void, its price is that potential
+/// whenever a robot stays out, and at or above it otherwise; counting the void at 0
+/// proves the optimum either way: no robot gains by leaving.
+fn task_prices(instance: &Instance, mut prices: Vec<f64>) -> Vec<f64> {
+    prices.truncate(instance.num_tasks());
+    prices
 }
 
 /// Checks that `prices` are one finite number per task.
@@ -248,7 +277,6 @@ impl Allocator for Optimum {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
-        crate::paper_game_only(instance, self)?;
         let (solution, wall_time) = timed(|| transport::solve(instance));
         Ok(Allocation {
             assignment: assignment_of(instance, &solution.task_of),
@@ -261,8 +289,14 @@ impl Allocator for Optimum {
     }
 }
 
-/// The assignment of a solver's task indices.
+/// The assignment of a solver's columns (M: the void).
 fn assignment_of(instance: &Instance, task_of: &[u32]) -> Assignment {
-    let tasks = task_of.iter().map(|&j| Some(TaskId(j))).collect();
+    let m = instance.num_tasks();
+    let tasks = task_of
+        .iter()
+        .map(|&j| (j as usize) < m)
+        .zip(task_of)
+        .map(|(task, &j)| task.then_some(TaskId(j)))
+        .collect();
     Assignment::from_tasks(instance, tasks).expect("the solver respects capacities")
 }

@@ -41,9 +41,10 @@ const BASE_ROBOTS: usize = 256;
 /// Cost matrices with at least this many entries are filled on all cores.
 const PARALLEL_ENTRIES: usize = 1 << 16;
 
-/// An optimal assignment (task index per robot), its prices (offset so that the sink's
-/// potential is 0: each price lies between its task's last and next marginal value),
-/// and the units routed at the finest level.
+/// An optimal assignment (column per robot: a task index, or M for the void), its
+/// prices (one per column, offset so that the sink's potential is 0: each price lies
+/// between its column's last and next marginal value), and the units routed at the
+/// finest level.
 pub(super) struct Solution {
     pub task_of: Vec<u32>,
     pub prices: Vec<f64>,
@@ -56,8 +57,8 @@ pub(super) fn solve(inst: &Instance) -> Solution {
     Level::new(inst, 1).solve(warm.as_deref())
 }
 
-/// Solves `inst` exactly from `prices` (one per task, any common offset), without
-/// subsample levels.
+/// Solves `inst` exactly from `prices` (one per column: the tasks', then the void's
+/// where the instance allows it; any common offset), without subsample levels.
 pub(super) fn solve_from(inst: &Instance, prices: &[f64]) -> Solution {
     Level::new(inst, 1).solve(Some(prices))
 }
@@ -74,24 +75,30 @@ fn coarse_prices(inst: &Instance, stride: usize) -> Option<Vec<f64>> {
 
 /// The problem on every `stride`-th robot, each standing for `stride` robots: task j's
 /// k-th member is worth `(F_j(k s) − F_j((k − 1) s)) / s` and its capacity is
-/// `⌈cap_j / s⌉` (at most the robots there are).
+/// `⌈cap_j / s⌉` (at most the robots there are). Its columns are the tasks, then the
+/// void where the instance allows it (cost 0, every member worth 0, room for all).
 struct Level<'a> {
     inst: &'a Instance,
     stride: usize,
     n: usize,
+    /// Columns: M tasks, plus one for the void.
     m: usize,
-    /// Row-major `n × m` travel costs `β d(i, j)`.
+    /// Row-major `n × m` travel costs `β d(i, j)`; 0 in the void's column.
     costs: Vec<f64>,
     capacity: Vec<usize>,
 }
 
 impl<'a> Level<'a> {
     fn new(inst: &'a Instance, stride: usize) -> Self {
-        let (n, m) = (inst.num_robots().div_ceil(stride), inst.num_tasks());
-        let capacity = inst
+        let n = inst.num_robots().div_ceil(stride);
+        let mut capacity: Vec<usize> = inst
             .task_ids()
             .map(|j| inst.capacity(j).div_ceil(stride).min(n))
             .collect();
+        if inst.allows_void() {
+            capacity.push(n);
+        }
+        let m = capacity.len();
         Level {
             inst,
             stride,
@@ -104,6 +111,9 @@ impl<'a> Level<'a> {
 
     /// The value of task j's k-th member (k ≥ 1) at this level.
     fn marginal(&self, j: usize, k: usize) -> f64 {
+        if j == self.inst.num_tasks() {
+            return 0.0; // the void
+        }
         let task = TaskId(j as u32);
         if self.stride == 1 {
             return self.inst.marginal_value(task, k);
@@ -175,19 +185,18 @@ impl<'a> Level<'a> {
     }
 }
 
-/// The row-major cost matrix of every `stride`-th robot, on all cores when large.
+/// The row-major cost matrix of every `stride`-th robot (with the void's column of
+/// zeros where the instance allows it), on all cores when large.
 fn cost_matrix(inst: &Instance, stride: usize) -> Vec<f64> {
-    let (n, m, beta) = (
-        inst.num_robots().div_ceil(stride),
-        inst.num_tasks(),
-        inst.beta(),
-    );
+    let (n, beta) = (inst.num_robots().div_ceil(stride), inst.beta());
+    let m = inst.num_tasks() + usize::from(inst.allows_void());
     let tasks: Vec<Point> = inst.tasks().iter().map(|t| t.position).collect();
     let robots = inst.robots();
     let mut costs = vec![0.0; n * m];
     // The same arithmetic as `Instance::cost`, with the task positions contiguous.
     let fill = |(t, row): (usize, &mut [f64])| {
         let robot = robots[t * stride];
+        // The void's column, if any, stays 0.
         for (c, &task) in row.iter_mut().zip(&tasks) {
             *c = beta * robot.distance(task);
         }

@@ -22,6 +22,11 @@
 //! best one, and the partition it gives (each robot at its place's task, places filled
 //! from k = 1 up, worth at least the matching) as well.
 //!
+//! Where the instance allows the void task, it is one more place for everyone: worth
+//! 0, at price 0, never filled and never raised, so it needs no record. A robot for
+//! which it is (within ε of) the best choice holds it and bids no more: prices only
+//! rise, so no other place can become worth more to it (until a restart).
+//!
 //! A crashed robot leaves a place whose price was set with it in the market: keeping
 //! it, or freeing it at any price, breaks that argument (a late crash left 0.05 % of
 //! the optimum on the table in our tests). So those who notice a crash restart the
@@ -89,6 +94,9 @@ impl Record {
 
 /// A place: (task, index from 0).
 type Place = (u32, u32);
+
+/// The void task's one place, held by every robot that stays out ([`Auction::choose`]).
+const VOID: Place = (u32::MAX, 0);
 
 /// A robot's table in its epoch: per task, the records of places 0..len (later ones
 /// are open).
@@ -232,7 +240,7 @@ impl<'a> Auction<'a> {
         (0..self.tables.len())
             .map(|i| {
                 let place = self.holding[i].filter(|_| self.radio.alive(i as u32));
-                place.map(|(j, _)| TaskId(j))
+                place.filter(|&p| p != VOID).map(|(j, _)| TaskId(j))
             })
             .collect()
     }
@@ -267,15 +275,18 @@ impl<'a> Auction<'a> {
             if self.holding[a as usize].is_none()
                 && let Some((place, price)) = self.choose(a)
             {
+                self.holding[a as usize] = Some(place);
+                acted = true;
+                if place == VOID {
+                    continue; // nothing to tell anyone
+                }
                 let record = Record {
                     epoch: self.tables[a as usize].epoch,
                     price,
                     winner: a,
                 };
                 self.write(a, place, record);
-                self.holding[a as usize] = Some(place);
                 self.bids += 1;
-                acted = true;
             }
         }
         acted
@@ -293,6 +304,8 @@ impl<'a> Auction<'a> {
     /// Robot `a`'s bid by its table: a place within ε of the one worth most to it at
     /// current prices (drawn at random), and the price that leaves it ε below its
     /// second choice (the best place's) or, for another place, ε above the old price.
+    /// [`VOID`] where the instance allows it and it is drawn; `None` only when every
+    /// place is taken and there is no void.
     fn choose(&mut self, a: u32) -> Option<(Place, f64)> {
         let table = &self.tables[a as usize];
         let open = Record::open(table.epoch);
@@ -308,6 +321,9 @@ impl<'a> Auction<'a> {
             for (k, r) in places.iter().copied().chain(first_open).enumerate() {
                 options.push((values[k] - r.price - cost, (j.0, k as u32), r.price));
             }
+        }
+        if self.instance.allows_void() {
+            options.push((0.0, VOID, 0.0));
         }
         let best = options
             .iter()

@@ -311,7 +311,8 @@ impl<'a> Grape<'a> {
     }
 
     /// The change robot `a` makes to its view: remove the crashed robots it noticed that
-    /// its view still places, or else move to its best response.
+    /// its view still places, or else make its best move (to a task, or to the void
+    /// where the instance allows it).
     fn next_view(&mut self, a: u32) -> Option<View> {
         let (robot, view) = (RobotId(a), &self.views[a as usize]);
         let gone: Vec<u32> = self.noticed[a as usize]
@@ -323,10 +324,10 @@ impl<'a> Grape<'a> {
             return Some(view.changed(robot, &gone, None, self.stamps.random()));
         }
         let current = view.tasks[a as usize];
-        let task =
-            self.instance
-                .best_response_given(robot, current, &view.sizes, self.preference)?;
-        Some(view.changed(robot, &[a], Some(task), self.stamps.random()))
+        let place = self
+            .instance
+            .best_move_given(robot, current, &view.sizes, self.preference)?;
+        Some(view.changed(robot, &[a], place, self.stamps.random()))
     }
 
     /// Awake senders broadcast: the messages that can change a neighbour are put in

@@ -293,11 +293,6 @@ impl Swarm {
         instance: &Instance,
         on_round: impl FnMut(u64),
     ) -> Result<SwarmReport, AllocError> {
-        if instance.allows_void() {
-            return Err(AllocError::VoidNotSupported {
-                method: "the swarm".into(),
-            });
-        }
         let limit = self.round_limit(instance.num_robots());
         let (outcome, wall_time) = timed(|| match self.method {
             SwarmMethod::Grape { preference } => {
@@ -364,7 +359,7 @@ fn survivors_game(
     tasks: &[Option<TaskId>],
 ) -> Result<(Instance, Assignment), AllocError> {
     let points: Vec<Point> = survivors.iter().map(|&i| instance.robots()[i]).collect();
-    let sub = Instance::new(points, instance.tasks().to_vec(), instance.beta())?;
+    let sub = instance.with_robots(points)?;
     let kept: Vec<Option<TaskId>> = survivors.iter().map(|&i| tasks[i]).collect();
     Ok((sub, partition_of(&kept, instance.num_tasks())))
 }

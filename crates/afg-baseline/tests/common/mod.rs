@@ -1,6 +1,9 @@
 //! What the allocator tests share: small random instances for brute force.
 
-use afg_game::{GOLDEN_RATIO, GeneratorConfig, Instance};
+// Each test binary uses part of it.
+#![allow(dead_code)]
+
+use afg_game::{GOLDEN_RATIO, GeneratorConfig, Instance, Point, Task};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
@@ -26,4 +29,35 @@ pub fn small_instance(rng: &mut ChaCha8Rng, case: usize) -> Instance {
         cfg = cfg.with_capacity_slack(rng.random_range(1.0..1.5));
     }
     cfg.generate().unwrap()
+}
+
+/// `inst` in GRAPE's game: the same tasks and β, the robots three times as far from
+/// the origin (so some places are worth less than nothing) and, every second case,
+/// capacities that hold only about half the robots.
+pub fn into_void(rng: &mut ChaCha8Rng, case: usize, inst: &Instance) -> Instance {
+    let n = inst.num_robots();
+    let robots = inst
+        .robots()
+        .iter()
+        .map(|p| Point::new(3.0 * p.x, 3.0 * p.y))
+        .collect();
+    let tasks = inst
+        .tasks()
+        .iter()
+        .map(|t| Task {
+            capacity: if case % 2 == 1 {
+                Some(rng.random_range(1..=n.div_ceil(2 * inst.num_tasks()).max(1)))
+            } else {
+                t.capacity
+            },
+            ..*t
+        })
+        .collect();
+    Instance::with_void(robots, tasks, inst.beta()).unwrap()
+}
+
+/// [`small_instance`] in GRAPE's game ([`into_void`]).
+pub fn small_void_instance(rng: &mut ChaCha8Rng, case: usize) -> Instance {
+    let inst = small_instance(rng, case);
+    into_void(rng, case, &inst)
 }

@@ -18,6 +18,11 @@
 //!   pass per task.
 //!
 //! Every input is per task, so the same weights serve any M.
+//!
+//! Where the instance allows the void task (GRAPE's game), staying out is one more
+//! action worth 0 beside every `π_a − β d(t, a)`: a robot stays out when each task's is
+//! below 0. The committed models were trained on the paper's game only (ours, not
+//! retrained for the void).
 
 mod config;
 mod net;
@@ -250,7 +255,8 @@ impl PricePolicy {
     }
 
     /// The task robot `t` takes in `state` with prices `prices`: the best
-    /// `π_a − β d(t, a)` among tasks with room.
+    /// `π_a − β d(t, a)` among tasks with room. `None` when none has room or, where
+    /// the instance allows the void task, when that best is below the void's 0.
     pub(super) fn choose(
         state: &PriceState<'_>,
         robot: RobotId,
@@ -263,7 +269,9 @@ impl PricePolicy {
             q[j.index()] = prices[j.index()] - state.cost(robot, j) as f32;
             mask[j.index()] = state.assignment().has_room(inst, robot, j);
         }
-        masked_argmax(q, mask).map(|j| TaskId(j as u32))
+        let best = masked_argmax(q, mask)?;
+        let out = inst.allows_void() && q[best] < 0.0;
+        (!out).then_some(TaskId(best as u32))
     }
 
     /// The greedy rollout of this policy.
@@ -289,7 +297,7 @@ impl PricePolicy {
                 )
                 .collect();
             for (robot, task) in instance.robot_ids().zip(tasks) {
-                state.assign(robot, task.expect("uncapped tasks take any robot"));
+                Self::place(&mut state, robot, task)?;
             }
             return Ok(state);
         }
@@ -299,13 +307,29 @@ impl PricePolicy {
                 state.features(&mut features);
                 self.mlp.prices_with(&features, &mut prices, &mut scratch);
             }
-            let task =
-                Self::choose(&state, robot, &prices, &mut q, &mut mask).ok_or_else(|| {
-                    AllocError::InvalidParameter(format!("no task has room for robot {robot}"))
-                })?;
-            state.assign(robot, task);
+            let task = Self::choose(&state, robot, &prices, &mut q, &mut mask);
+            Self::place(&mut state, robot, task)?;
         }
         Ok(state)
+    }
+
+    /// Puts `robot` where [`PricePolicy::choose`] sent it: in `task`, or, with `None`,
+    /// in the void where the instance allows it.
+    fn place(
+        state: &mut PriceState<'_>,
+        robot: RobotId,
+        task: Option<TaskId>,
+    ) -> Result<(), AllocError> {
+        match task {
+            Some(task) => state.assign(robot, task),
+            None if state.instance().allows_void() => state.leave_out(robot),
+            None => {
+                return Err(AllocError::InvalidParameter(format!(
+                    "no task has room for robot {robot}"
+                )));
+            }
+        }
+        Ok(())
     }
 }
 
@@ -315,7 +339,6 @@ impl Allocator for PricePolicy {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
-        afg_baseline::paper_game_only(instance, self)?;
         let start = std::time::Instant::now();
         let state = self.rollout(instance)?;
         Ok(Allocation {
