@@ -6,6 +6,7 @@ mod bench;
 mod bench_opt;
 mod crash;
 mod datasets;
+mod grape_fig7;
 mod manifest;
 mod realloc_study;
 mod regret;
@@ -56,6 +57,8 @@ enum Command {
     BenchScale(scale::ScaleArgs),
     /// Robots leave an optimally allocated instance: warm-start reallocation against OPT from scratch.
     ReallocStudy(realloc_study::StudyArgs),
+    /// GRAPE's published Fig. 7 runs (datasets/grape-fig7) beside afg's GRAPE and OPT.
+    GrapeFig7(grape_fig7::GrapeArgs),
     /// Where a trained model loses welfare along its rollouts, against the exact Q*.
     Regret(regret::RegretArgs),
     /// (Re)write manifest.json of finished training runs from their config and log.
@@ -89,6 +92,7 @@ impl Command {
             Command::BenchOpt(args) => bench_opt::run(args),
             Command::BenchScale(args) => scale::run(args),
             Command::ReallocStudy(args) => realloc_study::run(args),
+            Command::GrapeFig7(args) => grape_fig7::run(args),
             Command::Regret(args) => regret::run(args),
             Command::Manifest(args) => manifest::run_manifest(args),
             Command::CrashTest(args) => crash::run(args),

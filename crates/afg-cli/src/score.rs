@@ -16,7 +16,7 @@ pub struct ScoreArgs {
     #[arg(long)]
     input: PathBuf,
     /// The assignments, one JSON document per line in the order of the instances
-    /// (format "afg-assignment": `tasks[i]` is robot i's task, null for none), as
+    /// (format "afg-assignment": `tasks[i]` is robot i's task, -1 for none), as
     /// `afg solve --out` writes them.
     #[arg(long)]
     assignment: PathBuf,

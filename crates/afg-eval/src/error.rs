@@ -42,6 +42,15 @@ pub enum EvalError {
         /// The robot.
         robot: usize,
     },
+    /// A committed file that does not say what it must, or disagrees with the files
+    /// beside it.
+    #[error("{path}: {message}")]
+    BadFile {
+        /// The file.
+        path: String,
+        /// What is wrong.
+        message: String,
+    },
     /// A figure could not be drawn.
     #[error("drawing a figure: {0}")]
     Figure(String),
