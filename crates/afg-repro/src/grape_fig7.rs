@@ -11,7 +11,9 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use afg_baseline::{Allocator, CentralisedDa, DecentralisedDa, Optimum, percent_of_opt};
+use afg_baseline::{
+    Allocator, CentralisedDa, DecentralisedDa, DecentralisedRun, Optimum, percent_of_opt,
+};
 use afg_eval::EvalError;
 use afg_game::io::read_dataset;
 use afg_game::{Assignment, GameError, Instance, Preference};
@@ -177,6 +179,26 @@ struct Row {
 }
 
 impl Row {
+    /// Appends this row to a Markdown table, with its welfare as % of `best`.
+    fn write(&self, out: &mut String, best: f64) {
+        let count = |x: Option<u64>| x.map_or("—".into(), |v| v.to_string());
+        let rate = |x: Option<f64>| x.map_or("—".into(), |v| format!("{:.1} %", 100.0 * v));
+        let percent =
+            percent_of_opt(self.welfare, best).map_or("—".into(), |v| format!("{v:.2} %"));
+        let _ = writeln!(
+            out,
+            "| {} | {:.1} | {percent} | {} | {} | {} | {} | {} | {} |",
+            self.run,
+            self.welfare,
+            self.out.map_or("—".into(), |v| v.to_string()),
+            rate(self.ns_selfish),
+            rate(self.ns_balanced),
+            count(self.changes),
+            count(self.rounds),
+            count(self.messages),
+        );
+    }
+
     /// The row of `assignment`, judged by afg.
     fn scored(run: &str, instance: &Instance, assignment: &Assignment) -> Row {
         Row {
@@ -200,113 +222,106 @@ impl Row {
 pub fn table(dir: &Path) -> Result<String, EvalError> {
     let mut out = String::new();
     for run in read_runs(dir)? {
-        let inst = &run.instance;
-        let p = &run.published;
-        let void_opt = Optimum.allocate(inst)?.assignment;
-        let best = inst.welfare(&void_opt);
-        let paper = Instance::new(inst.robots().to_vec(), inst.tasks().to_vec(), inst.beta())?;
-        let paper_opt = Optimum.allocate(&paper)?.assignment;
-        let central = CentralisedDa::new(Preference::Selfish).allocate(inst)?;
-        let graph = GraphKind::Radius {
-            radius: p.communication_range,
-        };
+        let (inst, p) = (&run.instance, &run.published);
         let decentralised = DecentralisedDa {
             preference: Preference::Selfish,
-            graph,
+            graph: GraphKind::Radius {
+                radius: p.communication_range,
+            },
             seed: SEED,
         }
         .run(inst)?;
-        let balanced = CentralisedDa::new(Preference::Balanced).allocate(inst)?;
-        let decentral_stats = decentralised.allocation.stats;
-        let rows = [
-            Row {
-                run: "GRAPE, published (MATLAB)".into(),
-                welfare: p.utility,
-                out: None,
-                ns_selfish: None,
-                ns_balanced: None,
-                changes: Some(p.changes),
-                rounds: Some(p.rounds),
-                messages: None,
-            },
-            Row::scored(
-                "GRAPE's published partition, scored by afg",
-                inst,
-                &run.partition,
-            ),
-            Row {
-                changes: Some(central.stats.iterations),
-                ..Row::scored("GRAPE DA, centralised (afg)", inst, &central.assignment)
-            },
-            Row {
-                changes: Some(decentral_stats.iterations),
-                rounds: Some(decentral_stats.rounds),
-                messages: Some(decentral_stats.messages),
-                ..Row::scored(
-                    &format!(
-                        "GRAPE, decentralised over the {} m graph (afg, seed {SEED})",
-                        p.communication_range
-                    ),
-                    inst,
-                    &decentralised.allocation.assignment,
-                )
-            },
-            Row {
-                changes: Some(balanced.stats.iterations),
-                ..Row::scored("balanced DA (afg)", inst, &balanced.assignment)
-            },
-            Row::scored("OPT, void allowed (GRAPE's game)", inst, &void_opt),
-            Row::scored(
-                "OPT, every robot placed (the paper's game)",
-                inst,
-                &paper_opt,
-            ),
-        ];
+        let void_opt = Optimum.allocate(inst)?.assignment;
+        let best = inst.welfare(&void_opt);
+        let added = match decentralised.added_edges {
+            0 => String::new(),
+            k => format!(", {k} added to connect it"),
+        };
         let _ = writeln!(
             out,
-            "**{}** (`{}`: N = {}, M = {}, {} links within {} m{})\n",
+            "**{}** (`{}`: N = {}, M = {}, {} links within {} m{added})\n",
             p.name,
             p.file,
             inst.num_robots(),
             inst.num_tasks(),
             p.links,
             p.communication_range,
-            if decentralised.added_edges > 0 {
-                format!(", {} added to connect it", decentralised.added_edges)
-            } else {
-                String::new()
-            }
         );
         out.push_str(
             "| run | welfare | % of void OPT | robots out | NS_rate selfish | NS_rate balanced | changes | rounds | messages |\n",
         );
         out.push_str("|---|---|---|---|---|---|---|---|---|\n");
-        let count = |x: Option<u64>| x.map_or("—".into(), |v| v.to_string());
-        let rate = |x: Option<f64>| x.map_or("—".into(), |v| format!("{:.1} %", 100.0 * v));
-        for row in rows {
-            let percent =
-                percent_of_opt(row.welfare, best).map_or("—".into(), |v| format!("{v:.2} %"));
-            let _ = writeln!(
-                out,
-                "| {} | {:.1} | {percent} | {} | {} | {} | {} | {} | {} |",
-                row.run,
-                row.welfare,
-                row.out.map_or("—".into(), |v| v.to_string()),
-                rate(row.ns_selfish),
-                rate(row.ns_balanced),
-                count(row.changes),
-                count(row.rounds),
-                count(row.messages),
-            );
+        for row in rows(&run, &decentralised, &void_opt)? {
+            row.write(&mut out, best);
         }
+        let stats = decentralised.allocation.stats;
         let ours = inst.welfare(&decentralised.allocation.assignment);
         let _ = writeln!(
             out,
             "\nafg's decentralised GRAPE: welfare {:+.3} % against GRAPE's published utility, {} rounds against its {}.\n",
             100.0 * (ours - p.utility) / p.utility,
-            decentral_stats.rounds,
+            stats.rounds,
             p.rounds
         );
     }
     Ok(out)
+}
+
+/// The rows of one run, given afg's GRAPE over its graph and the optimum of its game.
+fn rows(
+    run: &GrapeRun,
+    decentralised: &DecentralisedRun,
+    void_opt: &Assignment,
+) -> Result<Vec<Row>, EvalError> {
+    let (inst, p) = (&run.instance, &run.published);
+    let paper = Instance::new(inst.robots().to_vec(), inst.tasks().to_vec(), inst.beta())?;
+    let paper_opt = Optimum.allocate(&paper)?.assignment;
+    let central = CentralisedDa::new(Preference::Selfish).allocate(inst)?;
+    let balanced = CentralisedDa::new(Preference::Balanced).allocate(inst)?;
+    let stats = decentralised.allocation.stats;
+    let decentralised_name = format!(
+        "GRAPE, decentralised over the {} m graph (afg, seed {SEED})",
+        p.communication_range
+    );
+    Ok(vec![
+        Row {
+            run: "GRAPE, published (MATLAB)".into(),
+            welfare: p.utility,
+            out: None,
+            ns_selfish: None,
+            ns_balanced: None,
+            changes: Some(p.changes),
+            rounds: Some(p.rounds),
+            messages: None,
+        },
+        Row::scored(
+            "GRAPE's published partition, scored by afg",
+            inst,
+            &run.partition,
+        ),
+        Row {
+            changes: Some(central.stats.iterations),
+            ..Row::scored("GRAPE DA, centralised (afg)", inst, &central.assignment)
+        },
+        Row {
+            changes: Some(stats.iterations),
+            rounds: Some(stats.rounds),
+            messages: Some(stats.messages),
+            ..Row::scored(
+                &decentralised_name,
+                inst,
+                &decentralised.allocation.assignment,
+            )
+        },
+        Row {
+            changes: Some(balanced.stats.iterations),
+            ..Row::scored("balanced DA (afg)", inst, &balanced.assignment)
+        },
+        Row::scored("OPT, void allowed (GRAPE's game)", inst, void_opt),
+        Row::scored(
+            "OPT, every robot placed (the paper's game)",
+            inst,
+            &paper_opt,
+        ),
+    ])
 }
