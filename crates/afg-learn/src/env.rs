@@ -97,9 +97,59 @@ impl<'a> Env<'a> {
     /// ```
     pub fn from_parts(instance: &'a Instance, parts: StateParts) -> Result<Self, LearnError> {
         let next = acted(instance, parts.assignment())?;
+        Self::from_parts_after(instance, parts, next)
+    }
+
+    /// [`Env::from_parts`] after `acted` robots have acted. Where the instance allows
+    /// the void task, robots that stayed out look like robots yet to act, so a caller
+    /// that keeps the state between steps keeps this count too.
+    ///
+    /// # Errors
+    /// [`LearnError::InvalidAction`] if `acted` is above N, a robot from `acted` on has
+    /// a task, or (in the paper's game) one before it has none.
+    ///
+    /// # Panics
+    /// As [`AllocationState::from_parts`].
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::{Instance, Point, RobotId, Task, TaskId};
+    /// use afg_graph::Units;
+    /// use afg_learn::env::Env;
+    /// let task = Task { position: Point::new(0.0, 0.0), reward: 1.0, eps: 2.0, capacity: None };
+    /// let robots = vec![Point::new(9.0, 0.0), Point::new(1.0, 0.0)];
+    /// let inst = Instance::with_void(robots, vec![task], 1.0)?;
+    /// let mut env = Env::reset(&inst, Units::Bounded);
+    /// assert_eq!(env.stay_out()?, (0.0, false));
+    /// let again = Env::from_parts_after(&inst, env.into_parts(), 1)?;
+    /// assert_eq!(again.actor(), Some(RobotId(1)));
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn from_parts_after(
+        instance: &'a Instance,
+        parts: StateParts,
+        acted: usize,
+    ) -> Result<Self, LearnError> {
+        let tasks = parts.assignment().tasks();
+        let bad = |why: String| Err(LearnError::InvalidAction(why));
+        if acted > tasks.len() {
+            return bad(format!("{acted} robots cannot have acted out of {}", tasks.len()));
+        }
+        if let Some(i) = (acted..tasks.len()).find(|&i| tasks[i].is_some()) {
+            return bad(format!(
+                "robots act in index order, but robot {i} has a task after {acted} have acted"
+            ));
+        }
+        if !instance.allows_void()
+            && let Some(i) = (0..acted).find(|&i| tasks[i].is_none())
+        {
+            return bad(format!(
+                "robot {i} has acted but has no task, and the instance is the paper's game"
+            ));
+        }
         Ok(Env {
             state: AllocationState::from_parts(instance, parts),
-            next,
+            next: acted,
         })
     }
 
@@ -153,6 +203,29 @@ impl<'a> Env<'a> {
         self.state.assign(robot, task);
         self.next += 1;
         Ok((reward, self.actor().is_none()))
+    }
+
+    /// The acting robot stays out (the void task, where the instance allows it): the
+    /// reward is 0, the welfare being unchanged. Returns it and whether the episode is
+    /// over.
+    ///
+    /// # Errors
+    /// [`LearnError::InvalidAction`] after the last robot, or in the paper's game.
+    pub fn stay_out(&mut self) -> Result<(f64, bool), LearnError> {
+        if !self.state.instance().allows_void() {
+            return Err(LearnError::InvalidAction(
+                "no robot may stay out of the paper's game: the instance does not allow the void task".into(),
+            ));
+        }
+        self.actor()
+            .ok_or_else(|| LearnError::InvalidAction("the episode is over".into()))?;
+        self.next += 1;
+        Ok((0.0, self.actor().is_none()))
+    }
+
+    /// Whether the acting robot may stay out ([`Env::stay_out`]).
+    pub fn may_stay_out(&self) -> bool {
+        self.state.instance().allows_void() && self.actor().is_some()
     }
 
     /// [`Env::step`] with the reward shaped by `shaping`: the welfare change plus the

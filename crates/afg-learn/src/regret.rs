@@ -19,6 +19,9 @@ use crate::targets::masked_argmax;
 /// `Q*(s, a)` for robot `actor` acting in `assignment`, in raw welfare: for each task,
 /// the best final welfare with the robots assigned in `assignment` fixed and `actor` on
 /// that task, minus the welfare of `assignment`. `None` where the task has no room.
+/// Where the instance allows the void task, one more value last: the actor staying out
+/// (the others unassigned in `assignment` are free, as in
+/// [`Optimum::complete`](afg_baseline::Optimum::complete)).
 ///
 /// # Errors
 /// [`LearnError::InvalidAction`] if the actor is already assigned or the assignment
@@ -55,43 +58,73 @@ pub fn q_star(
     Ok(values.into_iter().map(|v| v.map(|w| w - now)).collect())
 }
 
-/// [`q_star`] of the next robot after `prefix`, the tasks of robots `0..t` in the
-/// sequential MDP (robots act in index order): the values of robot `t`'s actions.
+/// [`q_star`] of the next robot after `prefix`, the places of robots `0..t` in the
+/// sequential MDP (robots act in index order; `None`: the robot stayed out, where the
+/// instance allows the void task): the values of robot `t`'s actions, one per task and,
+/// where the instance allows the void, one more for staying out.
+///
+/// Robots that stayed out add nothing and take no room, so the values are those of the
+/// game without them.
 ///
 /// # Errors
-/// [`LearnError::InvalidAction`] if every robot has acted or a task is out of range;
-/// the game's error for a task over its capacity.
+/// [`LearnError::InvalidAction`] if every robot has acted, a task is out of range, or a
+/// robot stayed out of the paper's game; the game's error for a task over its capacity.
 ///
 /// # Examples
 /// ```
 /// use afg_game::{GeneratorConfig, TaskId};
 /// use afg_learn::policy::{q_star, q_star_next};
 /// let inst = GeneratorConfig::paper(6, 2, 1).generate()?;
-/// let next = q_star_next(&inst, &[TaskId(1), TaskId(0)])?;
+/// let next = q_star_next(&inst, &[Some(TaskId(1)), Some(TaskId(0))])?;
 /// assert_eq!(next.len(), 2);
-/// assert!(q_star_next(&inst, &[TaskId(0); 6]).is_err()); // no robot is left
-/// assert!(q_star_next(&inst, &[TaskId(7)]).is_err());
+/// assert!(q_star_next(&inst, &[Some(TaskId(0)); 6]).is_err()); // no robot is left
+/// assert!(q_star_next(&inst, &[Some(TaskId(7))]).is_err());
+/// assert!(q_star_next(&inst, &[None]).is_err()); // no void in the paper's game
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
-pub fn q_star_next(instance: &Instance, prefix: &[TaskId]) -> Result<Vec<Option<f64>>, LearnError> {
+pub fn q_star_next(
+    instance: &Instance,
+    prefix: &[Option<TaskId>],
+) -> Result<Vec<Option<f64>>, LearnError> {
     let actor = prefix.len();
     if actor >= instance.num_robots() {
         return Err(LearnError::InvalidAction(
             "every robot has acted: there is no next robot".into(),
         ));
     }
-    let mut assignment = Assignment::unassigned(instance.num_robots(), instance.num_tasks());
-    for (i, &task) in prefix.iter().enumerate() {
-        if task.index() >= instance.num_tasks() {
-            return Err(LearnError::InvalidAction(format!(
-                "robot {i} has task {task}, but the instance has {} tasks",
-                instance.num_tasks()
-            )));
+    for (i, place) in prefix.iter().enumerate() {
+        match place {
+            Some(task) if task.index() >= instance.num_tasks() => {
+                return Err(LearnError::InvalidAction(format!(
+                    "robot {i} has task {task}, but the instance has {} tasks",
+                    instance.num_tasks()
+                )));
+            }
+            None if !instance.allows_void() => {
+                return Err(LearnError::InvalidAction(format!(
+                    "robot {i} stayed out, but the instance is the paper's game"
+                )));
+            }
+            _ => {}
         }
+    }
+    // The game of the robots that did not stay out, the actor's index shifted.
+    let stayed: Vec<usize> = (0..instance.num_robots())
+        .filter(|&i| i >= actor || prefix[i].is_some())
+        .collect();
+    let game = if stayed.len() < instance.num_robots() {
+        let robots = stayed.iter().map(|&i| instance.robots()[i]).collect();
+        std::borrow::Cow::Owned(instance.with_robots(robots)?)
+    } else {
+        std::borrow::Cow::Borrowed(instance)
+    };
+    let placed: Vec<TaskId> = prefix.iter().flatten().copied().collect();
+    let mut assignment = Assignment::unassigned(game.num_robots(), game.num_tasks());
+    for (i, &task) in placed.iter().enumerate() {
         assignment.set(RobotId(i as u32), Some(task));
     }
-    instance.check(&assignment)?;
-    q_star(instance, &assignment, RobotId(actor as u32))
+    game.check(&assignment)?;
+    q_star(&game, &assignment, RobotId(placed.len() as u32))
 }
 
 /// One step of a rollout, seen through Q\*.

@@ -16,28 +16,59 @@ use rayon::prelude::*;
 use crate::{PyInstance, value_error};
 
 /// One episode: the instance, and the MDP's state between calls (the assignment so far
-/// and its features), the reward shaping.
+/// and its features, the robots that have acted), the reward shaping, and whether the
+/// actions end with M = the void task.
 #[derive(Clone)]
 struct Episode {
     instance: Arc<Instance>,
     /// Always `Some` between calls.
     parts: Option<StateParts>,
+    /// Robots that have acted (those that stayed out have no task in `parts`).
+    acted: usize,
     shaping: Shaping,
+    void_action: bool,
 }
 
 impl Episode {
-    fn new(instance: Arc<Instance>, units: Units, shaping: Shaping) -> Self {
+    /// A fresh episode.
+    ///
+    /// # Errors
+    /// An instance that allows the void task for an environment without the void
+    /// action, or with reward shaping (its completions would place the robots that
+    /// stayed out).
+    fn new(
+        instance: Arc<Instance>,
+        units: Units,
+        shaping: Shaping,
+        void_action: bool,
+    ) -> Result<Self, String> {
+        if instance.allows_void() && !void_action {
+            return Err("the instance allows the void task, but the environment has no action for it: make the environment with allow_void=True".into());
+        }
+        if instance.allows_void() && shaping != Shaping::None {
+            return Err(format!(
+                "reward shaping \"{}\" is not defined with the void task: use shaping=\"none\"",
+                afg_game::Named::name(shaping)
+            ));
+        }
         let parts = Env::reset(&instance, units).into_parts();
-        Episode {
+        Ok(Episode {
             instance,
             parts: Some(parts),
+            acted: 0,
             shaping,
-        }
+            void_action,
+        })
     }
 
-    /// The same units and shaping on another instance.
-    fn renew(&self, instance: Arc<Instance>) -> Self {
-        Episode::new(instance, self.units(), self.shaping)
+    /// The same units, shaping and actions on another instance.
+    fn renew(&self, instance: Arc<Instance>) -> Result<Self, String> {
+        Episode::new(instance, self.units(), self.shaping, self.void_action)
+    }
+
+    /// Actions: the M tasks, and the void where the environment has it.
+    fn actions(&self) -> usize {
+        self.instance.num_tasks() + usize::from(self.void_action)
     }
 
     fn parts(&self) -> &StateParts {
@@ -61,27 +92,36 @@ impl Episode {
             .parts
             .take()
             .expect("an episode holds its state between calls");
-        let mut env = Env::from_parts(&self.instance, parts).expect("the episode's state is valid");
+        let mut env = Env::from_parts_after(&self.instance, parts, self.acted)
+            .expect("the episode's state is valid");
         let out = f(&mut env);
+        self.acted = env.step_index();
         self.parts = Some(env.into_parts());
         out
     }
 
-    /// The acting robot takes `action`: the (shaped) reward and whether it was the last.
+    /// The acting robot takes `action` (M: stays out): the (shaped) reward and whether
+    /// it was the last.
     fn step(&mut self, action: i64) -> Result<(f64, bool), String> {
-        let task = u32::try_from(action).map(TaskId).map_err(|_| {
-            format!(
-                "action {action} is not a task (0..{})",
-                self.instance.num_tasks()
-            )
-        })?;
+        let m = self.instance.num_tasks();
+        let out_of_range = || format!("action {action} is not one of 0..{}", self.actions());
+        let action = usize::try_from(action).map_err(|_| out_of_range())?;
+        if action >= self.actions() {
+            return Err(out_of_range());
+        }
         let shaping = self.shaping;
-        self.with_env(|env| env.step_shaped(task, shaping))
-            .map_err(|e| e.to_string())
+        self.with_env(|env| {
+            if action == m {
+                env.stay_out()
+            } else {
+                env.step_shaped(TaskId(action as u32), shaping)
+            }
+        })
+        .map_err(|e| e.to_string())
     }
 
-    /// Writes the observation into `nu` and `mu` (N×M each, zeroed) and `mask` (M):
-    /// returns the actor (N once the episode is over).
+    /// Writes the observation into `nu` and `mu` (N×M each, zeroed) and `mask` (one
+    /// per action): returns the actor (N once the episode is over).
     fn observe_into(&mut self, nu: &mut [f32], mu: &mut [f32], mask: &mut [i8]) -> usize {
         let (n, m) = (self.instance.num_robots(), self.instance.num_tasks());
         self.with_env(|env| {
@@ -94,12 +134,25 @@ impl Episode {
             for (out, allowed) in mask.iter_mut().zip(env.action_mask()) {
                 *out = i8::from(allowed);
             }
+            if let Some(void) = mask.get_mut(m) {
+                *void = i8::from(env.may_stay_out());
+            }
             env.actor().map_or(n, |r| r.index())
         })
     }
 
     fn tasks(&self) -> Vec<i64> {
         crate::task_indices(self.assignment())
+    }
+
+    /// Exact action values of the acting robot, one per action (-inf where masked).
+    fn q_star(&self, py: Python<'_>) -> PyResult<Vec<f64>> {
+        let instance = PyInstance {
+            inner: self.instance.clone(),
+        };
+        let mut values = crate::solve::q_star_of(py, &instance, self.tasks(), Some(self.acted))?;
+        values.resize(self.actions(), f64::NEG_INFINITY);
+        Ok(values)
     }
 }
 
@@ -119,19 +172,30 @@ pub struct EnvCore {
 #[pymethods]
 impl EnvCore {
     #[new]
-    #[pyo3(signature = (instance, units="bounded", shaping="none"))]
-    fn py_new(instance: &PyInstance, units: &str, shaping: &str) -> PyResult<Self> {
+    #[pyo3(signature = (instance, units="bounded", shaping="none", void_action=false))]
+    fn py_new(
+        instance: &PyInstance,
+        units: &str,
+        shaping: &str,
+        void_action: bool,
+    ) -> PyResult<Self> {
         let episode = Episode::new(
             instance.inner.clone(),
             crate::named::<Units>(units)?,
             crate::named::<Shaping>(shaping)?,
-        );
+            void_action,
+        )
+        .map_err(PyValueError::new_err)?;
         Ok(EnvCore { episode })
     }
 
-    /// Starts a new episode on `instance` (same units and shaping).
-    fn reset(&mut self, instance: &PyInstance) {
-        self.episode = self.episode.renew(instance.inner.clone());
+    /// Starts a new episode on `instance` (same units, shaping and actions).
+    fn reset(&mut self, instance: &PyInstance) -> PyResult<()> {
+        self.episode = self
+            .episode
+            .renew(instance.inner.clone())
+            .map_err(PyValueError::new_err)?;
+        Ok(())
     }
 
     /// The acting robot takes task `action`: `(reward, terminated)`.
@@ -141,7 +205,7 @@ impl EnvCore {
             .map_err(PyValueError::new_err)
     }
 
-    /// `(robot_features (N, M), task_features (N, M), actor, action_mask (M,))`.
+    /// `(robot_features (N, M), task_features (N, M), actor, action_mask (actions,))`.
     fn observation<'py>(&mut self, py: Python<'py>) -> ObservationArrays<'py> {
         let (n, m) = (
             self.episode.instance.num_robots(),
@@ -150,7 +214,7 @@ impl EnvCore {
         let (mut nu, mut mu, mut mask) = (
             Array2::zeros((n, m)),
             Array2::zeros((n, m)),
-            Array1::zeros(m),
+            Array1::zeros(self.episode.actions()),
         );
         let actor = self.episode.observe_into(
             nu.as_slice_mut().expect("contiguous"),
@@ -165,13 +229,9 @@ impl EnvCore {
         )
     }
 
-    /// Exact action values of the acting robot (-inf where a task has no room).
+    /// Exact action values of the acting robot (-inf where masked).
     fn q_star<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let instance = PyInstance {
-            inner: self.episode.instance.clone(),
-        };
-        let values = crate::solve::q_star_of(py, &instance, self.episode.tasks())?;
-        Ok(values.into_pyarray(py))
+        Ok(self.episode.q_star(py)?.into_pyarray(py))
     }
 
     /// The assignment so far (-1 for robots yet to act).
@@ -201,6 +261,7 @@ struct Draw {
     capacity_slack: Option<f64>,
     eps: Option<f64>,
     beta: f64,
+    allow_void: bool,
 }
 
 impl Draw {
@@ -210,7 +271,7 @@ impl Draw {
             eps: self.eps,
             beta: Some(self.beta),
             rewards: None,
-            allow_void: false,
+            allow_void: self.allow_void,
         }
         .config(self.robots, self.tasks, seed)?
         .generate()
@@ -238,7 +299,7 @@ pub struct VecEnvCore {
 #[pymethods]
 impl VecEnvCore {
     #[new]
-    #[pyo3(signature = (num_envs, robots, tasks=5, capacity_slack=None, eps=None, beta=1.0, units="bounded", shaping="none"))]
+    #[pyo3(signature = (num_envs, robots, tasks=5, capacity_slack=None, eps=None, beta=1.0, units="bounded", shaping="none", allow_void=false))]
     #[allow(clippy::too_many_arguments)]
     fn py_new(
         num_envs: usize,
@@ -249,6 +310,7 @@ impl VecEnvCore {
         beta: f64,
         units: &str,
         shaping: &str,
+        allow_void: bool,
     ) -> PyResult<Self> {
         if num_envs == 0 {
             return Err(PyValueError::new_err("num_envs must be at least 1"));
@@ -259,13 +321,16 @@ impl VecEnvCore {
             capacity_slack,
             eps,
             beta,
+            allow_void,
         };
         let first = Arc::new(draw.instance(0).map_err(crate::game_error)?);
         let episode = Episode::new(
             first,
             crate::named::<Units>(units)?,
             crate::named::<Shaping>(shaping)?,
-        );
+            allow_void,
+        )
+        .map_err(PyValueError::new_err)?;
         Ok(VecEnvCore {
             episodes: vec![episode; num_envs],
             draw,
@@ -290,7 +355,9 @@ impl VecEnvCore {
             })
             .map_err(crate::game_error)?;
         for (i, inst) in indices.into_iter().zip(fresh) {
-            self.episodes[i] = self.episodes[i].renew(Arc::new(inst));
+            self.episodes[i] = self.episodes[i]
+                .renew(Arc::new(inst))
+                .map_err(PyValueError::new_err)?;
         }
         Ok(())
     }
@@ -334,19 +401,23 @@ impl VecEnvCore {
     }
 
     /// Stacked observations: `(robot_features (K, N, M), task_features (K, N, M),
-    /// actors (K,), action_masks (K, M))`.
+    /// actors (K,), action_masks (K, actions))`.
     fn observations<'py>(&mut self, py: Python<'py>) -> VecObservationArrays<'py> {
         let (k, n, m) = (self.episodes.len(), self.draw.robots, self.draw.tasks);
+        let actions = m + usize::from(self.draw.allow_void);
         let mut nu = Array3::zeros((k, n, m));
         let mut mu = Array3::zeros((k, n, m));
-        let mut masks = Array2::zeros((k, m));
+        let mut masks = Array2::zeros((k, actions));
         let mut actors = Array1::zeros(k);
         let min_len = self.min_len();
         let episodes = &mut self.episodes;
         py.detach(|| {
             let nus = nu.as_slice_mut().expect("contiguous").par_chunks_mut(n * m);
             let mus = mu.as_slice_mut().expect("contiguous").par_chunks_mut(n * m);
-            let rows = masks.as_slice_mut().expect("contiguous").par_chunks_mut(m);
+            let rows = masks
+                .as_slice_mut()
+                .expect("contiguous")
+                .par_chunks_mut(actions);
             let actors = actors.as_slice_mut().expect("contiguous").par_iter_mut();
             episodes
                 .par_iter_mut()

@@ -304,33 +304,48 @@ fn reallocate(
 /// Exact action values of the next robot: `tasks_so_far[i]` is the task of robot i
 /// for the robots that have acted (robots act in index order); entry j of the result
 /// is the welfare that taking task j and then completing optimally adds from now on,
-/// -inf where task j has no room.
+/// -inf where task j has no room. Where the instance allows the void task, one more
+/// entry last: the robot staying out; and `acted` says how many robots have acted
+/// (a -1 among them stayed out).
 #[pyfunction]
+#[pyo3(signature = (instance, tasks_so_far, acted=None))]
 fn q_star<'py>(
     py: Python<'py>,
     instance: &PyInstance,
     tasks_so_far: IntVector<'_>,
+    acted: Option<usize>,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-    let values = q_star_of(py, instance, tasks_so_far.to_vec())?;
+    let values = q_star_of(py, instance, tasks_so_far.to_vec(), acted)?;
     Ok(values.into_pyarray(py))
 }
 
-/// [`q_star`] as a vector: the robots that have acted are the entries before the first
-/// -1 (a whole assignment vector with -1 for the rest is accepted too).
+/// [`q_star`] as a vector: the robots that have acted are the first `acted` entries
+/// (-1: stayed out) or, without `acted`, the entries before the first -1 (a whole
+/// assignment vector with -1 for the rest is accepted too).
 pub(crate) fn q_star_of(
     py: Python<'_>,
     instance: &PyInstance,
     tasks: Vec<i64>,
+    acted: Option<usize>,
 ) -> PyResult<Vec<f64>> {
-    let acted = tasks.iter().take_while(|&&t| t != -1).count();
+    let acted = acted.unwrap_or_else(|| tasks.iter().take_while(|&&t| t != -1).count());
+    if acted > tasks.len() {
+        return Err(PyValueError::new_err(format!(
+            "acted = {acted}, but there are {} tasks",
+            tasks.len()
+        )));
+    }
     if tasks[acted..].iter().any(|&t| t != -1) {
         return Err(PyValueError::new_err(
-            "robots act in index order: no robot after a -1 may have a task",
+            "robots act in index order: no robot after those that acted may have a task",
         ));
     }
     let prefix = tasks[..acted]
         .iter()
-        .map(|&t| u32::try_from(t).map(TaskId))
+        .map(|&t| match t {
+            -1 => Ok(None),
+            t => u32::try_from(t).map(|j| Some(TaskId(j))),
+        })
         .collect::<Result<Vec<_>, _>>()
         .map_err(|_| PyValueError::new_err("a task is -1 or an index 0..M"))?;
     let inst = instance.inner.clone();

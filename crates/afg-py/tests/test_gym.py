@@ -71,9 +71,9 @@ def test_observations_have_the_declared_shapes_and_bad_actions_raise() -> None:
     assert obs["robot_features"].shape == obs["task_features"].shape == (8, 3)
     assert obs["actor"] == 0 and obs["action_mask"].tolist() == [1, 1, 1]
     assert env.unwrapped.action_masks().dtype == bool
-    with pytest.raises(ValueError, match="cannot take task 5"):
+    with pytest.raises(ValueError, match="action 5 is not one of 0..3"):
         env.step(5)
-    with pytest.raises(ValueError, match="not a task"):
+    with pytest.raises(ValueError, match="not one of"):
         env.step(-3)
     for _ in range(8):
         obs, *_ = env.step(0)
@@ -105,3 +105,56 @@ def test_the_vector_env_equals_k_single_envs_step_by_step() -> None:
     # The next step resets every sub-environment (reward 0), then play goes on.
     obs, rewards, terminated, _, info = venv.step(np.zeros(k, dtype=np.int64))
     assert (rewards == 0).all() and not terminated.any() and (obs["actor"] == 0).all()
+
+
+def test_grapes_game_adds_the_void_action() -> None:
+    env = gym.make("afg/Allocation-v0", robots=10, tasks=3, allow_void=True)
+    check_env(env.unwrapped, skip_render_check=True)
+    assert env.action_space.n == 4
+    # Random masked play: staying out gives 0, the return is the final welfare.
+    rewards, info, steps = play(env, np.random.default_rng(3), seed=5)
+    assert steps == 10 and sum(rewards) == pytest.approx(info["welfare"])
+    # The oracle's argmax reaches the optimum of GRAPE's game, staying out included.
+    obs, info = env.reset(seed=4, options={"oracle": True})
+    stayed, done = 0, False
+    while not done:
+        q = info["q_star"]
+        assert q.shape == (4,) and np.isneginf(q[~info["action_mask"]]).all()
+        action = int(np.argmax(q))
+        stayed += action == 3
+        obs, reward, done, _, info = env.step(action)
+        if action == 3:
+            assert reward == 0.0
+    assert info["percent_of_opt"] == pytest.approx(100.0)
+    assert (info["tasks"] == -1).sum() == stayed
+    # A paper-game instance masks the void out; the paper's environment refuses the void.
+    paper = afg.generate(robots=10, tasks=3, seed=1)
+    obs, info = env.reset(options={"instance": paper})
+    assert obs["action_mask"].tolist() == [1, 1, 1, 0]
+    with pytest.raises(ValueError, match="paper's game"):
+        env.step(3)
+    void = afg.generate(robots=10, tasks=3, seed=1, allow_void=True)
+    with pytest.raises(ValueError, match="allow_void=True"):
+        gym.make("afg/Allocation-v0", robots=10, tasks=3).reset(options={"instance": void})
+    with pytest.raises(ValueError, match="shaping"):
+        gym.make("afg/Allocation-v0", robots=10, tasks=3, allow_void=True, shaping="greedy")
+
+
+def test_the_void_vector_env_equals_single_envs() -> None:
+    k, n, m = 2, 8, 3
+    venv = gym.make_vec(
+        "afg/Allocation-v0", num_envs=k, vectorization_mode="vector_entry_point",
+        robots=n, tasks=m, allow_void=True,
+    )
+    obs, info = venv.reset(seed=2)
+    seeds = [int(s) for s in np.random.default_rng(2).integers(2**63, size=k)]
+    singles = [afg.EnvCore(afg.generate(n, m, s, allow_void=True), void_action=True) for s in seeds]
+    rng = np.random.default_rng(1)
+    for t in range(n):
+        for i, core in enumerate(singles):
+            assert (obs["action_mask"][i] == core.observation()[3]).all()
+        actions = np.array([rng.choice(np.flatnonzero(info["action_mask"][i])) for i in range(k)])
+        obs, rewards, terminated, _, info = venv.step(actions)
+        for i, core in enumerate(singles):
+            assert (rewards[i], terminated[i]) == core.step(int(actions[i]))
+    assert terminated.all()

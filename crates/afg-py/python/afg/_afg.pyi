@@ -115,12 +115,20 @@ def reallocate(
     left_tasks: Sequence[int] = (),
     method: str = "da-balanced",
 ) -> Result: ...
-def q_star(instance: Instance, tasks_so_far: _Tasks) -> npt.NDArray[np.float64]: ...
+def q_star(
+    instance: Instance, tasks_so_far: _Tasks, acted: Optional[int] = None
+) -> npt.NDArray[np.float64]: ...
 
 class EnvCore:
     """One episode of the sequential MDP (driven by afg.gym.AllocationEnv)."""
 
-    def __init__(self, instance: Instance, units: str = "bounded", shaping: str = "none") -> None: ...
+    def __init__(
+        self,
+        instance: Instance,
+        units: str = "bounded",
+        shaping: str = "none",
+        void_action: bool = False,
+    ) -> None: ...
     def reset(self, instance: Instance) -> None: ...
     def step(self, action: int) -> Tuple[float, bool]: ...
     def observation(
@@ -145,6 +153,7 @@ class VecEnvCore:
         beta: float = 1.0,
         units: str = "bounded",
         shaping: str = "none",
+        allow_void: bool = False,
     ) -> None: ...
     def reset(self, indices: Sequence[int], seeds: Sequence[int]) -> None: ...
     def step(

@@ -19,6 +19,12 @@ project's networks read:
 - ``actor`` Discrete(N + 1): the robot to act (N once the episode is over);
 - ``action_mask`` MultiBinary(M): the tasks the actor may take.
 
+``allow_void=True`` plays GRAPE's game, where a robot may stay out of every coalition
+(the void task): instances are drawn with the void allowed, the action space is
+``Discrete(M + 1)`` with action M = stay out (reward 0), and ``action_mask`` has M + 1
+entries (the last one false for an instance of the paper's game given in ``reset``).
+Reward shaping is not defined there (``shaping`` must be ``"none"``).
+
 ``info["action_mask"]`` is given at every step and ``action_masks()`` for maskable
 agents. On the last step ``info`` holds ``tasks``, ``welfare``, ``opt_welfare`` and
 ``percent_of_opt``. ``reset(options={"instance": inst})`` plays a given instance;
@@ -43,14 +49,14 @@ __all__ = ["AllocationEnv", "AllocationVectorEnv"]
 _SEED_BOUND = 2**63
 
 
-def _observation_space(robots: int, tasks: int) -> spaces.Dict:
+def _observation_space(robots: int, tasks: int, actions: int) -> spaces.Dict:
     features = spaces.Box(-np.inf, np.inf, shape=(robots, tasks), dtype=np.float32)
     return spaces.Dict(
         {
             "robot_features": spaces.Box(0.0, 1.0, shape=(robots, tasks), dtype=np.float32),
             "task_features": features,
             "actor": spaces.Discrete(robots + 1),
-            "action_mask": spaces.MultiBinary(tasks),
+            "action_mask": spaces.MultiBinary(actions),
         }
     )
 
@@ -79,13 +85,17 @@ class AllocationEnv(gymnasium.Env):
         beta: float = 1.0,
         units: str = "bounded",
         shaping: str = "none",
+        allow_void: bool = False,
     ) -> None:
         self.robots, self.tasks = int(robots), int(tasks)
-        self._draw = dict(capacity_slack=capacity_slack, eps=eps, beta=beta)
+        self.allow_void = bool(allow_void)
+        actions = self.tasks + int(self.allow_void)
+        self._draw = dict(capacity_slack=capacity_slack, eps=eps, beta=beta, allow_void=self.allow_void)
         self._units, self._shaping = units, shaping
-        self.observation_space = _observation_space(self.robots, self.tasks)
-        self.action_space = spaces.Discrete(self.tasks)
-        self._core = EnvCore(generate(self.robots, self.tasks, 0, **self._draw), units, shaping)
+        self.observation_space = _observation_space(self.robots, self.tasks, actions)
+        self.action_space = spaces.Discrete(actions)
+        first = generate(self.robots, self.tasks, 0, **self._draw)
+        self._core = EnvCore(first, units, shaping, void_action=self.allow_void)
         self._oracle = False
 
     def _observe(self) -> Tuple[Dict[str, Any], Dict[str, Any]]:
@@ -122,7 +132,7 @@ class AllocationEnv(gymnasium.Env):
         return obs, float(reward), bool(terminated), False, info
 
     def action_masks(self) -> np.ndarray:
-        """The acting robot's allowed tasks, as booleans (for maskable agents)."""
+        """The acting robot's allowed actions, as booleans (for maskable agents)."""
         return self._core.observation()[3].astype(bool)
 
 
@@ -145,13 +155,17 @@ class AllocationVectorEnv(VectorEnv):
         beta: float = 1.0,
         units: str = "bounded",
         shaping: str = "none",
+        allow_void: bool = False,
     ) -> None:
         self.num_envs, self.robots, self.tasks = int(num_envs), int(robots), int(tasks)
+        self.allow_void = bool(allow_void)
+        actions = self.tasks + int(self.allow_void)
         self._core = VecEnvCore(
-            self.num_envs, self.robots, self.tasks, capacity_slack, eps, beta, units, shaping
+            self.num_envs, self.robots, self.tasks, capacity_slack, eps, beta, units, shaping,
+            self.allow_void,
         )
-        self.single_observation_space = _observation_space(self.robots, self.tasks)
-        self.single_action_space = spaces.Discrete(self.tasks)
+        self.single_observation_space = _observation_space(self.robots, self.tasks, actions)
+        self.single_action_space = spaces.Discrete(actions)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self._autoreset = np.zeros(self.num_envs, dtype=bool)
@@ -195,7 +209,7 @@ class AllocationVectorEnv(VectorEnv):
         return obs, rewards, terminated, truncated, info
 
     def action_masks(self) -> np.ndarray:
-        """Each sub-environment's allowed tasks, shape (K, M), as booleans."""
+        """Each sub-environment's allowed actions, shape (K, actions), as booleans."""
         return self._core.observations()[3].astype(bool)
 
 
