@@ -57,3 +57,58 @@ fn a_usage_error_exits_2() {
     assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("[possible values: balanced, selfish]"));
 }
+
+/// `afg score` on GRAPE's published runs: their utility, to the printed digit; and each
+/// kind of bad assignment (a task ≥ M, −1 in the paper's game, a wrong length) is one
+/// line and exit 1.
+#[test]
+fn afg_score_reads_grapes_runs_and_refuses_bad_assignments_in_one_line() {
+    let dataset = concat!(env!("CARGO_MANIFEST_DIR"), "/../../datasets/grape-fig7");
+    let out = afg(&[
+        "score",
+        "--input",
+        &format!("{dataset}/instances.jsonl"),
+        "--assignment",
+        &format!("{dataset}/grape-partitions.jsonl"),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = String::from_utf8_lossy(&out.stdout);
+    // GRAPE's published utilities (published.json), to three decimals.
+    for utility in ["461790.574", "350669.082", "309411.453"] {
+        assert!(text.contains(utility), "{text}");
+    }
+    let dir = std::env::temp_dir().join(format!("afg-score-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let instance = dir.join("paper.json");
+    let made = afg(&[
+        "gen",
+        "--robots",
+        "3",
+        "--tasks",
+        "2",
+        "--out",
+        instance.to_str().unwrap(),
+    ]);
+    assert_eq!(made.status.code(), Some(0), "{}", stderr(&made));
+    let assignment = dir.join("a.json");
+    for (tasks, needle) in [
+        ("[0,1,2]", "task 2"),
+        ("[0,-1,1]", "robot 1 has no task (-1)"),
+        ("[0,1]", "2 entries"),
+    ] {
+        let line = format!(r#"{{"format":"afg-assignment","version":1,"tasks":{tasks}}}"#);
+        std::fs::write(&assignment, line).unwrap();
+        let out = afg(&[
+            "score",
+            "--input",
+            instance.to_str().unwrap(),
+            "--assignment",
+            assignment.to_str().unwrap(),
+        ]);
+        let text = stderr(&out);
+        assert_eq!(out.status.code(), Some(1), "{tasks}: {text}");
+        assert_eq!(text.lines().count(), 1, "{text}");
+        assert!(text.contains(needle), "{tasks}: {text}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -101,7 +101,9 @@ pub fn curves_svg(curves: &[Curve], title: &str) -> Result<String, EvalError> {
 }
 
 /// Assignments of one instance side by side as an SVG map: robots coloured by task
-/// (black if unassigned), tasks as squares sized by coalition, welfare in each title.
+/// (a grey ring if in no coalition: the void task of GRAPE's game), tasks as squares
+/// sized by coalition, welfare in each title (and, in GRAPE's game, how many robots
+/// stay out).
 ///
 /// # Errors
 /// [`EvalError::Figure`] if drawing fails.
@@ -109,11 +111,17 @@ pub fn curves_svg(curves: &[Curve], title: &str) -> Result<String, EvalError> {
 /// # Examples
 /// ```
 /// use afg_baseline::{Allocator, Optimum};
-/// use afg_game::GeneratorConfig;
+/// use afg_game::{GeneratorConfig, Instance, Point, Task};
 /// let inst = GeneratorConfig::paper(10, 3, 1).generate()?;
 /// let opt = Optimum.allocate(&inst)?.assignment;
 /// let svg = afg_eval::figures::assignments_svg(&inst, &[("OPT", &opt)])?;
 /// assert!(svg.starts_with("<svg"));
+/// // GRAPE's game: the far robot stays out, drawn as a ring.
+/// let task = Task { position: Point::new(0.0, 0.0), reward: 1.0, eps: 2.0, capacity: None };
+/// let far = Instance::with_void(vec![Point::new(0.1, 0.0), Point::new(9.0, 9.0)], vec![task], 1.0)?;
+/// let opt = Optimum.allocate(&far)?.assignment;
+/// let svg = afg_eval::figures::assignments_svg(&far, &[("OPT", &opt)])?;
+/// assert!(svg.contains("1 stay out") && svg.contains(r#"fill="none""#));
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn assignments_svg(
@@ -136,8 +144,15 @@ pub fn assignments_svg(
             x = (x.0.min(p.x), x.1.max(p.x));
             y = (y.0.min(p.y), y.1.max(p.y));
         }
+        // A task's square grows with its coalition, in units of the drawing's extent.
+        let unit = 0.004 * (x.1 - x.0).max(y.1 - y.0);
         for (area, (name, a)) in areas.iter().zip(panels) {
-            let title = format!("{name}: welfare {:.2}", inst.welfare(a));
+            let out = inst.num_robots() - a.num_assigned();
+            let title = if inst.allows_void() {
+                format!("{name}: welfare {:.2}, {out} stay out", inst.welfare(a))
+            } else {
+                format!("{name}: welfare {:.2}", inst.welfare(a))
+            };
             let mut chart = ChartBuilder::on(area)
                 .caption(title, ("sans-serif", 18))
                 .margin(10)
@@ -146,9 +161,11 @@ pub fn assignments_svg(
                 .build_cartesian_2d(x.0..x.1, y.0..y.1)?;
             chart.configure_mesh().disable_mesh().draw()?;
             for (i, p) in inst.robots().iter().enumerate() {
-                let color =
-                    a.tasks()[i].map_or(BLACK.to_rgba(), |j| Palette99::pick(j.index()).to_rgba());
-                chart.draw_series(std::iter::once(Circle::new((p.x, p.y), 3, color.filled())))?;
+                // A robot in no coalition (the void task, or not yet placed): a grey ring.
+                let style = a.tasks()[i].map_or(RGBColor(150, 150, 150).stroke_width(1), |j| {
+                    Palette99::pick(j.index()).to_rgba().filled()
+                });
+                chart.draw_series(std::iter::once(Circle::new((p.x, p.y), 3, style)))?;
             }
             for j in inst.task_ids() {
                 let t = inst.task(j).position;
@@ -156,8 +173,8 @@ pub fn assignments_svg(
                 let color = Palette99::pick(j.index()).to_rgba();
                 chart.draw_series(std::iter::once(Rectangle::new(
                     [
-                        (t.x - 0.004 * size as f64, t.y - 0.004 * size as f64),
-                        (t.x + 0.004 * size as f64, t.y + 0.004 * size as f64),
+                        (t.x - unit * size as f64, t.y - unit * size as f64),
+                        (t.x + unit * size as f64, t.y + unit * size as f64),
                     ],
                     color.stroke_width(3),
                 )))?;

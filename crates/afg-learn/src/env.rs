@@ -133,7 +133,10 @@ impl<'a> Env<'a> {
         let tasks = parts.assignment().tasks();
         let bad = |why: String| Err(LearnError::InvalidAction(why));
         if acted > tasks.len() {
-            return bad(format!("{acted} robots cannot have acted out of {}", tasks.len()));
+            return bad(format!(
+                "{acted} robots cannot have acted out of {}",
+                tasks.len()
+            ));
         }
         if let Some(i) = (acted..tasks.len()).find(|&i| tasks[i].is_some()) {
             return bad(format!(
