@@ -44,7 +44,14 @@ impl Point {
         (dx * dx + dy * dy).sqrt()
     }
 
-    fn is_finite(self) -> bool {
+    /// Whether both coordinates are finite.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::Point;
+    /// assert!(Point::new(1.0, 2.0).is_finite() && !Point::new(f64::NAN, 0.0).is_finite());
+    /// ```
+    pub fn is_finite(self) -> bool {
         self.x.is_finite() && self.y.is_finite()
     }
 }

@@ -1,0 +1,234 @@
+//! Missions drawn from presets: the robots and tasks of the paper's distribution
+//! (unit square, rewards N/K to 2N/K, eps = max(2, N/K), β = 1), with workloads,
+//! arrival times and failures.
+
+use afg_game::{GeneratorConfig, Point};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::{Failure, Mission, MissionError, RobotSpec, TaskSpec};
+
+/// How tasks arrive (and robots fail).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Preset {
+    /// Every task at time 0: the first decision is the static game itself.
+    Static,
+    /// `waves` equal waves of tasks, one every `interval`, the first at 0.
+    Waves,
+    /// Arrivals at rate λ (`rate`), the first at 0.
+    Poisson,
+    /// Waves of tasks, and a share (`fail_share`) of the robots fails at uniformly
+    /// random times.
+    Attrition,
+}
+
+impl afg_game::Named for Preset {
+    const ALL: &'static [Self] = &[
+        Preset::Static,
+        Preset::Waves,
+        Preset::Poisson,
+        Preset::Attrition,
+    ];
+    const WHAT: &'static str = "preset";
+
+    fn name(self) -> &'static str {
+        match self {
+            Preset::Static => "static",
+            Preset::Waves => "waves",
+            Preset::Poisson => "poisson",
+            Preset::Attrition => "attrition",
+        }
+    }
+}
+
+/// Every knob of a generated mission ([`MissionConfig::new`] sets the defaults).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MissionConfig {
+    /// How tasks arrive.
+    pub preset: Preset,
+    /// Robots N.
+    pub robots: usize,
+    /// Tasks K over the whole mission.
+    pub tasks: usize,
+    /// Seed of the ChaCha8 generator.
+    pub seed: u64,
+    /// Workloads are uniform in `[workload_min, workload_max]`.
+    pub workload_min: f64,
+    /// See `workload_min`.
+    pub workload_max: f64,
+    /// Every robot's speed.
+    pub speed: f64,
+    /// The arena's side: positions are uniform in `[0, arena]²`.
+    pub arena: f64,
+    /// The mission ends here at the latest.
+    pub horizon: f64,
+    /// Waves of tasks (`waves`, `attrition`).
+    pub waves: usize,
+    /// Time between waves.
+    pub interval: f64,
+    /// Arrivals per time unit (`poisson`).
+    pub rate: f64,
+    /// Share of the robots that fail (`attrition`).
+    pub fail_share: f64,
+    /// Robots may idle (the void task) when no task is worth their trip.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub allow_void: bool,
+    /// Task capacities drawn as the instance generator's `capacity_slack` does (over
+    /// all K tasks: at any moment the open ones may hold fewer robots than there are,
+    /// and the others idle); `None`: unbounded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub capacity_slack: Option<f64>,
+}
+
+impl MissionConfig {
+    /// The defaults: workloads 1–3, speed 1, a unit arena, horizon 40, 4 waves every
+    /// 5 time units, a Poisson rate of K / 20, 30 % of the robots failing.
+    pub fn new(preset: Preset, robots: usize, tasks: usize, seed: u64) -> Self {
+        MissionConfig {
+            preset,
+            robots,
+            tasks,
+            seed,
+            workload_min: 1.0,
+            workload_max: 3.0,
+            speed: 1.0,
+            arena: 1.0,
+            horizon: 40.0,
+            waves: 4,
+            interval: 5.0,
+            rate: tasks as f64 / 20.0,
+            fail_share: 0.3,
+            allow_void: false,
+            capacity_slack: None,
+        }
+    }
+
+    /// Draws the mission.
+    ///
+    /// # Errors
+    /// [`MissionError::Invalid`] for knobs out of range (no robots or tasks, workloads,
+    /// speed, arena, horizon, interval or rate not finite and positive, a share outside
+    /// `[0, 1]`, no waves), or a mission that fails [`Mission::check`] (a wave after
+    /// the horizon).
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_mission::{MissionConfig, Preset};
+    /// let a = MissionConfig::new(Preset::Poisson, 30, 10, 7).generate()?;
+    /// assert_eq!(a, MissionConfig::new(Preset::Poisson, 30, 10, 7).generate()?);
+    /// assert_ne!(a, MissionConfig::new(Preset::Poisson, 30, 10, 8).generate()?);
+    /// # Ok::<(), afg_mission::MissionError>(())
+    /// ```
+    pub fn generate(&self) -> Result<Mission, MissionError> {
+        self.check()?;
+        let mut paper = GeneratorConfig::paper(self.robots, self.tasks, self.seed);
+        if let Some(slack) = self.capacity_slack {
+            paper = paper.with_capacity_slack(slack);
+        }
+        let game = paper.generate()?;
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed ^ 0x6d69_7373_696f_6e00);
+        let scale = |p: Point| Point::new(self.arena * p.x, self.arena * p.y);
+        let robots = game
+            .robots()
+            .iter()
+            .map(|&p| RobotSpec {
+                position: scale(p),
+                speed: self.speed,
+            })
+            .collect();
+        let appears = self.arrival_times(&mut rng);
+        let tasks = game
+            .tasks()
+            .iter()
+            .zip(appears)
+            .map(|(t, appears)| TaskSpec {
+                position: scale(t.position),
+                reward: t.reward,
+                eps: t.eps,
+                capacity: t.capacity,
+                workload: rng.random_range(self.workload_min..=self.workload_max),
+                appears,
+            })
+            .collect();
+        let failures = if self.preset == Preset::Attrition {
+            let count = (self.fail_share * self.robots as f64).round() as usize;
+            let mut order: Vec<usize> = (0..self.robots).collect();
+            for k in 0..count {
+                let pick = rng.random_range(k..self.robots);
+                order.swap(k, pick);
+            }
+            let mut failures: Vec<Failure> = order[..count]
+                .iter()
+                .map(|&robot| Failure {
+                    robot,
+                    time: rng.random_range(0.0..self.horizon),
+                    returns: None,
+                })
+                .collect();
+            failures.sort_by(|a, b| a.time.total_cmp(&b.time).then(a.robot.cmp(&b.robot)));
+            failures
+        } else {
+            Vec::new()
+        };
+        let beta = game.beta() / self.arena;
+        let mission = Mission::new(beta, self.allow_void, self.horizon, robots, tasks, failures)?;
+        Ok(mission.with_generator(self.clone()))
+    }
+
+    /// The K arrival times of the preset, in task order.
+    fn arrival_times(&self, rng: &mut ChaCha8Rng) -> Vec<f64> {
+        let k = self.tasks;
+        match self.preset {
+            Preset::Static => vec![0.0; k],
+            Preset::Waves | Preset::Attrition => (0..k)
+                .map(|j| (j * self.waves / k) as f64 * self.interval)
+                .collect(),
+            Preset::Poisson => {
+                let mut t = 0.0;
+                (0..k)
+                    .map(|j| {
+                        if j > 0 {
+                            let u: f64 = rng.random_range(f64::EPSILON..1.0);
+                            t += -u.ln() / self.rate;
+                        }
+                        // Arrivals past the horizon are folded back into it.
+                        t.min(self.horizon * (1.0 - 1e-9))
+                    })
+                    .collect()
+            }
+        }
+    }
+
+    fn check(&self) -> Result<(), MissionError> {
+        let bad = |what: &str| Err(MissionError::Invalid(what.into()));
+        let positive = |x: f64| x.is_finite() && x > 0.0;
+        if self.robots == 0 || self.tasks == 0 {
+            return bad("a mission needs at least one robot and one task");
+        }
+        if !(positive(self.workload_min) && self.workload_max >= self.workload_min) {
+            return bad("workloads must be finite, positive, and min ≤ max");
+        }
+        if !self.workload_max.is_finite() {
+            return bad("the largest workload must be finite");
+        }
+        if !(positive(self.speed) && positive(self.arena) && positive(self.horizon)) {
+            return bad("speed, arena and horizon must be finite and positive");
+        }
+        if !(positive(self.interval) && positive(self.rate)) || self.waves == 0 {
+            return bad("the interval and rate must be finite and positive, waves at least 1");
+        }
+        if self
+            .capacity_slack
+            .is_some_and(|s| !(s.is_finite() && s >= 1.0))
+        {
+            return bad("the capacity slack must be at least 1");
+        }
+        if !(0.0..=1.0).contains(&self.fail_share) {
+            return bad("the share of robots that fail must be in [0, 1]");
+        }
+        Ok(())
+    }
+}

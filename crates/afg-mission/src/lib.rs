@@ -1,0 +1,71 @@
+//! Missions over time for the alliance formation game: tasks appear with a workload
+//! and are worked off, robots travel at their speed and may fail, and an allocator —
+//! any [`afg_baseline::Allocator`] — decides at every event.
+//!
+//! - [`Mission`]: the robots, tasks, failures and horizon, with its JSON format
+//!   (`afg-mission`, versioned, unknown fields refused) and its checks.
+//! - [`MissionConfig`]: missions drawn from presets ([`Preset`]: static, waves,
+//!   Poisson arrivals, attrition) with every knob.
+//! - [`simulate`]: the event-driven run with a replanning rule ([`Replan`]: from
+//!   scratch, warm-started, or the exact optimum re-solved from its previous prices),
+//!   an optional decision latency ([`Latency`]) and replanning interval, returning the
+//!   [`Metrics`], a timeline and, if asked, every event ([`TraceEvent`]).
+//!
+//! The model, in brief (docs/missions.md has it in full): robots move in straight
+//! lines towards their task; the `n` robots present at a task do
+//! `log_eps(n + eps − 1)` units of work per time unit ([`work_rate`]), so the paper's
+//! coalition value `F_j(n)` is the task's reward rate; a task is done when its
+//! workload is, and its robots are free. At every event (a task appears or is done, a
+//! robot fails or returns) the allocator is handed the paper's game of the current
+//! state — the living robots where they are, the open tasks as they are (their reward,
+//! not scaled by the work left) — and robots act on its answer once it is made.
+//!
+//! # Examples
+//! ```
+//! use afg_baseline::{Greedy, Optimum};
+//! use afg_mission::{MissionConfig, Preset, Replan, RunOptions, simulate};
+//! let mission = MissionConfig::new(Preset::Waves, 40, 8, 2).generate()?;
+//! let greedy = simulate(&mission, Replan::Scratch(&Greedy), RunOptions::default())?;
+//! let opt = simulate(&mission, Replan::IncrementalOpt, RunOptions::default())?;
+//! assert_eq!(greedy.metrics.tasks, 8);
+//! assert!(opt.metrics.decisions >= 4); // at least one per wave
+//! # Ok::<(), afg_mission::MissionError>(())
+//! ```
+
+mod generate;
+mod mission;
+mod sim;
+
+pub use generate::{MissionConfig, Preset};
+pub use mission::{Failure, MISSION_FORMAT, MISSION_VERSION, Mission, RobotSpec, TaskSpec};
+pub use sim::{
+    Latency, Metrics, MissionRun, Replan, RunOptions, TimelinePoint, TraceEvent, simulate,
+    work_rate,
+};
+
+use afg_baseline::AllocError;
+use afg_game::GameError;
+use thiserror::Error;
+
+/// What can go wrong with a mission.
+#[derive(Debug, Error)]
+pub enum MissionError {
+    /// Malformed JSON, an unknown or a missing field.
+    #[error("invalid mission JSON: {0}")]
+    Json(#[from] serde_json::Error),
+    /// A file of another format or version.
+    #[error("expected format \"afg-mission\" version 1, found {found}")]
+    Format {
+        /// What the file declares.
+        found: String,
+    },
+    /// A value out of range.
+    #[error("invalid mission: {0}")]
+    Invalid(String),
+    /// The game of a decision could not be built.
+    #[error(transparent)]
+    Game(#[from] GameError),
+    /// The allocator failed.
+    #[error(transparent)]
+    Alloc(#[from] AllocError),
+}

@@ -1,0 +1,151 @@
+//! Decisions: the game of the current state, the allocator, and the decision landing.
+
+use std::collections::HashMap;
+use std::time::Instant;
+
+use afg_baseline::{CentralisedDa, Optimum};
+use afg_game::{Assignment, Instance, RobotId, TaskId};
+
+use super::{Latency, Pending, Replan, Sim, TraceEvent};
+use crate::MissionError;
+
+impl Sim<'_, '_> {
+    /// A decision on the current state: the living robots at their positions, the open
+    /// tasks. It lands now, or after the latency.
+    pub(super) fn decide(&mut self) -> Result<(), MissionError> {
+        let alive: Vec<usize> = (0..self.robots.len())
+            .filter(|&i| self.robots[i].alive)
+            .collect();
+        let open: Vec<usize> = (0..self.tasks.len())
+            .filter(|&j| self.tasks[j].open)
+            .collect();
+        if alive.is_empty() || open.is_empty() {
+            return Ok(());
+        }
+        let game = self.game(&alive, &open)?;
+        let start = Instant::now();
+        let assignment = self.plan(&game, &alive, &open)?;
+        let compute_s = start.elapsed().as_secs_f64();
+        self.decisions += 1;
+        self.compute.push(compute_s);
+        let tasks = alive
+            .iter()
+            .zip(assignment.tasks())
+            .map(|(&i, t)| (i, t.map(|j| open[j.index()])))
+            .collect();
+        let delay = match self.options.latency {
+            Latency::None => 0.0,
+            Latency::Fixed { delay } => delay,
+            Latency::Measured { factor } => compute_s * factor,
+        };
+        self.pending = Some(Pending {
+            ready: self.now + delay,
+            asked: self.now,
+            tasks,
+            compute_s,
+        });
+        self.decided = true;
+        if delay == 0.0 {
+            self.land();
+        }
+        Ok(())
+    }
+
+    /// The game of the living robots `alive` (at their positions now) and the open tasks
+    /// `open`: GRAPE's game where the mission allows idling, or where the open tasks
+    /// cannot hold every robot (the extra robots then idle).
+    fn game(&self, alive: &[usize], open: &[usize]) -> Result<Instance, MissionError> {
+        let robots = alive.iter().map(|&i| self.position(i)).collect();
+        let tasks: Vec<_> = open.iter().map(|&j| self.mission.tasks[j].task()).collect();
+        let room = tasks
+            .iter()
+            .map(|t| t.capacity.unwrap_or(usize::MAX))
+            .fold(0usize, usize::saturating_add);
+        let beta = self.mission.beta;
+        Ok(if self.mission.allow_void || room < alive.len() {
+            Instance::with_void(robots, tasks, beta)?
+        } else {
+            Instance::new(robots, tasks, beta)?
+        })
+    }
+
+    /// The assignment of `game` by the replanning rule.
+    fn plan(
+        &mut self,
+        game: &Instance,
+        alive: &[usize],
+        open: &[usize],
+    ) -> Result<Assignment, MissionError> {
+        match self.replan {
+            Replan::Scratch(allocator) => Ok(allocator.allocate(game)?.assignment),
+            Replan::Warm { first, .. } if !self.decided => Ok(first.allocate(game)?.assignment),
+            Replan::Warm { preference, .. } => {
+                let column: HashMap<usize, usize> =
+                    open.iter().enumerate().map(|(k, &j)| (j, k)).collect();
+                let mut a = Assignment::unassigned(game.num_robots(), game.num_tasks());
+                for (k, &i) in alive.iter().enumerate() {
+                    let kept = self.robots[i].task.and_then(|j| column.get(&j));
+                    if let Some(&col) = kept {
+                        let (robot, task) = (RobotId(k as u32), TaskId(col as u32));
+                        if a.has_room(game, robot, task) {
+                            a.set(robot, Some(task));
+                        }
+                    }
+                }
+                CentralisedDa::new(preference).improve(game, &mut a);
+                Ok(a)
+            }
+            Replan::IncrementalOpt => {
+                let (a, prices) = if self.decided {
+                    let start: Vec<f64> = open
+                        .iter()
+                        .map(|j| self.prices.get(j).copied().unwrap_or(0.0))
+                        .collect();
+                    Optimum.with_prices_from(game, &start)?
+                } else {
+                    Optimum.with_prices(game)
+                };
+                self.prices = open.iter().copied().zip(prices).collect();
+                Ok(a)
+            }
+        }
+    }
+
+    /// The pending decision takes effect: each living robot heads for its task (if still
+    /// open) or stops.
+    pub(super) fn land(&mut self) {
+        let Some(p) = self.pending.take() else {
+            return;
+        };
+        for &(i, task) in &p.tasks {
+            if !self.robots[i].alive {
+                continue;
+            }
+            match task.filter(|&j| self.tasks[j].open) {
+                Some(j) => self.send(i, j),
+                None if self.robots[i].task.is_some() => self.stop(i),
+                None => {}
+            }
+        }
+        if self.options.trace {
+            let tasks = self
+                .robots
+                .iter()
+                .map(|r| r.task.map_or(-1, |j| j as i64))
+                .collect();
+            let positions = (0..self.robots.len())
+                .map(|i| {
+                    let p = self.position(i);
+                    [p.x, p.y]
+                })
+                .collect();
+            self.trace.push(TraceEvent::Decision {
+                time: self.now,
+                asked: p.asked,
+                tasks,
+                positions,
+                compute_s: p.compute_s,
+            });
+        }
+    }
+}

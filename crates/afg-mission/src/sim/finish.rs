@@ -1,0 +1,71 @@
+//! The metrics of a finished run.
+
+use super::{Metrics, MissionRun, Sim};
+
+impl Sim<'_, '_> {
+    /// The run's metrics, timeline and trace.
+    pub(super) fn finish(self) -> MissionRun {
+        let mut latencies: Vec<f64> = self
+            .tasks
+            .iter()
+            .zip(&self.mission.tasks)
+            .filter_map(|(t, spec)| t.done_at.map(|d| d - spec.appears))
+            .collect();
+        latencies.sort_by(f64::total_cmp);
+        let n = latencies.len();
+        let p95 = (n > 0).then(|| latencies[(0.95 * n as f64).ceil() as usize - 1]);
+        let makespan = self
+            .tasks
+            .iter()
+            .map(|t| t.done_at)
+            .collect::<Option<Vec<f64>>>()
+            .map(|done| done.into_iter().fold(0.0, f64::max));
+        // Legs still under way count up to where the robots are now.
+        let travelling: f64 = (0..self.robots.len())
+            .filter(|&i| {
+                let r = &self.robots[i];
+                r.alive && r.task.is_some() && !r.there
+            })
+            .map(|i| self.robots[i].from.distance(self.position(i)))
+            .sum();
+        let work_done = self
+            .tasks
+            .iter()
+            .zip(&self.mission.tasks)
+            .map(|(t, spec)| spec.workload - t.remaining)
+            .sum();
+        let total: f64 = self.compute.iter().sum();
+        let metrics = Metrics {
+            tasks_done: n,
+            tasks: self.tasks.len(),
+            reward_done: self.reward_done(),
+            reward_total: self
+                .mission
+                .tasks
+                .iter()
+                .map(|t| t.reward * t.workload)
+                .sum(),
+            latency_mean: (n > 0).then(|| latencies.iter().sum::<f64>() / n as f64),
+            latency_p95: p95,
+            latency_max: latencies.last().copied(),
+            makespan,
+            end: self.now,
+            distance: self.distance + travelling,
+            reassignments: self.reassignments,
+            decisions: self.decisions,
+            compute_mean_s: if self.compute.is_empty() {
+                0.0
+            } else {
+                total / self.compute.len() as f64
+            },
+            compute_max_s: self.compute.iter().copied().fold(0.0, f64::max),
+            compute_total_s: total,
+            work_done,
+        };
+        MissionRun {
+            metrics,
+            timeline: self.timeline,
+            trace: self.trace,
+        }
+    }
+}

@@ -1,0 +1,408 @@
+//! Missions against what they must be: the static preset is the static game, event
+//! times match a fine-step reference, no robot outruns its speed, capacities hold,
+//! failed robots never act again, the incremental optimum is the optimum at every
+//! decision, and a seed gives one trace.
+
+use afg_baseline::{Method, Optimum, verify_optimal};
+use afg_game::{Assignment, GeneratorConfig, Instance, Point, TaskId};
+use afg_mission::{
+    Latency, Mission, MissionConfig, MissionRun, Preset, Replan, RunOptions, TraceEvent, simulate,
+    work_rate,
+};
+use proptest::prelude::*;
+
+fn traced() -> RunOptions {
+    RunOptions {
+        trace: true,
+        ..RunOptions::default()
+    }
+}
+
+/// The first decision's assignment of a run, robot by robot.
+fn first_decision(run: &MissionRun) -> Vec<i64> {
+    run.trace
+        .iter()
+        .find_map(|e| match e {
+            TraceEvent::Decision { tasks, .. } => Some(tasks.clone()),
+            _ => None,
+        })
+        .expect("a decision")
+}
+
+fn assignment(inst: &Instance, tasks: &[i64]) -> Assignment {
+    let tasks = tasks
+        .iter()
+        .map(|&t| u32::try_from(t).ok().map(TaskId))
+        .collect();
+    Assignment::from_tasks(inst, tasks).unwrap()
+}
+
+/// The static preset's first decision is the static game of `afg solve`: the same
+/// instance, and every method's answer on it.
+#[test]
+fn the_static_preset_is_the_static_game() {
+    for seed in 0..4 {
+        let (n, k) = (30, 5);
+        let mission = MissionConfig::new(Preset::Static, n, k, seed)
+            .generate()
+            .unwrap();
+        let game = GeneratorConfig::paper(n, k, seed).generate().unwrap();
+        for method in [
+            Method::Opt,
+            Method::Da,
+            Method::DaBalanced,
+            Method::Greedy,
+            Method::Nearest,
+        ] {
+            let allocator = method.allocator(seed);
+            let run = simulate(&mission, Replan::Scratch(allocator.as_ref()), traced()).unwrap();
+            let first = assignment(&game, &first_decision(&run));
+            let solved = allocator.allocate(&game).unwrap().assignment;
+            assert_eq!(
+                game.welfare(&first),
+                game.welfare(&solved),
+                "seed {seed} {method}"
+            );
+        }
+    }
+}
+
+/// Robot positions and task work stepped with a fine clock `dt`, replaying the run's
+/// decisions at their times: when each task is done, and every (robot, task, time)
+/// arrival.
+fn reference(mission: &Mission, run: &MissionRun, dt: f64) -> (Vec<f64>, Vec<(usize, usize, f64)>) {
+    let n = mission.robots.len();
+    let mut pos: Vec<Point> = mission.robots.iter().map(|r| r.position).collect();
+    let mut task: Vec<Option<usize>> = vec![None; n];
+    let mut remaining: Vec<f64> = mission.tasks.iter().map(|t| t.workload).collect();
+    let mut done = vec![f64::NAN; remaining.len()];
+    let mut arrived = vec![f64::NAN; n];
+    let mut arrivals: Vec<(usize, usize, f64)> = Vec::new();
+    let decisions: Vec<(f64, Vec<i64>)> = run
+        .trace
+        .iter()
+        .filter_map(|e| match e {
+            TraceEvent::Decision { time, tasks, .. } => Some((*time, tasks.clone())),
+            _ => None,
+        })
+        .collect();
+    let (mut t, mut next) = (0.0, 0);
+    while t < run.metrics.end + dt {
+        while next < decisions.len() && decisions[next].0 <= t + 1e-12 {
+            for (i, &j) in decisions[next].1.iter().enumerate() {
+                let j = usize::try_from(j).ok();
+                if j != task[i] {
+                    arrived[i] = f64::NAN;
+                }
+                task[i] = j;
+            }
+            next += 1;
+        }
+        let mut present = vec![0usize; remaining.len()];
+        for i in 0..n {
+            let Some(j) = task[i] else { continue };
+            let target = mission.tasks[j].position;
+            let d = pos[i].distance(target);
+            let step = mission.robots[i].speed * dt;
+            if d <= step {
+                pos[i] = target;
+                if arrived[i].is_nan() {
+                    arrived[i] = t;
+                    arrivals.push((i, j, t));
+                }
+                present[j] += 1;
+            } else {
+                pos[i] = Point::new(
+                    pos[i].x + step * (target.x - pos[i].x) / d,
+                    pos[i].y + step * (target.y - pos[i].y) / d,
+                );
+            }
+        }
+        for (j, r) in remaining.iter_mut().enumerate() {
+            if *r > 0.0 && present[j] > 0 {
+                *r -= work_rate(present[j], mission.tasks[j].eps) * dt;
+                if *r <= 0.0 {
+                    done[j] = t + dt;
+                }
+            }
+        }
+        t += dt;
+    }
+    (done, arrivals)
+}
+
+/// Each arrival and completion of the event-driven run happens in the fine-step
+/// reference within a step or so of its time.
+fn check_against_reference(mission: &Mission, run: &MissionRun, dt: f64) {
+    let (done, arrivals) = reference(mission, run, dt);
+    let speed = mission.robots.iter().map(|r| r.speed).fold(0.0, f64::max);
+    for e in &run.trace {
+        match *e {
+            TraceEvent::TaskDone { time, task } => {
+                assert!(
+                    (done[task] - time).abs() <= 3.0 * dt * (1.0 + speed),
+                    "task {task}: done at {time}, the reference at {}",
+                    done[task]
+                );
+            }
+            TraceEvent::Arrival { time, robot, task } => {
+                let nearest = arrivals
+                    .iter()
+                    .filter(|&&(i, j, _)| (i, j) == (robot, task))
+                    .map(|&(_, _, t)| (t - time).abs())
+                    .fold(f64::INFINITY, f64::min);
+                assert!(
+                    nearest <= 2.0 * dt,
+                    "robot {robot} at task {task}: arrived at {time}, the reference {nearest} away"
+                );
+            }
+            _ => {}
+        }
+    }
+}
+
+#[test]
+fn event_times_equal_a_fine_step_reference() {
+    for seed in 0..3 {
+        for preset in [Preset::Static, Preset::Waves] {
+            let mut config = MissionConfig::new(preset, 6, 3, seed);
+            config.horizon = 20.0;
+            let mission = config.generate().unwrap();
+            let run =
+                simulate(&mission, Replan::Scratch(&afg_baseline::Nearest), traced()).unwrap();
+            assert!(run.metrics.tasks_done > 0);
+            check_against_reference(&mission, &run, 1e-4);
+        }
+    }
+}
+
+/// What every traced run must satisfy: robots no faster than their speed (an arrival
+/// comes exactly distance / speed after the decision that sent the robot there),
+/// coalitions within capacity, failed robots idle, work conserved.
+fn check_run(mission: &Mission, run: &MissionRun) {
+    let n = mission.robots.len();
+    let mut sent: Vec<Option<(f64, [f64; 2], i64)>> = vec![None; n];
+    let mut failed = vec![false; n];
+    for e in &run.trace {
+        match e {
+            TraceEvent::Decision {
+                time,
+                tasks,
+                positions,
+                ..
+            } => {
+                let mut sizes = vec![0usize; mission.tasks.len()];
+                for (i, &j) in tasks.iter().enumerate() {
+                    if j < 0 {
+                        sent[i] = None;
+                        continue;
+                    }
+                    assert!(!failed[i], "failed robot {i} given task {j}");
+                    sizes[j as usize] += 1;
+                    if sent[i].is_none_or(|(_, _, old)| old != j) {
+                        sent[i] = Some((*time, positions[i], j));
+                    }
+                }
+                for (j, &size) in sizes.iter().enumerate() {
+                    let cap = mission.tasks[j].capacity.unwrap_or(usize::MAX);
+                    assert!(size <= cap, "task {j}: {size} robots, capacity {cap}");
+                }
+            }
+            TraceEvent::Arrival { time, robot, task } => {
+                assert!(!failed[*robot], "failed robot {robot} arrived");
+                let (t0, [x, y], j) = sent[*robot].expect("sent before arriving");
+                assert_eq!(j as usize, *task);
+                let d = Point::new(x, y).distance(mission.tasks[*task].position);
+                let need = d / mission.robots[*robot].speed;
+                assert!(
+                    (time - t0 - need).abs() <= 1e-9 * (1.0 + time),
+                    "robot {robot}: {} time units for {need}",
+                    time - t0
+                );
+            }
+            TraceEvent::RobotFails { robot, .. } => failed[*robot] = true,
+            TraceEvent::RobotReturns { robot, .. } => failed[*robot] = false,
+            _ => {}
+        }
+    }
+    let m = &run.metrics;
+    let done_work: f64 = run
+        .trace
+        .iter()
+        .filter_map(|e| match e {
+            TraceEvent::TaskDone { task, .. } => Some(mission.tasks[*task].workload),
+            _ => None,
+        })
+        .sum();
+    assert!(m.work_done >= done_work - 1e-9);
+    assert!(m.work_done <= mission.tasks.iter().map(|t| t.workload).sum::<f64>() + 1e-9);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+
+    /// Random missions of every preset, with capacities, failures that return, and
+    /// every replanning rule: the run's invariants hold, and the same seed gives the
+    /// same trace (compute times aside).
+    #[test]
+    fn every_run_keeps_the_rules_and_repeats(
+        seed in 0u64..1000,
+        preset in prop_oneof![
+            Just(Preset::Static), Just(Preset::Waves), Just(Preset::Poisson), Just(Preset::Attrition)
+        ],
+        robots in 2usize..30,
+        tasks in 1usize..8,
+        capped in any::<bool>(),
+        rule in 0usize..4,
+    ) {
+        let mut config = MissionConfig::new(preset, robots, tasks, seed);
+        config.horizon = 30.0;
+        config.capacity_slack = capped.then_some(1.2);
+        let mut mission = config.generate().unwrap();
+        if let Some(f) = mission.failures.first_mut() {
+            f.returns = Some((f.time + 3.0).min(29.0)).filter(|&b| b > f.time);
+        }
+        let allocator = Method::Greedy.allocator(seed);
+        let replan = match rule {
+            0 => Replan::Scratch(allocator.as_ref()),
+            1 => Replan::Warm { first: allocator.as_ref(), preference: afg_game::Preference::Balanced },
+            2 => Replan::IncrementalOpt,
+            _ => Replan::Scratch(&Optimum),
+        };
+        let options = RunOptions { replan_every: (rule == 3).then_some(2.5), ..traced() };
+        let run = simulate(&mission, replan, options).unwrap();
+        check_run(&mission, &run);
+        let again = simulate(&mission, replan, options).unwrap();
+        let strip = |r: &MissionRun| -> Vec<TraceEvent> {
+            r.trace.iter().cloned().map(|e| match e {
+                TraceEvent::Decision { time, asked, tasks, positions, .. } =>
+                    TraceEvent::Decision { time, asked, tasks, positions, compute_s: 0.0 },
+                e => e,
+            }).collect()
+        };
+        prop_assert_eq!(strip(&run), strip(&again));
+        prop_assert_eq!(run.metrics.reward_done, again.metrics.reward_done);
+    }
+}
+
+/// The incremental optimum is the optimum of every decision's game, with prices that
+/// prove it: the game is rebuilt from the trace and solved from scratch.
+#[test]
+fn the_incremental_optimum_is_the_optimum_at_every_decision() {
+    for seed in 0..6 {
+        let preset = [Preset::Waves, Preset::Poisson, Preset::Attrition][seed as usize % 3];
+        let mission = MissionConfig::new(preset, 40, 10, seed).generate().unwrap();
+        let run = simulate(&mission, Replan::IncrementalOpt, traced()).unwrap();
+        let (mut open, mut alive) = (vec![false; 10], vec![true; 40]);
+        let mut checked = 0;
+        for e in &run.trace {
+            match e {
+                TraceEvent::TaskAppears { task, .. } => open[*task] = true,
+                TraceEvent::TaskDone { task, .. } => open[*task] = false,
+                TraceEvent::RobotFails { robot, .. } => alive[*robot] = false,
+                TraceEvent::Decision {
+                    tasks, positions, ..
+                } => {
+                    let robots: Vec<usize> = (0..40).filter(|&i| alive[i]).collect();
+                    let columns: Vec<usize> = (0..10).filter(|&j| open[j]).collect();
+                    let game = Instance::new(
+                        robots
+                            .iter()
+                            .map(|&i| Point::new(positions[i][0], positions[i][1]))
+                            .collect(),
+                        columns.iter().map(|&j| mission.tasks[j].task()).collect(),
+                        mission.beta,
+                    )
+                    .unwrap();
+                    let chosen: Vec<i64> = robots
+                        .iter()
+                        .map(|&i| {
+                            columns
+                                .iter()
+                                .position(|&j| j as i64 == tasks[i])
+                                .map_or(-1, |k| k as i64)
+                        })
+                        .collect();
+                    let a = assignment(&game, &chosen);
+                    let (opt, prices) = Optimum.with_prices(&game);
+                    let best = game.welfare(&opt);
+                    assert!(
+                        (game.welfare(&a) - best).abs() <= 1e-9 * best.abs().max(1.0),
+                        "seed {seed}: {} vs {best}",
+                        game.welfare(&a)
+                    );
+                    verify_optimal(&game, &opt, &prices).unwrap();
+                    checked += 1;
+                }
+                _ => {}
+            }
+        }
+        assert!(checked >= 3, "seed {seed}: {checked} decisions");
+    }
+}
+
+/// A decision latency delays every decision; the mission's outcome is no better.
+#[test]
+fn latency_delays_decisions() {
+    let mission = MissionConfig::new(Preset::Waves, 30, 8, 3)
+        .generate()
+        .unwrap();
+    let instant = simulate(&mission, Replan::IncrementalOpt, traced()).unwrap();
+    let slow = RunOptions {
+        latency: Latency::Fixed { delay: 0.5 },
+        ..traced()
+    };
+    let late = simulate(&mission, Replan::IncrementalOpt, slow).unwrap();
+    for e in &late.trace {
+        if let TraceEvent::Decision { time, asked, .. } = e {
+            assert!((time - asked - 0.5).abs() < 1e-12);
+        }
+    }
+    let (a, b) = (&instant.metrics, &late.metrics);
+    assert!(b.latency_mean.unwrap() > a.latency_mean.unwrap());
+}
+
+#[test]
+fn bad_missions_are_refused_in_one_line() {
+    let mission = MissionConfig::new(Preset::Attrition, 10, 3, 1)
+        .generate()
+        .unwrap();
+    let text = mission.to_json();
+    let cases = [
+        (
+            text.replacen("\"speed\":1.0", "\"speed\":-1.0", 1),
+            "speed -1",
+        ),
+        (
+            text.replacen("\"workload\":", "\"workload\":-", 1),
+            "workload -",
+        ),
+        (
+            text.replace("\"horizon\":40.0", "\"horizon\":0.5"),
+            "outside the mission",
+        ),
+        (
+            text.replacen("\"robot\":", "\"robot\":9", 1),
+            "names robot 9",
+        ),
+        (text.replace("afg-mission", "afg-instance"), "afg-instance"),
+        (text.replacen("\"beta\"", "\"betta\"", 1), "unknown field"),
+    ];
+    for (bad, needle) in cases {
+        assert_ne!(bad, text, "{needle}");
+        let err = Mission::from_json(&bad).unwrap_err().to_string();
+        assert!(err.contains(needle), "{needle}: {err}");
+        assert!(!err.contains('\n'));
+    }
+    assert!(
+        simulate(
+            &mission,
+            Replan::IncrementalOpt,
+            RunOptions {
+                replan_every: Some(0.0),
+                ..RunOptions::default()
+            }
+        )
+        .is_err()
+    );
+}
