@@ -9,6 +9,7 @@
 //! | `afg score` | anyone's assignment against the game: % of OPT, stability, who would move | [`score`] |
 //! | `afg gen` | your own instances from the paper's distribution | [`generate`] |
 //! | `afg swarm` | GRAPE and a decentralised auction over a failing network | [`swarm`] |
+//! | `afg mission` | missions over time: draw one, run allocators in the loop, compare them | [`mission`] |
 //! | `afg train` | a Q network by DQN or Double DQN, resumable | [`train`] |
 //! | `afg train-price` | the price model (ours) | [`price`] |
 //! | `afg plot-curves`, `afg training-report` | training runs as an SVG or a Markdown table | [`curves`] |
@@ -29,6 +30,7 @@
 pub mod curves;
 pub mod generate;
 pub mod migrate;
+pub mod mission;
 pub mod price;
 pub mod realloc;
 pub mod score;
@@ -65,6 +67,9 @@ pub enum Command {
     Gen(generate::GenArgs),
     /// GRAPE and a decentralised auction over a lossy, late, range-limited network where robots fail mid-run.
     Swarm(swarm::SwarmArgs),
+    /// Missions over time: tasks appear and are worked off, robots travel and fail, an allocator decides at every event.
+    #[command(subcommand)]
+    Mission(mission::MissionCommand),
     /// Train a Q network with DQN or Double DQN (resumable, seeded, with validation curves).
     Train(train::TrainArgs),
     /// Train the price-structured model (ours) by regression on the exact Q* (DAgger).
@@ -88,6 +93,7 @@ impl Command {
             Command::Score(args) => score::run(args),
             Command::Gen(args) => generate::run(args),
             Command::Swarm(args) => swarm::run(args),
+            Command::Mission(command) => mission::run(command),
             Command::Train(args) => train::run(args, "afg train"),
             Command::TrainPrice(args) => price::run(args),
             Command::PlotCurves(args) => curves::run_plot(args),

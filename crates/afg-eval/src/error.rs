@@ -11,6 +11,9 @@ pub enum EvalError {
     /// An allocator failed.
     #[error(transparent)]
     Alloc(#[from] AllocError),
+    /// A mission could not be read or run.
+    #[error(transparent)]
+    Mission(#[from] afg_mission::MissionError),
     /// A learned model could not be loaded.
     #[error(transparent)]
     Learn(#[from] LearnError),

@@ -306,3 +306,83 @@ pub fn swarm_svg(runs: &[(String, SwarmReport)], title: &str) -> Result<String, 
     }
     Ok(svg)
 }
+
+/// Mission runs against time as an SVG of three panels — tasks open, tasks done, and
+/// the reward of the tasks done — one stepped line per run (a method, on one mission).
+///
+/// # Errors
+/// [`EvalError::Figure`] if there is no run or drawing fails.
+///
+/// # Examples
+/// ```
+/// use afg_baseline::Greedy;
+/// use afg_mission::{MissionConfig, Preset, Replan, RunOptions, simulate};
+/// let mission = MissionConfig::new(Preset::Waves, 20, 6, 1).generate()?;
+/// let run = simulate(&mission, Replan::Scratch(&Greedy), RunOptions::default())?;
+/// let svg = afg_eval::figures::mission_svg(&[("greedy".into(), run)], "waves")?;
+/// assert!(svg.contains("tasks done") && svg.contains("greedy"));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn mission_svg(
+    runs: &[(String, afg_mission::MissionRun)],
+    title: &str,
+) -> Result<String, EvalError> {
+    let end = runs
+        .iter()
+        .flat_map(|(_, r)| r.timeline.last().map(|p| p.time))
+        .fold(f64::NAN, f64::max);
+    if runs.is_empty() || !end.is_finite() {
+        return Err(EvalError::Figure("no mission run to draw".into()));
+    }
+    type Value = fn(&afg_mission::TimelinePoint) -> f64;
+    let panels: [(&str, Value); 3] = [
+        ("tasks open", |p| p.open as f64),
+        ("tasks done", |p| p.done as f64),
+        ("reward of the tasks done", |p| p.reward),
+    ];
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (800, 900)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let root = root.titled(title, ("sans-serif", 20))?;
+        for (area, (label, value)) in root.split_evenly((3, 1)).iter().zip(panels) {
+            let top = runs
+                .iter()
+                .flat_map(|(_, r)| r.timeline.iter().map(value))
+                .fold(0.0, f64::max)
+                .max(1.0)
+                * 1.05;
+            let mut chart = ChartBuilder::on(area)
+                .margin(12)
+                .x_label_area_size(35)
+                .y_label_area_size(60)
+                .build_cartesian_2d(0.0..end.max(1e-9), 0.0..top)?;
+            chart.configure_mesh().x_desc("time").y_desc(label).draw()?;
+            for (i, (name, r)) in runs.iter().enumerate() {
+                let color = Palette99::pick(i).to_rgba();
+                // Stepped: each value holds until the next event.
+                let mut points = Vec::with_capacity(2 * r.timeline.len());
+                for (k, p) in r.timeline.iter().enumerate() {
+                    if k > 0 {
+                        points.push((p.time, value(&r.timeline[k - 1])));
+                    }
+                    points.push((p.time, value(p)));
+                }
+                chart
+                    .draw_series(LineSeries::new(points, color.stroke_width(2)))?
+                    .label(name.clone())
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                    });
+            }
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::UpperLeft)
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .draw()?;
+        }
+        root.present()?;
+    }
+    Ok(svg)
+}

@@ -1,0 +1,316 @@
+//! `afg mission`: missions over time — `gen` draws one, `run` plays one allocator in
+//! the loop, `compare` plays several on the same missions (docs/missions.md).
+
+use std::path::{Path, PathBuf};
+
+use afg_baseline::Method;
+use afg_eval::figures::mission_svg;
+use afg_eval::mission::{Planner, compare, table};
+use afg_game::fs::{write_atomic, write_atomic_making_dirs};
+use afg_learn::run::ModelOptions;
+use afg_mission::{Latency, Mission, MissionConfig, MissionRun, Preset, RunOptions};
+use anyhow::{Context, Result, bail};
+use clap::{Args, Subcommand};
+
+/// `afg mission`'s commands.
+#[derive(Subcommand)]
+pub enum MissionCommand {
+    /// Draw a mission: robots and K tasks arriving over it by a preset, with every knob.
+    Gen(GenArgs),
+    /// Run one allocator in the loop and print the mission's metrics.
+    Run(RunArgs),
+    /// Run several allocators on the same missions: one table (and curves with --svg).
+    Compare(CompareArgs),
+}
+
+/// `afg mission gen`: the preset, its knobs and the output file.
+#[derive(Args)]
+pub struct GenArgs {
+    /// How tasks arrive: static (all at 0), waves, poisson, attrition (waves, and robots fail).
+    #[arg(long, value_parser = crate::choice::<Preset>())]
+    preset: Preset,
+    /// Robots N.
+    #[arg(long)]
+    robots: usize,
+    /// Tasks K over the whole mission.
+    #[arg(long)]
+    tasks: usize,
+    /// Seed of the ChaCha8 generator.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Workloads are uniform in [LO, HI] (one robot does 1 unit per time unit).
+    #[arg(long, value_delimiter = ',', num_args = 1, value_names = ["LO,HI"], default_value = "1,3")]
+    workload: Vec<f64>,
+    /// Every robot's speed (arena units per time unit).
+    #[arg(long, default_value_t = 1.0)]
+    speed: f64,
+    /// The arena's side: positions uniform in [0, arena]², β scaled by 1/arena.
+    #[arg(long, default_value_t = 1.0)]
+    arena: f64,
+    /// The mission ends at this time at the latest.
+    #[arg(long, default_value_t = 40.0)]
+    horizon: f64,
+    /// Waves of tasks (waves, attrition).
+    #[arg(long, default_value_t = 4)]
+    waves: usize,
+    /// Time between waves.
+    #[arg(long, default_value_t = 5.0)]
+    interval: f64,
+    /// Task arrivals per time unit (poisson; default K / 20).
+    #[arg(long)]
+    rate: Option<f64>,
+    /// Share of the robots that fail at random times (attrition).
+    #[arg(long, default_value_t = 0.3)]
+    fail_share: f64,
+    /// Task capacities as `afg gen --capacity-slack` draws them (s ≥ 1).
+    #[arg(long)]
+    capacity_slack: Option<f64>,
+    /// Robots may idle (the void task) when no task is worth their trip.
+    #[arg(long)]
+    allow_void: bool,
+    /// The mission file to write (JSON).
+    #[arg(long)]
+    out: PathBuf,
+}
+
+/// The allocator in the loop and the run's options, shared by `run` and `compare`.
+#[derive(Args)]
+pub struct LoopArgs {
+    /// Warm start: the optimum re-solved from its previous prices (opt), or survivors
+    /// keeping their task and best-response dynamics settling the rest (others).
+    #[arg(long)]
+    warm: bool,
+    /// Also decide every T time units, not only at events.
+    #[arg(long, value_name = "T")]
+    replan: Option<f64>,
+    /// Each decision takes D time units of mission time.
+    #[arg(long, value_name = "D", conflicts_with = "latency_factor")]
+    latency: Option<f64>,
+    /// Each decision takes the allocator's measured compute time times F (mission time
+    /// units per second): not reproducible run to run.
+    #[arg(long, value_name = "F")]
+    latency_factor: Option<f64>,
+    /// Seed of the random method.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+}
+
+impl LoopArgs {
+    fn options(&self, trace: bool) -> RunOptions {
+        let latency = match (self.latency, self.latency_factor) {
+            (Some(delay), _) => Latency::Fixed { delay },
+            (None, Some(factor)) => Latency::Measured { factor },
+            (None, None) => Latency::None,
+        };
+        RunOptions {
+            replan_every: self.replan,
+            latency,
+            trace,
+        }
+    }
+}
+
+/// `afg mission run`: one mission, one allocator.
+#[derive(Args)]
+pub struct RunArgs {
+    /// The mission file (`afg mission gen --out`).
+    #[arg(long)]
+    mission: PathBuf,
+    /// The allocator (ignored with --model).
+    #[arg(long, default_value_t = Method::Opt)]
+    method: Method,
+    /// A trained model's run directory instead of a built-in method.
+    #[arg(long)]
+    model: Option<PathBuf>,
+    #[command(flatten)]
+    looping: LoopArgs,
+    /// Print the metrics as JSON.
+    #[arg(long)]
+    json: bool,
+    /// Write every event and decision as JSON Lines.
+    #[arg(long)]
+    trace: Option<PathBuf>,
+}
+
+/// `afg mission compare`: several allocators on the same missions.
+#[derive(Args)]
+pub struct CompareArgs {
+    /// Mission files.
+    #[arg(long, num_args = 1.., required = true)]
+    mission: Vec<PathBuf>,
+    /// The allocators, comma-separated.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "opt,da,da-balanced,greedy,nearest"
+    )]
+    methods: Vec<Method>,
+    /// Trained models' run directories, run beside the methods.
+    #[arg(long, num_args = 1..)]
+    model: Vec<PathBuf>,
+    #[command(flatten)]
+    looping: LoopArgs,
+    /// Print JSON (each method's metrics per mission) instead of the table.
+    #[arg(long)]
+    json: bool,
+    /// Draw the first mission's tasks open, tasks done and reward against time.
+    #[arg(long)]
+    svg: Option<PathBuf>,
+}
+
+/// Runs `afg mission …`.
+///
+/// # Errors
+/// A bad knob or file, or an allocator that fails.
+pub fn run(command: MissionCommand) -> Result<()> {
+    match command {
+        MissionCommand::Gen(args) => generate(&args),
+        MissionCommand::Run(args) => run_one(&args),
+        MissionCommand::Compare(args) => run_compare(&args),
+    }
+}
+
+fn generate(args: &GenArgs) -> Result<()> {
+    let &[lo, hi] = args.workload.as_slice() else {
+        bail!("--workload takes two numbers, LO,HI");
+    };
+    let mut config = MissionConfig::new(args.preset, args.robots, args.tasks, args.seed);
+    config.workload_min = lo;
+    config.workload_max = hi;
+    config.speed = args.speed;
+    config.arena = args.arena;
+    config.horizon = args.horizon;
+    config.waves = args.waves;
+    config.interval = args.interval;
+    if let Some(rate) = args.rate {
+        config.rate = rate;
+    }
+    config.fail_share = args.fail_share;
+    config.capacity_slack = args.capacity_slack;
+    config.allow_void = args.allow_void;
+    let mission = config.generate()?;
+    write_atomic(&args.out, (mission.to_json() + "\n").as_bytes())?;
+    println!(
+        "wrote {} ({} robots, {} tasks, {} failures, horizon {})",
+        args.out.display(),
+        mission.robots.len(),
+        mission.tasks.len(),
+        mission.failures.len(),
+        mission.horizon
+    );
+    Ok(())
+}
+
+fn read_mission(path: &Path) -> Result<Mission> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    Mission::from_json(&text).with_context(|| path.display().to_string())
+}
+
+fn planner(method: Method, model: Option<&Path>, looping: &LoopArgs) -> Result<Planner> {
+    Ok(match model {
+        Some(dir) => Planner::model(dir, ModelOptions::default(), looping.warm)?,
+        None => Planner::method(method, looping.seed, looping.warm),
+    })
+}
+
+fn run_one(args: &RunArgs) -> Result<()> {
+    let mission = read_mission(&args.mission)?;
+    let planner = planner(args.method, args.model.as_deref(), &args.looping)?;
+    let run = planner.run(&mission, args.looping.options(args.trace.is_some()))?;
+    if let Some(path) = &args.trace {
+        let lines: String = run
+            .trace
+            .iter()
+            .map(|e| serde_json::to_string(e).map(|l| l + "\n"))
+            .collect::<Result<_, _>>()?;
+        write_atomic_making_dirs(path, lines.as_bytes())?;
+    }
+    if args.json {
+        println!("{}", serde_json::to_string(&run.metrics)?);
+    } else {
+        print_metrics(&planner.name(), &args.mission, &run);
+    }
+    Ok(())
+}
+
+fn print_metrics(name: &str, path: &Path, run: &MissionRun) {
+    let m = &run.metrics;
+    let or_dash = |x: Option<f64>| x.map_or("—".into(), |v| format!("{v:.3}"));
+    println!("{name} on {}", path.display());
+    println!("  tasks done          {} / {}", m.tasks_done, m.tasks);
+    println!(
+        "  reward done         {:.3}   ({:.2} % of all tasks' {:.3})",
+        m.reward_done,
+        100.0 * m.reward_done / m.reward_total,
+        m.reward_total
+    );
+    println!(
+        "  latency             mean {}, p95 {}, max {}",
+        or_dash(m.latency_mean),
+        or_dash(m.latency_p95),
+        or_dash(m.latency_max)
+    );
+    println!(
+        "  makespan            {}   (run ended at {:.3})",
+        or_dash(m.makespan),
+        m.end
+    );
+    println!("  distance            {:.3}", m.distance);
+    println!("  reassignments       {}", m.reassignments);
+    println!(
+        "  decisions           {}   (compute {:.3} ms mean, {:.3} ms max, {:.3} ms in all)",
+        m.decisions,
+        1e3 * m.compute_mean_s,
+        1e3 * m.compute_max_s,
+        1e3 * m.compute_total_s
+    );
+}
+
+fn run_compare(args: &CompareArgs) -> Result<()> {
+    let missions = args
+        .mission
+        .iter()
+        .map(|p| read_mission(p))
+        .collect::<Result<Vec<_>>>()?;
+    let mut planners: Vec<Planner> = args
+        .methods
+        .iter()
+        .map(|&m| planner(m, None, &args.looping))
+        .collect::<Result<_>>()?;
+    for dir in &args.model {
+        planners.push(planner(Method::Opt, Some(dir), &args.looping)?);
+    }
+    let bar = afg_eval::report::progress((missions.len() * planners.len()) as u64, "missions");
+    let results = compare(&missions, &planners, args.looping.options(false), || {
+        bar.inc(1)
+    })?;
+    bar.finish_and_clear();
+    if let Some(path) = &args.svg {
+        let curves = results
+            .iter()
+            .map(|(row, runs)| (row.method.clone(), runs[0].clone()))
+            .collect::<Vec<_>>();
+        let title = format!("{} (first mission)", args.mission[0].display());
+        write_atomic_making_dirs(path, mission_svg(&curves, &title)?.as_bytes())?;
+    }
+    let rows: Vec<_> = results.into_iter().map(|(row, _)| row).collect();
+    if args.json {
+        println!("{}", serde_json::to_string(&rows)?);
+    } else {
+        println!(
+            "{} mission(s), means over them{}\n",
+            missions.len(),
+            if matches!(
+                args.looping.options(false).latency,
+                Latency::Measured { .. }
+            ) {
+                " (measured latency: not reproducible run to run)"
+            } else {
+                ""
+            }
+        );
+        print!("{}", table(&rows));
+    }
+    Ok(())
+}

@@ -1,0 +1,197 @@
+//! Allocators in missions, as the front ends name them: a [`Planner`] (a built-in
+//! method or a trained model, from scratch or warm-started) and the table of
+//! [`compare`] (several planners on the same missions).
+
+use std::fmt::Write as _;
+use std::path::Path;
+use std::time::Duration;
+
+use afg_baseline::{Allocator, Method};
+use afg_game::Preference;
+use afg_learn::run::{ModelOptions, load_model};
+use afg_mission::{Metrics, Mission, MissionRun, Replan, RunOptions, simulate};
+use serde::Serialize;
+
+use crate::EvalError;
+use crate::report::duration;
+
+/// An allocator in the loop and how it replans.
+///
+/// # Examples
+/// ```
+/// use afg_baseline::Method;
+/// use afg_eval::mission::Planner;
+/// use afg_mission::{MissionConfig, Preset, RunOptions};
+/// let mission = MissionConfig::new(Preset::Waves, 30, 6, 1).generate()?;
+/// let opt = Planner::method(Method::Opt, 0, true);
+/// assert_eq!(opt.name(), "opt (incremental)");
+/// let run = opt.run(&mission, RunOptions::default())?;
+/// assert!(run.metrics.tasks_done > 0);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub struct Planner {
+    name: String,
+    allocator: Box<dyn Allocator>,
+    method: Option<Method>,
+    warm: bool,
+}
+
+impl Planner {
+    /// A built-in method (seeded where it draws); `warm`: warm-started decisions
+    /// ([`Planner::replan`]).
+    pub fn method(method: Method, seed: u64, warm: bool) -> Self {
+        Planner {
+            name: method.to_string(),
+            allocator: method.allocator(seed),
+            method: Some(method),
+            warm,
+        }
+    }
+
+    /// A trained model's run directory (a Q network or a price model).
+    ///
+    /// # Errors
+    /// The model's loading errors.
+    pub fn model(dir: &Path, options: ModelOptions, warm: bool) -> Result<Self, EvalError> {
+        let allocator = load_model(dir, options)?;
+        Ok(Planner {
+            name: allocator.name(),
+            allocator,
+            method: None,
+            warm,
+        })
+    }
+
+    /// The planner's name in tables: the method's, with "(incremental)" for the
+    /// warm-started optimum and "(warm)" for other warm starts.
+    pub fn name(&self) -> String {
+        match (self.warm, self.method) {
+            (true, Some(Method::Opt)) => format!("{} (incremental)", self.name),
+            (true, _) => format!("{} (warm)", self.name),
+            (false, _) => self.name.clone(),
+        }
+    }
+
+    /// The replanning rule: from scratch; or, warm-started, the optimum re-solved from
+    /// its previous prices, and for every other method its answer at the first
+    /// decision and then survivors kept and best-response dynamics (GRAPE's selfish
+    /// ones for `da`, balanced for the rest).
+    pub fn replan(&self) -> Replan<'_> {
+        let first = self.allocator.as_ref();
+        match (self.warm, self.method) {
+            (false, _) => Replan::Scratch(first),
+            (true, Some(Method::Opt)) => Replan::IncrementalOpt,
+            (true, Some(Method::Da | Method::DaDecentralised)) => Replan::Warm {
+                first,
+                preference: Preference::Selfish,
+            },
+            (true, _) => Replan::Warm {
+                first,
+                preference: Preference::Balanced,
+            },
+        }
+    }
+
+    /// Runs `mission` with this planner.
+    ///
+    /// # Errors
+    /// The simulator's errors.
+    pub fn run(&self, mission: &Mission, options: RunOptions) -> Result<MissionRun, EvalError> {
+        Ok(simulate(mission, self.replan(), options)?)
+    }
+}
+
+/// One planner's metrics on each mission.
+#[derive(Clone, Debug, Serialize)]
+pub struct CompareRow {
+    /// The planner's name.
+    pub method: String,
+    /// Each mission's metrics.
+    pub missions: Vec<Metrics>,
+}
+
+/// Runs every planner on every mission (in order).
+///
+/// # Errors
+/// The simulator's errors.
+pub fn compare(
+    missions: &[Mission],
+    planners: &[Planner],
+    options: RunOptions,
+    mut on_run: impl FnMut(),
+) -> Result<Vec<(CompareRow, Vec<MissionRun>)>, EvalError> {
+    planners
+        .iter()
+        .map(|p| {
+            let runs = missions
+                .iter()
+                .map(|m| {
+                    let run = p.run(m, options);
+                    on_run();
+                    run
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            let row = CompareRow {
+                method: p.name(),
+                missions: runs.iter().map(|r| r.metrics.clone()).collect(),
+            };
+            Ok((row, runs))
+        })
+        .collect()
+}
+
+/// The Markdown table of [`compare`]'s rows: means over the missions.
+///
+/// # Examples
+/// ```
+/// use afg_baseline::Method;
+/// use afg_eval::mission::{Planner, compare, table};
+/// use afg_mission::{MissionConfig, Preset, RunOptions};
+/// let missions = vec![MissionConfig::new(Preset::Poisson, 20, 5, 1).generate()?];
+/// let planners = [Planner::method(Method::Greedy, 0, false), Planner::method(Method::Opt, 0, true)];
+/// let rows: Vec<_> = compare(&missions, &planners, RunOptions::default(), || {})?
+///     .into_iter().map(|(row, _)| row).collect();
+/// let text = table(&rows);
+/// assert!(text.contains("| greedy |") && text.contains("| opt (incremental) |"));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn table(rows: &[CompareRow]) -> String {
+    let mut out = String::from(
+        "| method | tasks done | reward done, % of all | latency mean | p95 | max | makespan | distance | reassignments | decisions | compute / decision | compute max |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for row in rows {
+        let k = row.missions.len().max(1) as f64;
+        let mean = |f: &dyn Fn(&Metrics) -> f64| row.missions.iter().map(f).sum::<f64>() / k;
+        let opt_mean = |f: &dyn Fn(&Metrics) -> Option<f64>| {
+            let values: Vec<f64> = row.missions.iter().filter_map(f).collect();
+            if values.len() == row.missions.len() && !values.is_empty() {
+                format!("{:.2}", values.iter().sum::<f64>() / values.len() as f64)
+            } else {
+                "—".into()
+            }
+        };
+        let compute_max = row
+            .missions
+            .iter()
+            .map(|m| m.compute_max_s)
+            .fold(0.0, f64::max);
+        let _ = writeln!(
+            out,
+            "| {} | {:.2} / {:.0} | {:.2} % | {} | {} | {} | {} | {:.2} | {:.1} | {:.1} | {} | {} |",
+            row.method,
+            mean(&|m| m.tasks_done as f64),
+            mean(&|m| m.tasks as f64),
+            100.0 * mean(&|m| m.reward_done / m.reward_total),
+            opt_mean(&|m| m.latency_mean),
+            opt_mean(&|m| m.latency_p95),
+            opt_mean(&|m| m.latency_max),
+            opt_mean(&|m| m.makespan),
+            mean(&|m| m.distance),
+            mean(&|m| m.reassignments as f64),
+            mean(&|m| m.decisions as f64),
+            duration(Duration::from_secs_f64(mean(&|m| m.compute_mean_s))),
+            duration(Duration::from_secs_f64(compute_max)),
+        );
+    }
+    out
+}
