@@ -8,6 +8,7 @@ mod crash;
 mod datasets;
 mod grape_fig7;
 mod manifest;
+mod mission_study;
 mod realloc_study;
 mod regret;
 mod scale;
@@ -59,6 +60,8 @@ enum Command {
     ReallocStudy(realloc_study::StudyArgs),
     /// GRAPE's published Fig. 7 runs (datasets/grape-fig7) beside afg's GRAPE and OPT.
     GrapeFig7(grape_fig7::GrapeArgs),
+    /// Allocators in the loop of generated missions (waves, Poisson, attrition), from scratch and warm-started.
+    MissionStudy(mission_study::MissionStudyArgs),
     /// Where a trained model loses welfare along its rollouts, against the exact Q*.
     Regret(regret::RegretArgs),
     /// (Re)write manifest.json of finished training runs from their config and log.
@@ -93,6 +96,7 @@ impl Command {
             Command::BenchScale(args) => scale::run(args),
             Command::ReallocStudy(args) => realloc_study::run(args),
             Command::GrapeFig7(args) => grape_fig7::run(args),
+            Command::MissionStudy(args) => mission_study::run(args),
             Command::Regret(args) => regret::run(args),
             Command::Manifest(args) => manifest::run_manifest(args),
             Command::CrashTest(args) => crash::run(args),

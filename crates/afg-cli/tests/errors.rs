@@ -112,3 +112,55 @@ fn afg_score_reads_grapes_runs_and_refuses_bad_assignments_in_one_line() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `afg mission`: a generated mission runs (JSON metrics, a trace of JSON Lines), and a
+/// broken mission file is one line and exit 1.
+#[test]
+fn afg_mission_runs_and_refuses_a_broken_mission_in_one_line() {
+    let dir = std::env::temp_dir().join(format!("afg-mission-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mission = dir.join("m.json");
+    let path = mission.to_str().unwrap();
+    let args = ["mission", "gen", "--preset", "attrition", "--robots", "12"];
+    let made = afg(&[&args[..], &["--tasks", "4", "--out", path]].concat());
+    assert_eq!(made.status.code(), Some(0), "{}", stderr(&made));
+    let trace = dir.join("t.jsonl");
+    let trace_path = trace.to_str().unwrap();
+    let ran = afg(&[
+        "mission",
+        "run",
+        "--mission",
+        path,
+        "--method",
+        "da",
+        "--warm",
+        "--json",
+        "--trace",
+        trace_path,
+    ]);
+    assert_eq!(ran.status.code(), Some(0), "{}", stderr(&ran));
+    let metrics: serde_json::Value = serde_json::from_slice(&ran.stdout).unwrap();
+    assert_eq!(metrics["tasks"], 4);
+    let events = std::fs::read_to_string(&trace).unwrap();
+    assert!(
+        events
+            .lines()
+            .all(|l| serde_json::from_str::<serde_json::Value>(l).is_ok())
+    );
+    assert!(events.contains("\"event\":\"robot_fails\""));
+    let text = std::fs::read_to_string(&mission).unwrap();
+    std::fs::write(
+        &mission,
+        text.replacen("\"speed\":1.0", "\"speed\":\"fast\"", 1),
+    )
+    .unwrap();
+    let out = afg(&["mission", "run", "--mission", path]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = stderr(&out);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("m.json") && err.contains("invalid mission JSON"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -3,7 +3,8 @@
 //! themselves ([`tables`], with the price model's ablation in [`price_ablation`] and
 //! the comparison of two renderings in [`markdown`]), the benchmarks ([`bench`](mod@bench),
 //! [`scale`]), the regret study ([`regret`]), the removal study
-//! ([`realloc_study`]) and GRAPE's published runs beside ours ([`grape_fig7`]).
+//! ([`realloc_study`]), the mission study ([`mission_study`]) and GRAPE's published
+//! runs beside ours ([`grape_fig7`]).
 //!
 //! Only the maintainer's `cargo xtask` depends on this crate: the `afg` command line
 //! and the Python package call `afg-eval`, so neither compiles the tables, the paper's
@@ -12,6 +13,7 @@
 pub mod bench;
 pub mod grape_fig7;
 pub mod markdown;
+pub mod mission_study;
 mod model;
 pub mod paper;
 pub mod price_ablation;

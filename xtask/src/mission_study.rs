@@ -1,0 +1,57 @@
+//! `cargo xtask mission-study`: allocators in the loop of generated missions, as the
+//! Markdown tables of docs/missions.md.
+
+use afg_baseline::Method;
+use afg_mission::Preset;
+use afg_repro::mission_study::{MissionPlan, study};
+use anyhow::Result;
+use clap::Args;
+
+/// The study's missions and allocators.
+#[derive(Args)]
+pub struct MissionStudyArgs {
+    /// Robots N.
+    #[arg(long, default_value_t = 100)]
+    robots: usize,
+    /// Tasks K over each mission.
+    #[arg(long, default_value_t = 40)]
+    tasks: usize,
+    /// Missions per preset (seeds 0..count).
+    #[arg(long, default_value_t = 5)]
+    count: u64,
+    /// The presets, comma-separated.
+    #[arg(long, value_delimiter = ',', value_parser = afg_cli::choice::<Preset>(), default_value = "waves,poisson,attrition")]
+    presets: Vec<Preset>,
+    /// The allocators, comma-separated (each from scratch and warm-started).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "opt,da,da-balanced,greedy,nearest"
+    )]
+    methods: Vec<Method>,
+    /// Also run every mission with each decision this many time units late.
+    #[arg(long)]
+    latency: Option<f64>,
+}
+
+/// Runs the study and prints its tables.
+pub fn run(args: MissionStudyArgs) -> Result<()> {
+    let plan = MissionPlan {
+        robots: args.robots,
+        tasks: args.tasks,
+        count: args.count,
+        presets: args.presets,
+        methods: args.methods,
+        latency: args.latency,
+    };
+    let runs = plan.presets.len() as u64
+        * plan.count
+        * 2
+        * plan.methods.len() as u64
+        * (1 + u64::from(plan.latency.is_some()));
+    let bar = afg_eval::report::progress(runs, "missions");
+    let text = study(&plan, || bar.inc(1))?;
+    bar.finish_and_clear();
+    print!("{text}");
+    Ok(())
+}
