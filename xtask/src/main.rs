@@ -3,6 +3,7 @@
 //! `afg-cli`).
 
 mod bench;
+mod bench_mission;
 mod bench_opt;
 mod crash;
 mod datasets;
@@ -54,6 +55,8 @@ enum Command {
     BenchModels(bench::ModelBenchArgs),
     /// The exact optimum against OR-Tools on the same files, each solution certified.
     BenchOpt(bench_opt::BenchOptArgs),
+    /// The optimum re-solved after one event against from scratch; whole missions with allocators in the loop.
+    BenchMission(bench_mission::BenchMissionArgs),
     /// The learned policy (fast path, blocks, repair) against OPT, DA and greedy up to N = 100 000.
     BenchScale(scale::ScaleArgs),
     /// Robots leave an optimally allocated instance: warm-start reallocation against OPT from scratch.
@@ -93,6 +96,7 @@ impl Command {
             Command::BenchBaselines(args) => bench::run(args),
             Command::BenchModels(args) => bench::run_models(args),
             Command::BenchOpt(args) => bench_opt::run(args),
+            Command::BenchMission(args) => bench_mission::run(args),
             Command::BenchScale(args) => scale::run(args),
             Command::ReallocStudy(args) => realloc_study::run(args),
             Command::GrapeFig7(args) => grape_fig7::run(args),

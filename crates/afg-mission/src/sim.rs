@@ -23,7 +23,8 @@ pub enum Replan<'a> {
         preference: Preference,
     },
     /// The exact optimum, re-solved at every decision from the previous decision's task
-    /// prices (a new task starts at price 0): the same optimum, found faster.
+    /// prices (a new task starts at [`Optimum::start_price`](afg_baseline::Optimum::start_price)):
+    /// the same optimum, found from a warm start.
     IncrementalOpt,
 }
 
@@ -163,6 +164,9 @@ pub struct Metrics {
     pub reassignments: u64,
     /// Decisions taken.
     pub decisions: u64,
+    /// Robot–task pairs of the decisions' games (Σ robots × open tasks): what any exact
+    /// method must read at least once.
+    pub pairs: u64,
     /// The allocator's compute time per decision, mean (seconds).
     pub compute_mean_s: f64,
     /// Its maximum.
@@ -305,6 +309,7 @@ struct Sim<'m, 'a> {
     distance: f64,
     reassignments: u64,
     decisions: u64,
+    pairs: u64,
     compute: Vec<f64>,
     timeline: Vec<TimelinePoint>,
     trace: Vec<TraceEvent>,
@@ -369,6 +374,7 @@ impl<'m, 'a> Sim<'m, 'a> {
             distance: 0.0,
             reassignments: 0,
             decisions: 0,
+            pairs: 0,
             compute: Vec::new(),
             timeline: Vec::new(),
             trace: Vec::new(),

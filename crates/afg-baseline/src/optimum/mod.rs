@@ -160,6 +160,28 @@ impl Optimum {
         ))
     }
 
+    /// A price to start [`Optimum::with_prices_from`] at for a task that has none yet
+    /// (one that just appeared): the marginal value of its member at the mean coalition
+    /// size N / M, what its price would be if it got an average share of the robots.
+    ///
+    /// # Panics
+    /// If `task` is not a task of the instance.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::Optimum;
+    /// use afg_game::{GeneratorConfig, TaskId};
+    /// let inst = GeneratorConfig::paper(100, 5, 1).generate()?;
+    /// let p = Optimum::start_price(&inst, TaskId(2));
+    /// assert_eq!(p, inst.marginal_value(TaskId(2), 20));
+    /// # Ok::<(), afg_game::GameError>(())
+    /// ```
+    pub fn start_price(instance: &Instance, task: TaskId) -> f64 {
+        let mean = instance.num_robots() / instance.num_tasks();
+        let size = mean.clamp(1, instance.capacity(task).max(1));
+        instance.marginal_value(task, size)
+    }
+
     /// For every task a, the best final welfare with the robots assigned in `partial`
     /// fixed and `actor` (unassigned there) on a; `None` where a has no room for it.
     /// Where the instance allows the void task, one more entry last: the actor staying

@@ -27,6 +27,7 @@ impl Sim<'_, '_> {
         let assignment = self.plan(&game, &alive, &open)?;
         let compute_s = start.elapsed().as_secs_f64();
         self.decisions += 1;
+        self.pairs += (alive.len() * open.len()) as u64;
         self.compute.push(compute_s);
         let tasks = alive
             .iter()
@@ -99,7 +100,11 @@ impl Sim<'_, '_> {
                 let (a, prices) = if self.decided {
                     let start: Vec<f64> = open
                         .iter()
-                        .map(|j| self.prices.get(j).copied().unwrap_or(0.0))
+                        .enumerate()
+                        .map(|(k, j)| {
+                            let new = || Optimum::start_price(game, TaskId(k as u32));
+                            self.prices.get(j).copied().unwrap_or_else(new)
+                        })
                         .collect();
                     Optimum.with_prices_from(game, &start)?
                 } else {

@@ -53,6 +53,7 @@ impl Sim<'_, '_> {
             distance: self.distance + travelling,
             reassignments: self.reassignments,
             decisions: self.decisions,
+            pairs: self.pairs,
             compute_mean_s: if self.compute.is_empty() {
                 0.0
             } else {

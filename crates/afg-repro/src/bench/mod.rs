@@ -5,6 +5,7 @@
 //!
 //! The machine is shared and noisy: compare ratios measured in one run.
 
+pub mod mission;
 pub mod plain;
 
 use std::convert::Infallible;

@@ -1,0 +1,165 @@
+//! The mission benchmarks (`cargo xtask bench-mission`): the exact optimum re-solved
+//! after one event from the previous optimum's prices against a solve from scratch,
+//! and whole missions with an allocator in the loop.
+
+use std::fmt::Write as _;
+use std::time::{Duration, Instant};
+
+use afg_baseline::{Optimum, verify_optimal};
+use afg_eval::EvalError;
+use afg_eval::mission::Planner;
+use afg_eval::report::duration;
+use afg_game::{GeneratorConfig, Instance, Point, TaskId};
+use afg_mission::{Mission, RunOptions};
+
+use super::median_of;
+
+/// The game after one event, and the prices to start from.
+struct Event {
+    name: &'static str,
+    after: Instance,
+    start: Vec<f64>,
+}
+
+/// The three events of a mission on `inst` (solved with prices `prices`): a task
+/// appears (drawn from the same distribution), a task is done, 1 % of the robots fail.
+fn events(inst: &Instance, prices: &[f64], seed: u64) -> Result<Vec<Event>, EvalError> {
+    let (n, m) = (inst.num_robots(), inst.num_tasks());
+    let other = GeneratorConfig::paper(n, m + 1, seed ^ 1).generate()?;
+    let mut tasks = inst.tasks().to_vec();
+    tasks.push(other.tasks()[m]);
+    let appears = Instance::new(inst.robots().to_vec(), tasks, inst.beta())?;
+    let mut start = prices.to_vec();
+    start.push(Optimum::start_price(&appears, TaskId(m as u32)));
+    let done = Instance::new(
+        inst.robots().to_vec(),
+        inst.tasks()[1..].to_vec(),
+        inst.beta(),
+    )?;
+    let survivors: Vec<Point> = inst
+        .robots()
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| i % 100 != 0)
+        .map(|(_, &p)| p)
+        .collect();
+    Ok(vec![
+        Event {
+            name: "a task appears",
+            after: appears,
+            start,
+        },
+        Event {
+            name: "a task is done",
+            after: done,
+            start: prices[1..].to_vec(),
+        },
+        Event {
+            name: "1 % of the robots fail",
+            after: inst.with_robots(survivors)?,
+            start: prices.to_vec(),
+        },
+    ])
+}
+
+/// The incremental re-solve against from scratch after each event, at N robots and M
+/// tasks: median times (at most `budget_s` per measurement), their ratio, both
+/// certified and of equal welfare; a Markdown table.
+///
+/// # Errors
+/// The generator's and the optimum's errors; [`EvalError::BadOptions`] if a solution is
+/// not certified or the two welfares differ.
+///
+/// # Examples
+/// ```
+/// let text = afg_repro::bench::mission::incremental(2_000, 10, 1, 0.01)?;
+/// assert!(text.contains("| a task appears |") && text.contains("| yes |"));
+/// # Ok::<(), afg_eval::EvalError>(())
+/// ```
+pub fn incremental(
+    robots: usize,
+    tasks: usize,
+    seed: u64,
+    budget_s: f64,
+) -> Result<String, EvalError> {
+    let inst = GeneratorConfig::paper(robots, tasks, seed).generate()?;
+    let (_, prices) = Optimum.with_prices(&inst);
+    let mut out = format!(
+        "N = {robots}, M = {tasks}, seed {seed}: the optimum after one event\n\n| event | from scratch | from the previous prices | speed-up | certified, same welfare |\n|---|---|---|---|---|\n"
+    );
+    for event in events(&inst, &prices, seed)? {
+        let game = &event.after;
+        let (scratch, (a, p)) = median_of(budget_s, 20, || {
+            let start = Instant::now();
+            let solved = Optimum.with_prices(game);
+            Ok::<_, EvalError>((start.elapsed(), solved))
+        })?;
+        let (warm, (b, q)) = median_of(budget_s, 20, || {
+            let start = Instant::now();
+            let solved = Optimum.with_prices_from(game, &event.start)?;
+            Ok::<_, EvalError>((start.elapsed(), solved))
+        })?;
+        let (x, y) = (verify_optimal(game, &a, &p)?, verify_optimal(game, &b, &q)?);
+        if (x.welfare - y.welfare).abs() > 1e-9 * x.welfare.abs().max(1.0) {
+            return Err(EvalError::BadOptions("the two optima differ"));
+        }
+        let _ = writeln!(
+            out,
+            "| {} | {} | {} | {:.1}× | yes |",
+            event.name,
+            duration(scratch),
+            duration(warm),
+            scratch.as_secs_f64() / warm.as_secs_f64()
+        );
+    }
+    Ok(out)
+}
+
+/// Whole missions: each planner on `mission` once, its wall time (the simulation
+/// included) and its allocator's compute time, beside the floor of any exact method —
+/// reading every robot–task distance of every decision's game once.
+///
+/// # Errors
+/// The simulator's errors.
+pub fn missions(mission: &Mission, planners: &[Planner]) -> Result<String, EvalError> {
+    let mut out = String::from(
+        "| method | wall time | allocator compute | decisions | distance floor | tasks done | reward done, % of all |\n|---|---|---|---|---|---|---|\n",
+    );
+    for planner in planners {
+        let start = Instant::now();
+        let run = planner.run(mission, RunOptions::default())?;
+        let wall = start.elapsed();
+        let m = &run.metrics;
+        let floor = distance_floor(mission, m.pairs);
+        let _ = writeln!(
+            out,
+            "| {} | {} | {} | {} | {} | {} / {} | {:.2} % |",
+            planner.name(),
+            duration(wall),
+            duration(Duration::from_secs_f64(m.compute_total_s)),
+            m.decisions,
+            duration(floor),
+            m.tasks_done,
+            m.tasks,
+            100.0 * m.reward_done / m.reward_total
+        );
+    }
+    Ok(out)
+}
+
+/// The time to read `pairs` robot–task distances (every decision's N × M once),
+/// from the time to read all of `mission`'s once, measured here.
+fn distance_floor(mission: &Mission, pairs: u64) -> Duration {
+    let robots: Vec<Point> = mission.robots.iter().map(|r| r.position).collect();
+    let tasks: Vec<Point> = mission.tasks.iter().map(|t| t.position).collect();
+    let start = Instant::now();
+    let mut sum = 0.0;
+    for r in &robots {
+        for t in &tasks {
+            sum += r.distance(*t);
+        }
+    }
+    std::hint::black_box(sum);
+    let per_pair = start.elapsed().as_secs_f64() / (robots.len() * tasks.len()) as f64;
+    Duration::from_secs_f64(per_pair * pairs as f64)
+}
