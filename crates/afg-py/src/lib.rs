@@ -17,6 +17,7 @@ use pyo3::exceptions::{PyFileNotFoundError, PyValueError};
 use pyo3::prelude::*;
 
 mod env;
+mod mission;
 mod solve;
 
 /// A Rust error as a `ValueError` carrying the same message.
@@ -376,5 +377,6 @@ fn _afg(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(generate, m)?)?;
     solve::register(m)?;
     env::register(m)?;
+    mission::register(m)?;
     Ok(())
 }

@@ -3,7 +3,8 @@
 A thin Python layer over the Rust crates of https://example.invalid/afg: instances and
 their generator, every allocator (the exact optimum, GRAPE DA, balanced DA, greedy,
 nearest, random, trained models), warm-start reallocation, the exact action values Q*,
-and (in ``afg.gym``) the paper's sequential MDP as a Gymnasium environment.
+missions over time (``afg.Mission``, ``afg.run_mission``), and (in ``afg.gym``) the
+paper's sequential MDP as a Gymnasium environment.
 
 >>> import afg
 >>> inst = afg.generate(robots=60, tasks=5, seed=1)
@@ -17,6 +18,8 @@ from __future__ import annotations
 from ._afg import (
     EnvCore,
     Instance,
+    Mission,
+    MissionResult,
     Model,
     Result,
     VecEnvCore,
@@ -26,6 +29,7 @@ from ._afg import (
     q_star,
     read_jsonl,
     reallocate,
+    run_mission,
     score,
     solve,
     write_jsonl,
@@ -34,6 +38,8 @@ from ._afg import (
 __all__ = [
     "EnvCore",
     "Instance",
+    "Mission",
+    "MissionResult",
     "Model",
     "Result",
     "VecEnvCore",
@@ -43,6 +49,7 @@ __all__ = [
     "q_star",
     "read_jsonl",
     "reallocate",
+    "run_mission",
     "score",
     "solve",
     "write_jsonl",

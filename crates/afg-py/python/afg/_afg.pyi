@@ -167,3 +167,67 @@ class VecEnvCore:
     def tasks(self, index: int) -> npt.NDArray[np.int64]: ...
     def welfare(self, index: int) -> float: ...
     def instance(self, index: int) -> Instance: ...
+
+class Mission:
+    """A mission: robots, tasks that appear with a workload, failures, beta, a horizon."""
+
+    @staticmethod
+    def from_json(text: str) -> "Mission": ...
+    @staticmethod
+    def read(path: _Path) -> "Mission": ...
+    @staticmethod
+    def generate(
+        preset: str,
+        robots: int,
+        tasks: int,
+        seed: int = 0,
+        workload: Tuple[float, float] = (1.0, 3.0),
+        speed: float = 1.0,
+        arena: float = 1.0,
+        horizon: float = 40.0,
+        waves: int = 4,
+        interval: float = 5.0,
+        rate: Optional[float] = None,
+        fail_share: float = 0.3,
+        capacity_slack: Optional[float] = None,
+        allow_void: bool = False,
+    ) -> "Mission": ...
+    def to_json(self) -> str: ...
+    def write(self, path: _Path) -> None: ...
+    @property
+    def num_robots(self) -> int: ...
+    @property
+    def num_tasks(self) -> int: ...
+    @property
+    def horizon(self) -> float: ...
+    @property
+    def robot_positions(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def task_positions(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def appears(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def workloads(self) -> npt.NDArray[np.float64]: ...
+
+class MissionResult:
+    """One run of a mission: metrics, timeline, decisions."""
+
+    @property
+    def metrics(self) -> Dict[str, Optional[float]]: ...
+    @property
+    def timeline(self) -> Dict[str, npt.NDArray[Any]]: ...
+    @property
+    def decisions(self) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]]: ...
+    def trace_jsonl(self) -> str: ...
+
+def run_mission(
+    mission: Mission,
+    method: Optional[str] = None,
+    model: Optional[_Path] = None,
+    warm: bool = False,
+    replan: Optional[float] = None,
+    latency: Optional[float] = None,
+    latency_factor: Optional[float] = None,
+    seed: int = 0,
+    trace: bool = False,
+) -> MissionResult: ...
