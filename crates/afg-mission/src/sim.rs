@@ -1,7 +1,8 @@
 //! The event-driven simulator: exact arrival and completion times, a decision at every
 //! event, any allocator in the loop.
 
-use std::collections::HashMap;
+use std::cmp::Ordering;
+use std::collections::{BinaryHeap, HashMap};
 
 use afg_baseline::Allocator;
 use afg_game::{Point, Preference};
@@ -238,6 +239,36 @@ struct Pending {
     compute_s: f64,
 }
 
+/// A robot's arrival at the end of its current leg, earliest first in a heap.
+#[derive(Clone, Copy, Debug)]
+struct Due {
+    time: f64,
+    robot: u32,
+    leg: u64,
+}
+
+impl PartialEq for Due {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other) == Ordering::Equal
+    }
+}
+impl Eq for Due {}
+impl PartialOrd for Due {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+impl Ord for Due {
+    /// Reversed, so that `BinaryHeap` pops the earliest; ties by robot index.
+    fn cmp(&self, other: &Self) -> Ordering {
+        other
+            .time
+            .total_cmp(&self.time)
+            .then(other.robot.cmp(&self.robot))
+            .then(other.leg.cmp(&self.leg))
+    }
+}
+
 /// Relative tolerance under which an arrival or completion counts as reached.
 const REACHED: f64 = 1e-9;
 
@@ -303,7 +334,12 @@ struct Sim<'m, 'a> {
     pending: Option<Pending>,
     /// An event happened while a decision was pending: decide again when it lands.
     wanted: bool,
-    /// The last decision's tasks per robot (for warm starts) and prices per task.
+    /// Arrivals to come: one per leg, stale once the robot's leg count moved on.
+    due: BinaryHeap<Due>,
+    /// Legs begun per robot.
+    legs: Vec<u64>,
+    /// Whether a decision was made (warm starts start after it) and the task prices
+    /// of the last (the incremental optimum).
     decided: bool,
     prices: HashMap<usize, f64>,
     distance: f64,
@@ -369,6 +405,8 @@ impl<'m, 'a> Sim<'m, 'a> {
             next_tick: options.replan_every,
             pending: None,
             wanted: false,
+            due: BinaryHeap::new(),
+            legs: vec![0; mission.robots.len()],
             decided: false,
             prices: HashMap::new(),
             distance: 0.0,
@@ -475,14 +513,19 @@ impl<'m, 'a> Sim<'m, 'a> {
         any
     }
 
-    /// Robots reaching their task now.
+    /// Robots reaching their task now (from the queue of legs, the stale ones dropped).
     fn arrivals(&mut self) {
-        for i in 0..self.robots.len() {
+        while let Some(&due) = self.due.peek() {
+            if due.time > self.now {
+                break;
+            }
+            self.due.pop();
+            let i = due.robot as usize;
             let r = self.robots[i];
-            let Some(j) = r.task.filter(|_| r.alive && !r.there) else {
+            if due.leg != self.legs[i] || !r.alive || r.there {
                 continue;
-            };
-            if self.arrival_time(i, j) <= self.now {
+            }
+            if let Some(j) = r.task {
                 let target = self.mission.tasks[j].position;
                 self.distance += r.from.distance(target);
                 self.robots[i].from = target;
@@ -534,6 +577,7 @@ impl<'m, 'a> Sim<'m, 'a> {
 
     /// Robot `i` stops where it is: it leaves its task (and its coalition, if there).
     fn stop(&mut self, i: usize) {
+        self.legs[i] += 1;
         let here = self.position(i);
         let r = self.robots[i];
         if let Some(j) = r.task {
@@ -562,6 +606,12 @@ impl<'m, 'a> Sim<'m, 'a> {
         }
         self.stop(i);
         self.robots[i].task = Some(j);
+        let time = self.arrival_time(i, j);
+        self.due.push(Due {
+            time,
+            robot: i as u32,
+            leg: self.legs[i],
+        });
     }
 
     /// The earliest event after now: a scheduled one, an arrival, a completion, a
@@ -571,10 +621,8 @@ impl<'m, 'a> Sim<'m, 'a> {
         if let Some(&(t, _)) = self.scheduled.get(self.next_scheduled) {
             next = next.min(t);
         }
-        for (i, r) in self.robots.iter().enumerate() {
-            if let Some(j) = r.task.filter(|_| r.alive && !r.there) {
-                next = next.min(self.arrival_time(i, j));
-            }
+        if let Some(due) = self.due.peek() {
+            next = next.min(due.time);
         }
         for (j, t) in self.tasks.iter().enumerate() {
             if t.open && t.present > 0 {
