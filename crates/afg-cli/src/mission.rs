@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use afg_baseline::Method;
-use afg_eval::figures::mission_svg;
+use afg_eval::figures::{mission_html, mission_svg};
 use afg_eval::mission::{Planner, compare, table};
 use afg_game::fs::{write_atomic, write_atomic_making_dirs};
 use afg_learn::run::ModelOptions;
@@ -106,6 +106,7 @@ impl LoopArgs {
             replan_every: self.replan,
             latency,
             trace,
+            ..RunOptions::default()
         }
     }
 }
@@ -130,6 +131,10 @@ pub struct RunArgs {
     /// Write every event and decision as JSON Lines.
     #[arg(long)]
     trace: Option<PathBuf>,
+    /// Write an animation of the run: a self-contained HTML page (opens in a browser,
+    /// no server), robots coloured by task moving, tasks sized by the work left.
+    #[arg(long)]
+    animate: Option<PathBuf>,
 }
 
 /// `afg mission compare`: several allocators on the same missions.
@@ -217,7 +222,17 @@ fn planner(method: Method, model: Option<&Path>, looping: &LoopArgs) -> Result<P
 fn run_one(args: &RunArgs) -> Result<()> {
     let mission = read_mission(&args.mission)?;
     let planner = planner(args.method, args.model.as_deref(), &args.looping)?;
-    let run = planner.run(&mission, args.looping.options(args.trace.is_some()))?;
+    let mut options = args.looping.options(args.trace.is_some());
+    if args.animate.is_some() {
+        // Frames enough for a smooth page, few enough to keep it a few megabytes.
+        let frames = (2_000_000 / mission.robots.len().max(1)).clamp(20, 400);
+        options.frame_every = Some(mission.horizon / frames as f64);
+    }
+    let run = planner.run(&mission, options)?;
+    if let Some(path) = &args.animate {
+        let title = format!("{} on {}", planner.name(), args.mission.display());
+        write_atomic_making_dirs(path, mission_html(&mission, &run, &title)?.as_bytes())?;
+    }
     if let Some(path) = &args.trace {
         let lines: String = run
             .trace

@@ -386,3 +386,111 @@ pub fn mission_svg(
     }
     Ok(svg)
 }
+
+/// A self-contained HTML page that animates a mission run's frames (no server, no
+/// network: the frames and a few lines of JavaScript are in the page): robots coloured
+/// by their task (grey: none; a red cross: failed), tasks as squares sized by the work
+/// left, with a play button and a time slider.
+///
+/// # Errors
+/// [`EvalError::Figure`] if the run has no frames.
+///
+/// # Examples
+/// ```
+/// use afg_baseline::Greedy;
+/// use afg_mission::{MissionConfig, Preset, Replan, RunOptions, simulate};
+/// let mission = MissionConfig::new(Preset::Attrition, 20, 6, 1).generate()?;
+/// let options = RunOptions { frame_every: Some(0.5), ..RunOptions::default() };
+/// let run = simulate(&mission, Replan::Scratch(&Greedy), options)?;
+/// let html = afg_eval::figures::mission_html(&mission, &run, "greedy")?;
+/// assert!(html.starts_with("<!DOCTYPE html>") && html.contains("\"frames\""));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn mission_html(
+    mission: &afg_mission::Mission,
+    run: &afg_mission::MissionRun,
+    title: &str,
+) -> Result<String, EvalError> {
+    if run.frames.is_empty() {
+        return Err(EvalError::Figure("the run has no frames to animate".into()));
+    }
+    let points = mission
+        .robots
+        .iter()
+        .map(|r| r.position)
+        .chain(mission.tasks.iter().map(|t| t.position));
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in points {
+        lo = [lo[0].min(p.x), lo[1].min(p.y)];
+        hi = [hi[0].max(p.x), hi[1].max(p.y)];
+    }
+    let tasks: Vec<[f64; 2]> = mission
+        .tasks
+        .iter()
+        .map(|t| [t.position.x, t.position.y])
+        .collect();
+    let data = serde_json::json!({
+        "title": title,
+        "bounds": [lo, hi],
+        "tasks": tasks,
+        "frames": run.frames,
+    });
+    let escaped = serde_json::to_string(&data)
+        .map_err(|e| EvalError::Figure(e.to_string()))?
+        .replace("</", "<\\/");
+    Ok(MISSION_PAGE
+        .replace("__DATA__", &escaped)
+        .replace("__TITLE__", &html_text(title)))
+}
+
+/// `text` safe inside HTML.
+fn html_text(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
+/// The page of [`mission_html`]; `__DATA__` and `__TITLE__` are filled in.
+const MISSION_PAGE: &str = r##"<!DOCTYPE html>
+<html><head><meta charset="utf-8"><title>__TITLE__</title>
+<style>body{font-family:sans-serif;margin:16px}canvas{border:1px solid #ccc}</style></head>
+<body><h3>__TITLE__</h3>
+<canvas id="map" width="720" height="720"></canvas><br>
+<button id="play">pause</button> <input id="time" type="range" min="0" value="0" style="width:560px"> <span id="label"></span>
+<p>Robots coloured by task (grey: no task, red cross: failed); squares: tasks, sized by the work left (outline: done).</p>
+<script>
+const D = __DATA__;
+const c = document.getElementById("map"), g = c.getContext("2d");
+const slider = document.getElementById("time"), label = document.getElementById("label");
+const play = document.getElementById("play");
+slider.max = D.frames.length - 1;
+const [lo, hi] = D.bounds, span = Math.max(hi[0] - lo[0], hi[1] - lo[1], 1e-9);
+const X = x => 20 + 680 * (x - lo[0]) / span, Y = y => 700 - 680 * (y - lo[1]) / span;
+const hue = j => `hsl(${(j * 137.508) % 360},70%,45%)`;
+function draw(k) {
+  const f = D.frames[k];
+  g.clearRect(0, 0, c.width, c.height);
+  D.tasks.forEach((t, j) => {
+    const left = f.left[j];
+    if (left < 0) return;
+    const s = 4 + 14 * Math.sqrt(left);
+    g.strokeStyle = hue(j); g.lineWidth = 2;
+    if (left > 0) { g.fillStyle = hue(j); g.globalAlpha = 0.35; g.fillRect(X(t[0]) - s, Y(t[1]) - s, 2 * s, 2 * s); g.globalAlpha = 1; }
+    g.strokeRect(X(t[0]) - s, Y(t[1]) - s, 2 * s, 2 * s);
+  });
+  f.positions.forEach((p, i) => {
+    const j = f.tasks[i], x = X(p[0]), y = Y(p[1]);
+    if (j === -2) { g.strokeStyle = "red"; g.lineWidth = 1.5; g.beginPath(); g.moveTo(x - 3, y - 3); g.lineTo(x + 3, y + 3); g.moveTo(x + 3, y - 3); g.lineTo(x - 3, y + 3); g.stroke(); return; }
+    g.fillStyle = j < 0 ? "#999" : hue(j);
+    g.beginPath(); g.arc(x, y, 2.5, 0, 2 * Math.PI); g.fill();
+  });
+  const done = f.left.filter(l => l === 0).length;
+  label.textContent = `t = ${f.time.toFixed(2)}, tasks done ${done} / ${D.tasks.length}`;
+}
+let k = 0, running = true;
+slider.oninput = () => { k = +slider.value; draw(k); };
+play.onclick = () => { running = !running; play.textContent = running ? "pause" : "play"; };
+setInterval(() => { if (!running) return; k = (k + 1) % D.frames.length; slider.value = k; draw(k); }, 60);
+draw(0);
+</script></body></html>
+"##;

@@ -39,7 +39,7 @@ mod sim;
 pub use generate::{MissionConfig, Preset};
 pub use mission::{Failure, MISSION_FORMAT, MISSION_VERSION, Mission, RobotSpec, TaskSpec};
 pub use sim::{
-    Latency, Metrics, MissionRun, Replan, RunOptions, TimelinePoint, TraceEvent, simulate,
+    Frame, Latency, Metrics, MissionRun, Replan, RunOptions, TimelinePoint, TraceEvent, simulate,
     work_rate,
 };
 

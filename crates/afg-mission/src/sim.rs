@@ -57,11 +57,15 @@ pub struct RunOptions {
     pub latency: Latency,
     /// Keep every event and decision ([`MissionRun::trace`]).
     pub trace: bool,
+    /// Snapshot the whole state every this many time units ([`MissionRun::frames`]:
+    /// the animation's frames).
+    pub frame_every: Option<f64>,
 }
 
 impl Default for RunOptions {
     fn default() -> Self {
         RunOptions {
+            frame_every: None,
             replan_every: None,
             latency: Latency::None,
             trace: false,
@@ -187,6 +191,21 @@ pub struct MissionRun {
     pub timeline: Vec<TimelinePoint>,
     /// Every event and decision, if [`RunOptions::trace`].
     pub trace: Vec<TraceEvent>,
+    /// Snapshots every [`RunOptions::frame_every`] time units.
+    pub frames: Vec<Frame>,
+}
+
+/// The whole state at one moment (for animations).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Frame {
+    /// Mission time.
+    pub time: f64,
+    /// Every robot's position.
+    pub positions: Vec<[f32; 2]>,
+    /// Every robot's task (−1: none; −2: failed).
+    pub tasks: Vec<i32>,
+    /// Every task's work left as a share of its workload (−1: not yet appeared; 0: done).
+    pub left: Vec<f32>,
 }
 
 /// The work rate of `n` robots at a task of base `eps`: `log_eps(n + eps − 1)` (one
@@ -306,6 +325,11 @@ fn check_options(options: &RunOptions) -> Result<(), MissionError> {
             "the replanning interval must be finite and positive".into(),
         ));
     }
+    if options.frame_every.is_some_and(|r| !positive(r)) {
+        return Err(MissionError::Invalid(
+            "the time between frames must be finite and positive".into(),
+        ));
+    }
     let latency_ok = match options.latency {
         Latency::None => true,
         Latency::Fixed { delay } => delay.is_finite() && delay >= 0.0,
@@ -349,6 +373,8 @@ struct Sim<'m, 'a> {
     compute: Vec<f64>,
     timeline: Vec<TimelinePoint>,
     trace: Vec<TraceEvent>,
+    frames: Vec<Frame>,
+    next_frame: Option<f64>,
 }
 
 /// An event known in advance.
@@ -416,6 +442,8 @@ impl<'m, 'a> Sim<'m, 'a> {
             compute: Vec::new(),
             timeline: Vec::new(),
             trace: Vec::new(),
+            frames: Vec::new(),
+            next_frame: options.frame_every.map(|_| 0.0),
         }
     }
 
@@ -442,6 +470,7 @@ impl<'m, 'a> Sim<'m, 'a> {
                 }
             }
             self.record();
+            self.snapshot();
             if self.over() {
                 return Ok(());
             }
@@ -633,10 +662,54 @@ impl<'m, 'a> Sim<'m, 'a> {
         if let Some(p) = &self.pending {
             next = next.min(p.ready);
         }
-        if let Some(t) = self.next_tick {
+        for t in [self.next_tick, self.next_frame].into_iter().flatten() {
             next = next.min(t);
         }
         next
+    }
+
+    /// A frame, if one is due.
+    fn snapshot(&mut self) {
+        let (Some(due), Some(every)) = (self.next_frame, self.options.frame_every) else {
+            return;
+        };
+        if due > self.now {
+            return;
+        }
+        self.next_frame = Some(due + every);
+        let positions = (0..self.robots.len())
+            .map(|i| {
+                let p = self.position(i);
+                [p.x as f32, p.y as f32]
+            })
+            .collect();
+        let tasks = self
+            .robots
+            .iter()
+            .map(|r| match (r.alive, r.task) {
+                (false, _) => -2,
+                (true, None) => -1,
+                (true, Some(j)) => j as i32,
+            })
+            .collect();
+        let left = self
+            .tasks
+            .iter()
+            .zip(&self.mission.tasks)
+            .map(|(t, spec)| {
+                if t.open || t.done_at.is_some() {
+                    (t.remaining / spec.workload) as f32
+                } else {
+                    -1.0
+                }
+            })
+            .collect();
+        self.frames.push(Frame {
+            time: self.now,
+            positions,
+            tasks,
+            left,
+        });
     }
 
     /// Moves time to `to`: work is done at the present coalitions' rates (robots'

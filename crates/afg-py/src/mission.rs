@@ -310,6 +310,7 @@ pub(crate) fn run_mission(
         replan_every: replan,
         latency,
         trace,
+        ..RunOptions::default()
     };
     let inner = Arc::clone(&mission.inner);
     let run = py

@@ -67,6 +67,7 @@ impl Sim<'_, '_> {
             metrics,
             timeline: self.timeline,
             trace: self.trace,
+            frames: self.frames,
         }
     }
 }
