@@ -90,6 +90,13 @@ pub struct LoopArgs {
     /// units per second): not reproducible run to run.
     #[arg(long, value_name = "F")]
     latency_factor: Option<f64>,
+    /// Commitment: robots at work stay until their task is done.
+    #[arg(long)]
+    commit: bool,
+    /// Hysteresis: a travelling robot switches task only for a gain above THETA
+    /// (balanced score, in the game's welfare units).
+    #[arg(long, value_name = "THETA")]
+    hysteresis: Option<f64>,
     /// Seed of the random method.
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -106,6 +113,8 @@ impl LoopArgs {
             replan_every: self.replan,
             latency,
             trace,
+            commit: self.commit,
+            hysteresis: self.hysteresis,
             ..RunOptions::default()
         }
     }

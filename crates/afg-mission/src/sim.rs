@@ -60,12 +60,19 @@ pub struct RunOptions {
     /// Snapshot the whole state every this many time units ([`MissionRun::frames`]:
     /// the animation's frames).
     pub frame_every: Option<f64>,
+    /// Commitment: robots at work stay until their task is done.
+    pub commit: bool,
+    /// Hysteresis: a travelling robot switches task only for a gain (in balanced
+    /// score, the decision's game) above this.
+    pub hysteresis: Option<f64>,
 }
 
 impl Default for RunOptions {
     fn default() -> Self {
         RunOptions {
             frame_every: None,
+            commit: false,
+            hysteresis: None,
             replan_every: None,
             latency: Latency::None,
             trace: false,
@@ -323,6 +330,11 @@ fn check_options(options: &RunOptions) -> Result<(), MissionError> {
     if options.replan_every.is_some_and(|r| !positive(r)) {
         return Err(MissionError::Invalid(
             "the replanning interval must be finite and positive".into(),
+        ));
+    }
+    if options.hysteresis.is_some_and(|h| h.is_nan() || h < 0.0) {
+        return Err(MissionError::Invalid(
+            "the hysteresis threshold must be ≥ 0".into(),
         ));
     }
     if options.frame_every.is_some_and(|r| !positive(r)) {

@@ -406,3 +406,52 @@ fn bad_missions_are_refused_in_one_line() {
         .is_err()
     );
 }
+
+/// Commitment: a robot that reached its task keeps it until the task is done.
+/// Hysteresis ∞ as well: no robot ever switches from one task to another.
+#[test]
+fn commitment_and_hysteresis_keep_robots_on_their_task() {
+    let mut held_back = 0;
+    for seed in 0..4 {
+        let mut config = MissionConfig::new(Preset::Attrition, 30, 10, seed);
+        config.capacity_slack = (seed % 2 == 1).then_some(1.2);
+        let mission = config.generate().unwrap();
+        let committed = RunOptions {
+            commit: true,
+            ..traced()
+        };
+        let run = simulate(&mission, Replan::Scratch(&Optimum), committed).unwrap();
+        check_run(&mission, &run);
+        let mut working: Vec<Option<usize>> = vec![None; 30];
+        for e in &run.trace {
+            match e {
+                TraceEvent::Arrival { robot, task, .. } => working[*robot] = Some(*task),
+                TraceEvent::TaskDone { task, .. } => {
+                    for w in working.iter_mut().filter(|w| **w == Some(*task)) {
+                        *w = None;
+                    }
+                }
+                TraceEvent::RobotFails { robot, .. } => working[*robot] = None,
+                TraceEvent::Decision { tasks, .. } => {
+                    for (i, w) in working.iter().enumerate() {
+                        if let Some(j) = w {
+                            assert_eq!(tasks[i], *j as i64, "seed {seed}: robot {i} left task {j}");
+                        }
+                    }
+                }
+                _ => {}
+            }
+        }
+        let frozen = RunOptions {
+            commit: true,
+            hysteresis: Some(f64::INFINITY),
+            ..traced()
+        };
+        let run = simulate(&mission, Replan::Scratch(&Optimum), frozen).unwrap();
+        check_run(&mission, &run);
+        assert_eq!(run.metrics.reassignments, 0, "seed {seed}");
+        let free = simulate(&mission, Replan::Scratch(&Optimum), traced()).unwrap();
+        held_back += free.metrics.reassignments;
+    }
+    assert!(held_back > 0, "nothing to hold back");
+}

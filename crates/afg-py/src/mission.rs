@@ -264,9 +264,11 @@ fn metrics_dict<'py>(py: Python<'py>, m: &Metrics) -> PyResult<Bound<'py, PyDict
 /// or a trained model's run directory; `warm=True` warm-starts every decision after
 /// the first (the optimum from its previous prices); `replan=T` also decides every T;
 /// `latency=D` makes each decision take D time units, `latency_factor=F` the
-/// allocator's measured compute time times F; `trace=True` keeps every decision.
+/// allocator's measured compute time times F; `commit=True` keeps robots at work until
+/// their task is done, `hysteresis=THETA` lets a travelling robot switch only for a
+/// gain above THETA; `trace=True` keeps every decision.
 #[pyfunction]
-#[pyo3(signature = (mission, method=None, model=None, warm=false, replan=None, latency=None, latency_factor=None, seed=0, trace=false))]
+#[pyo3(signature = (mission, method=None, model=None, warm=false, replan=None, latency=None, latency_factor=None, commit=false, hysteresis=None, seed=0, trace=false))]
 // Python's keyword arguments, one per option.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run_mission(
@@ -278,6 +280,8 @@ pub(crate) fn run_mission(
     replan: Option<f64>,
     latency: Option<f64>,
     latency_factor: Option<f64>,
+    commit: bool,
+    hysteresis: Option<f64>,
     seed: u64,
     trace: bool,
 ) -> PyResult<PyMissionResult> {
@@ -310,6 +314,8 @@ pub(crate) fn run_mission(
         replan_every: replan,
         latency,
         trace,
+        commit,
+        hysteresis,
         ..RunOptions::default()
     };
     let inner = Arc::clone(&mission.inner);

@@ -24,8 +24,9 @@ impl Sim<'_, '_> {
         }
         let game = self.game(&alive, &open)?;
         let start = Instant::now();
-        let assignment = self.plan(&game, &alive, &open)?;
+        let mut assignment = self.plan(&game, &alive, &open)?;
         let compute_s = start.elapsed().as_secs_f64();
+        self.keep_places(&game, &alive, &open, &mut assignment);
         self.decisions += 1;
         self.pairs += (alive.len() * open.len()) as u64;
         self.compute.push(compute_s);
@@ -50,6 +51,61 @@ impl Sim<'_, '_> {
             self.land();
         }
         Ok(())
+    }
+
+    /// The policies around the allocator: with commitment, robots at work keep their
+    /// task (a robot the allocator put in a task they leave no room in idles); with
+    /// hysteresis θ, a travelling robot keeps its task unless the new one scores more
+    /// than θ above it (balanced scores in the decision's game).
+    fn keep_places(
+        &self,
+        game: &Instance,
+        alive: &[usize],
+        open: &[usize],
+        assignment: &mut Assignment,
+    ) {
+        let column: HashMap<usize, usize> = open.iter().enumerate().map(|(k, &j)| (j, k)).collect();
+        let current = |k: usize| {
+            let r = &self.robots[alive[k]];
+            r.task
+                .and_then(|j| column.get(&j))
+                .map(|&c| (TaskId(c as u32), r.there))
+        };
+        if self.options.commit {
+            for k in 0..alive.len() {
+                if let Some((task, true)) = current(k) {
+                    assignment.set(RobotId(k as u32), Some(task));
+                }
+            }
+            for j in game.task_ids() {
+                let mut over = assignment.size(j).saturating_sub(game.capacity(j));
+                for k in 0..alive.len() {
+                    let robot = RobotId(k as u32);
+                    if over > 0
+                        && assignment.task_of(robot) == Some(j)
+                        && current(k) != Some((j, true))
+                    {
+                        assignment.set(robot, None);
+                        over -= 1;
+                    }
+                }
+            }
+        }
+        let Some(threshold) = self.options.hysteresis else {
+            return;
+        };
+        for k in 0..alive.len() {
+            let robot = RobotId(k as u32);
+            let (Some((old, false)), Some(new)) = (current(k), assignment.task_of(robot)) else {
+                continue;
+            };
+            let balanced = afg_game::Preference::Balanced;
+            let gain = game.score(assignment, robot, new, balanced)
+                - game.score(assignment, robot, old, balanced);
+            if new != old && gain <= threshold && assignment.has_room(game, robot, old) {
+                assignment.set(robot, Some(old));
+            }
+        }
     }
 
     /// The game of the living robots `alive` (at their positions now) and the open tasks

@@ -228,6 +228,8 @@ def run_mission(
     replan: Optional[float] = None,
     latency: Optional[float] = None,
     latency_factor: Optional[float] = None,
+    commit: bool = False,
+    hysteresis: Optional[float] = None,
     seed: int = 0,
     trace: bool = False,
 ) -> MissionResult: ...
