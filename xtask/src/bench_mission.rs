@@ -65,11 +65,12 @@ pub fn run(args: BenchMissionArgs) -> Result<()> {
         )?);
     }
     println!(
-        "A mission of {} robots and {} tasks arriving at rate {} (seed {}), one run each:\n",
+        "A mission of {} robots and {} tasks arriving at rate {} (seed {}), one run each, on {} core(s):\n",
         args.robots,
         args.tasks,
         args.tasks as f64 / 20.0,
-        args.seed
+        args.seed,
+        rayon::current_num_threads()
     );
     print!("{}", missions(&mission, &planners)?);
     Ok(())
