@@ -26,7 +26,7 @@ pub struct MissionStudyArgs {
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "opt,da,da-balanced,greedy,nearest"
+        default_value = afg_eval::mission::DEFAULT_METHODS
     )]
     methods: Vec<Method>,
     /// Also run every mission with each decision this many time units late.

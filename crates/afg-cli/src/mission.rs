@@ -156,7 +156,7 @@ pub struct CompareArgs {
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "opt,da,da-balanced,greedy,nearest"
+        default_value = afg_eval::mission::DEFAULT_METHODS
     )]
     methods: Vec<Method>,
     /// Trained models' run directories, run beside the methods.

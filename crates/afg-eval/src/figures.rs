@@ -2,6 +2,7 @@
 
 use afg_baseline::{Allocator, Method, Optimum, SwarmReport};
 use afg_game::{Assignment, Instance};
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
 use crate::EvalError;
@@ -53,16 +54,7 @@ pub fn curves_svg(curves: &[Curve], title: &str) -> Result<String, EvalError> {
             .y_desc("validation welfare (mean)")
             .draw()?;
         for (i, Curve { label, points, .. }) in curves.iter().enumerate() {
-            let color = Palette99::pick(i).to_rgba();
-            chart
-                .draw_series(LineSeries::new(
-                    points.iter().copied(),
-                    color.stroke_width(2),
-                ))?
-                .label(label.clone())
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-                });
+            palette_line(&mut chart, i, label, points.iter().copied())?;
         }
         // The classical methods on each distinct validation set, dashed, in greys.
         let mut drawn: Vec<(Method, f64)> = Vec::new();
@@ -98,6 +90,39 @@ pub fn curves_svg(curves: &[Curve], title: &str) -> Result<String, EvalError> {
         root.present()?;
     }
     Ok(svg)
+}
+
+/// A chart of lines over two `f64` axes, drawn into an SVG string.
+type LineChart<'a, 'b> =
+    ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// Draws `points` as the `i`-th line of the palette, named `name` in the legend.
+fn palette_line(
+    chart: &mut LineChart<'_, '_>,
+    i: usize,
+    name: &str,
+    points: impl IntoIterator<Item = (f64, f64)>,
+) -> Result<(), EvalError> {
+    let color = Palette99::pick(i).to_rgba();
+    chart
+        .draw_series(LineSeries::new(points, color.stroke_width(2)))?
+        .label(name)
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+    Ok(())
+}
+
+/// The legend box of the named lines, at `position`.
+fn legend<'a, 'b: 'a>(
+    chart: &mut LineChart<'a, 'b>,
+    position: SeriesLabelPosition,
+) -> Result<(), EvalError> {
+    chart
+        .configure_series_labels()
+        .position(position)
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()?;
+    Ok(())
 }
 
 /// Assignments of one instance side by side as an SVG map: robots coloured by task
@@ -279,7 +304,6 @@ pub fn swarm_svg(runs: &[(String, SwarmReport)], title: &str) -> Result<String, 
                 .y_desc(label)
                 .draw()?;
             for (i, (name, r)) in runs.iter().enumerate() {
-                let color = Palette99::pick(i).to_rgba();
                 let points = r.trace.iter().map(|p| {
                     let y = if panel == 0 {
                         percent(r, p.welfare).max(lowest)
@@ -288,19 +312,9 @@ pub fn swarm_svg(runs: &[(String, SwarmReport)], title: &str) -> Result<String, 
                     };
                     (p.round as f64, y)
                 });
-                chart
-                    .draw_series(LineSeries::new(points, color.stroke_width(2)))?
-                    .label(name.clone())
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-                    });
+                palette_line(&mut chart, i, name, points)?;
             }
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::LowerRight)
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .draw()?;
+            legend(&mut chart, SeriesLabelPosition::LowerRight)?;
         }
         root.present()?;
     }
@@ -359,7 +373,6 @@ pub fn mission_svg(
                 .build_cartesian_2d(0.0..end.max(1e-9), 0.0..top)?;
             chart.configure_mesh().x_desc("time").y_desc(label).draw()?;
             for (i, (name, r)) in runs.iter().enumerate() {
-                let color = Palette99::pick(i).to_rgba();
                 // Stepped: each value holds until the next event.
                 let mut points = Vec::with_capacity(2 * r.timeline.len());
                 for (k, p) in r.timeline.iter().enumerate() {
@@ -368,19 +381,9 @@ pub fn mission_svg(
                     }
                     points.push((p.time, value(p)));
                 }
-                chart
-                    .draw_series(LineSeries::new(points, color.stroke_width(2)))?
-                    .label(name.clone())
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-                    });
+                palette_line(&mut chart, i, name, points)?;
             }
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperLeft)
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .draw()?;
+            legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
         }
         root.present()?;
     }

@@ -15,6 +15,9 @@ use serde::Serialize;
 use crate::EvalError;
 use crate::report::duration;
 
+/// The methods a mission comparison runs unless told otherwise.
+pub const DEFAULT_METHODS: &str = "opt,da,da-balanced,greedy,nearest";
+
 /// An allocator in the loop and how it replans.
 ///
 /// # Examples
