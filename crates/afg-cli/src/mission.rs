@@ -237,7 +237,10 @@ fn run_one(args: &RunArgs) -> Result<()> {
         let frames = (2_000_000 / mission.robots.len().max(1)).clamp(20, 400);
         options.frame_every = Some(mission.horizon / frames as f64);
     }
-    let run = planner.run(&mission, options)?;
+    // Mission time in hundredths, for the bar.
+    let bar = afg_eval::report::progress((100.0 * mission.horizon).ceil() as u64, "mission time");
+    let run = planner.run_with(&mission, options, |t| bar.set_position((100.0 * t) as u64))?;
+    bar.finish_and_clear();
     if let Some(path) = &args.animate {
         let title = format!("{} on {}", planner.name(), args.mission.display());
         write_atomic_making_dirs(path, mission_html(&mission, &run, &title)?.as_bytes())?;

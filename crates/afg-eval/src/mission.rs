@@ -9,7 +9,7 @@ use std::time::Duration;
 use afg_baseline::{Allocator, Method};
 use afg_game::Preference;
 use afg_learn::run::{ModelOptions, load_model};
-use afg_mission::{Metrics, Mission, MissionRun, Replan, RunOptions, simulate};
+use afg_mission::{Metrics, Mission, MissionRun, Replan, RunOptions, simulate_with};
 use serde::Serialize;
 
 use crate::EvalError;
@@ -100,7 +100,20 @@ impl Planner {
     /// # Errors
     /// The simulator's errors.
     pub fn run(&self, mission: &Mission, options: RunOptions) -> Result<MissionRun, EvalError> {
-        Ok(simulate(mission, self.replan(), options)?)
+        self.run_with(mission, options, |_| {})
+    }
+
+    /// [`Planner::run`], telling `on_time` the mission time after every event.
+    ///
+    /// # Errors
+    /// The simulator's errors.
+    pub fn run_with(
+        &self,
+        mission: &Mission,
+        options: RunOptions,
+        on_time: impl FnMut(f64),
+    ) -> Result<MissionRun, EvalError> {
+        Ok(simulate_with(mission, self.replan(), options, on_time)?)
     }
 }
 

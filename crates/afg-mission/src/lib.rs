@@ -40,7 +40,7 @@ pub use generate::{MissionConfig, Preset};
 pub use mission::{Failure, MISSION_FORMAT, MISSION_VERSION, Mission, RobotSpec, TaskSpec};
 pub use sim::{
     Frame, Latency, Metrics, MissionRun, Replan, RunOptions, TimelinePoint, TraceEvent, simulate,
-    work_rate,
+    simulate_with, work_rate,
 };
 
 use afg_baseline::AllocError;

@@ -319,9 +319,34 @@ pub fn simulate(
     replan: Replan<'_>,
     options: RunOptions,
 ) -> Result<MissionRun, MissionError> {
+    simulate_with(mission, replan, options, |_| {})
+}
+
+/// [`simulate`], telling `on_time` the mission time after every event (a progress
+/// bar).
+///
+/// # Errors
+/// As [`simulate`].
+///
+/// # Examples
+/// ```
+/// use afg_baseline::Greedy;
+/// use afg_mission::{MissionConfig, Preset, Replan, RunOptions, simulate_with};
+/// let mission = MissionConfig::new(Preset::Waves, 10, 4, 1).generate()?;
+/// let mut last = 0.0;
+/// simulate_with(&mission, Replan::Scratch(&Greedy), RunOptions::default(), |t| last = t)?;
+/// assert!(last > 0.0 && last <= mission.horizon);
+/// # Ok::<(), afg_mission::MissionError>(())
+/// ```
+pub fn simulate_with(
+    mission: &Mission,
+    replan: Replan<'_>,
+    options: RunOptions,
+    on_time: impl FnMut(f64),
+) -> Result<MissionRun, MissionError> {
     check_options(&options)?;
     let mut sim = Sim::new(mission, replan, options);
-    sim.run()?;
+    sim.run(on_time)?;
     Ok(sim.finish())
 }
 
@@ -460,8 +485,9 @@ impl<'m, 'a> Sim<'m, 'a> {
     }
 
     /// Event after event until the horizon or the last task's completion.
-    fn run(&mut self) -> Result<(), MissionError> {
+    fn run(&mut self, mut on_time: impl FnMut(f64)) -> Result<(), MissionError> {
         loop {
+            on_time(self.now);
             let mut epoch = self.scheduled_events();
             epoch |= self.completions();
             self.arrivals();
