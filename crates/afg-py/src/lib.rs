@@ -308,6 +308,12 @@ impl PyInstance {
         Ok(self.inner.ns_rate(&self.assignment(&tasks)?, pref))
     }
 
+    /// Pickles through the instance's JSON document.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
+        let parse = py.get_type::<PyInstance>().getattr("parse")?;
+        Ok((parse, (self.inner.to_json(),)))
+    }
+
     fn __eq__(&self, other: &Self) -> bool {
         self.inner == other.inner
     }

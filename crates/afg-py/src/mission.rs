@@ -29,28 +29,28 @@ pub(crate) struct PyMission {
 
 #[pymethods]
 impl PyMission {
-    /// Parses a mission file's text (format "afg-mission").
+    /// Reads a mission file (format "afg-mission"), as `afg mission gen` writes it.
     #[staticmethod]
-    fn from_json(text: &str) -> PyResult<Self> {
+    fn from_json(path: PathBuf) -> PyResult<Self> {
+        let text = std::fs::read_to_string(&path).map_err(|source| {
+            crate::game_error(afg_game::GameError::Io {
+                path: path.display().to_string(),
+                source,
+            })
+        })?;
+        let mission = Mission::from_json(&text)
+            .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))?;
         Ok(PyMission {
-            inner: Arc::new(Mission::from_json(text).map_err(value_error)?),
+            inner: Arc::new(mission),
         })
     }
 
-    /// Reads a mission file.
+    /// Parses a mission document from a string.
     #[staticmethod]
-    fn read(path: PathBuf) -> PyResult<Self> {
-        let text = std::fs::read_to_string(&path).map_err(|e| {
-            let message = format!("{}: {e}", path.display());
-            match e.kind() {
-                std::io::ErrorKind::NotFound => {
-                    pyo3::exceptions::PyFileNotFoundError::new_err(message)
-                }
-                _ => PyValueError::new_err(message),
-            }
-        })?;
-        Self::from_json(&text)
-            .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))
+    fn parse(text: &str) -> PyResult<Self> {
+        Ok(PyMission {
+            inner: Arc::new(Mission::from_json(text).map_err(value_error)?),
+        })
     }
 
     /// Draws a mission: `preset` is "static", "waves", "poisson" or "attrition"; every
@@ -147,6 +147,12 @@ impl PyMission {
 
     fn __eq__(&self, other: &Self) -> bool {
         self.inner == other.inner
+    }
+
+    /// Pickles through the mission's JSON document.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
+        let parse = py.get_type::<PyMission>().getattr("parse")?;
+        Ok((parse, (self.inner.to_json(),)))
     }
 
     fn __repr__(&self) -> String {

@@ -140,6 +140,8 @@ impl SolveResult {
 pub struct PyModel {
     allocator: Box<dyn Allocator>,
     path: String,
+    /// `load_model`'s options: block, repair, one_shot.
+    options: (Option<usize>, bool, bool),
 }
 
 #[pymethods]
@@ -150,6 +152,17 @@ impl PyModel {
     }
     fn __repr__(&self) -> String {
         format!("Model({:?})", self.path)
+    }
+
+    /// Pickles as the directory and options to load it again.
+    #[allow(clippy::type_complexity)]
+    fn __reduce__<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(Bound<'py, PyAny>, (String, Option<usize>, bool, bool))> {
+        let load = py.import("afg._afg")?.getattr("load_model")?;
+        let (block, repair, one_shot) = self.options;
+        Ok((load, (self.path.clone(), block, repair, one_shot)))
     }
 }
 
@@ -177,6 +190,7 @@ fn load_model(
     Ok(PyModel {
         allocator: load_dir(&path, options).map_err(value_error)?,
         path: path.display().to_string(),
+        options: (block, repair, one_shot),
     })
 }
 

@@ -9,6 +9,8 @@ import pytest
 
 import afg
 
+ROOT = Path(__file__).resolve().parents[3]
+
 
 def test_missions_round_trip_and_show_their_arrays(tmp_path: Path) -> None:
     mission = afg.Mission.generate("waves", robots=20, tasks=8, seed=3)
@@ -18,7 +20,7 @@ def test_missions_round_trip_and_show_their_arrays(tmp_path: Path) -> None:
     assert ((1.0 <= mission.workloads) & (mission.workloads <= 3.0)).all()
     path = tmp_path / "m.json"
     mission.write(path)
-    assert afg.Mission.read(path) == mission == afg.Mission.from_json(mission.to_json())
+    assert afg.Mission.from_json(path) == mission == afg.Mission.parse(mission.to_json())
     assert afg.Mission.generate("waves", robots=20, tasks=8, seed=4) != mission
 
 
@@ -49,10 +51,31 @@ def test_bad_missions_and_options_raise_with_a_message(tmp_path: Path) -> None:
         afg.Mission.generate("storm", robots=5, tasks=2)
     mission = afg.Mission.generate("static", robots=5, tasks=2)
     with pytest.raises(ValueError, match="speed"):
-        afg.Mission.from_json(mission.to_json().replace('"speed":1.0', '"speed":-2.0', 1))
+        afg.Mission.parse(mission.to_json().replace('"speed":1.0', '"speed":-2.0', 1))
     with pytest.raises(FileNotFoundError):
-        afg.Mission.read(tmp_path / "none.json")
+        afg.Mission.from_json(tmp_path / "none.json")
     with pytest.raises(ValueError, match="unknown method"):
         afg.run_mission(mission, method="oracle")
     with pytest.raises(ValueError, match="not both"):
         afg.run_mission(mission, latency=1.0, latency_factor=2.0)
+
+
+def _welfare_of_greedy(instance: afg.Instance) -> float:
+    return afg.solve(instance, method="greedy").welfare
+
+
+def test_instances_missions_and_models_pickle_and_cross_processes() -> None:
+    import multiprocessing
+    import pickle
+
+    inst = afg.generate(robots=12, tasks=3, seed=5, allow_void=True)
+    mission = afg.Mission.generate("poisson", robots=10, tasks=4, seed=2)
+    model = afg.load_model(ROOT / "models" / "ours" / "price_n60", one_shot=True)
+    assert pickle.loads(pickle.dumps(inst)) == inst
+    assert pickle.loads(pickle.dumps(mission)) == mission
+    again = pickle.loads(pickle.dumps(model))
+    assert (again.allocate(inst).tasks == model.allocate(inst).tasks).all()
+    instances = [afg.generate(robots=20, tasks=4, seed=s) for s in range(3)]
+    with multiprocessing.get_context("spawn").Pool(2) as pool:
+        far = pool.map(_welfare_of_greedy, instances)
+    assert far == [_welfare_of_greedy(i) for i in instances]
