@@ -148,6 +148,18 @@ fn afg_mission_runs_and_refuses_a_broken_mission_in_one_line() {
             .all(|l| serde_json::from_str::<serde_json::Value>(l).is_ok())
     );
     assert!(events.contains("\"event\":\"robot_fails\""));
+    // A Q network built for M = 5 among 4 open tasks: the decision says so.
+    let model = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../models/paper/afgnet_ddqn_n20"
+    );
+    let out = afg(&["mission", "run", "--mission", path, "--model", model]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = stderr(&out);
+    assert!(
+        err.contains("the decision at time 0.000") && err.contains("M = 5"),
+        "{err}"
+    );
     let text = std::fs::read_to_string(&mission).unwrap();
     std::fs::write(
         &mission,

@@ -68,4 +68,18 @@ pub enum MissionError {
     /// The allocator failed.
     #[error(transparent)]
     Alloc(#[from] AllocError),
+    /// The allocator failed at a decision (a Q network built for another number of
+    /// tasks than are open then, for instance).
+    #[error("the decision at time {time:.3} ({robots} robots, {tasks} open tasks): {source}")]
+    Decision {
+        /// Mission time.
+        time: f64,
+        /// Robots in the decision's game.
+        robots: usize,
+        /// Open tasks in it.
+        tasks: usize,
+        /// What the allocator said.
+        #[source]
+        source: AllocError,
+    },
 }

@@ -24,7 +24,15 @@ impl Sim<'_, '_> {
         }
         let game = self.game(&alive, &open)?;
         let start = Instant::now();
-        let mut assignment = self.plan(&game, &alive, &open)?;
+        let mut assignment = self.plan(&game, &alive, &open).map_err(|e| match e {
+            MissionError::Alloc(source) => MissionError::Decision {
+                time: self.now,
+                robots: alive.len(),
+                tasks: open.len(),
+                source,
+            },
+            other => other,
+        })?;
         let compute_s = start.elapsed().as_secs_f64();
         self.keep_places(&game, &alive, &open, &mut assignment);
         self.decisions += 1;
