@@ -105,7 +105,7 @@ enum MethodName {
 /// A knob out of range, an unreadable input, or a failed write.
 pub fn run(args: SwarmArgs) -> Result<()> {
     let grid = grid(&args)?;
-    let runs = grid.cells()?.len() * args.seeds;
+    let runs = grid.run_count();
     let bar = afg_eval::report::progress(runs as u64, "swarm runs");
     let on_round = |round: u64| {
         if round.is_multiple_of(100) {

@@ -92,6 +92,13 @@ impl SwarmGrid {
         Ok(cells)
     }
 
+    /// How many runs [`SwarmGrid::run`] makes: every cell for every seed (a progress
+    /// bar's length), without building the cells.
+    pub fn run_count(&self) -> usize {
+        let seeds = self.seeds.end.saturating_sub(self.seeds.start) as usize;
+        self.methods.len() * self.instances.len() * self.losses.len() * self.failing.len() * seeds
+    }
+
     /// Every cell for every seed, in parallel: `(cell index, report)` in cell and seed
     /// order. `on_run` is called after each run; `on_round` sees the rounds of a grid of
     /// one run (a progress bar).
@@ -118,6 +125,7 @@ impl SwarmGrid {
     /// };
     /// let (cells, reports) = grid.run(|| {}, &|_| {})?;
     /// assert_eq!((cells.len(), reports.len()), (2, 4));
+    /// assert_eq!(grid.run_count(), reports.len());
     /// assert!(reports.iter().all(|(_, r)| r.converged));
     /// assert_eq!(table(&cells, &reports).lines().count(), 2 + 2);
     /// # Ok::<(), Box<dyn std::error::Error>>(())
