@@ -10,7 +10,7 @@ use serde::Serialize;
 use crate::EvalError;
 
 /// One allocation of one instance, measured against OPT.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct Score {
     /// Welfare of the allocation.
     pub welfare: f64,

@@ -3,12 +3,12 @@
 //! move under each preference, and where.
 
 use afg_game::{Assignment, Instance, Preference, RobotId, TaskId};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::{EvalError, Score, optimum_welfare};
 
 /// A robot that strictly prefers another place, and the best one it would take.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Move {
     /// The robot.
     pub robot: u32,
@@ -21,7 +21,7 @@ pub struct Move {
 /// An assignment against the game: the [`Score`] (the field names of `afg solve
 /// --json`), coalition sizes, robots in no coalition, stability under both
 /// preferences and the robots that would move.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Scorecard {
     /// Welfare, OPT's welfare, % of OPT and both NS rates.
     #[serde(flatten)]

@@ -6,7 +6,7 @@ use std::collections::{BinaryHeap, HashMap};
 
 use afg_baseline::Allocator;
 use afg_game::{Point, Preference};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::{Mission, MissionError};
 
@@ -81,7 +81,7 @@ impl Default for RunOptions {
 }
 
 /// One event of a run, for `--trace` (JSON Lines).
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case", tag = "event")]
 pub enum TraceEvent {
     /// A task appeared.
@@ -137,7 +137,7 @@ pub enum TraceEvent {
 }
 
 /// Where the mission stood after an event.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TimelinePoint {
     /// Mission time.
     pub time: f64,
@@ -150,7 +150,7 @@ pub struct TimelinePoint {
 }
 
 /// The metrics of a run (docs/missions.md defines each).
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Metrics {
     /// Tasks whose workload was done by the horizon.
     pub tasks_done: usize,
@@ -190,7 +190,7 @@ pub struct Metrics {
 }
 
 /// A finished run: its metrics, its timeline, and (if asked) every event.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MissionRun {
     /// The metrics.
     pub metrics: Metrics,
@@ -203,7 +203,7 @@ pub struct MissionRun {
 }
 
 /// The whole state at one moment (for animations).
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Frame {
     /// Mission time.
     pub time: f64,

@@ -174,6 +174,7 @@ fn points(ps: impl ExactSizeIterator<Item = afg_game::Point>) -> Array2<f64> {
 
 /// One run of a mission: its metrics, its timeline and (if asked) its decisions.
 #[pyclass(name = "MissionResult", module = "afg", frozen)]
+#[derive(serde::Serialize, serde::Deserialize)]
 pub(crate) struct PyMissionResult {
     run: MissionRun,
     robots: usize,
@@ -241,6 +242,21 @@ impl PyMissionResult {
             .map(|e| serde_json::to_string(e).map(|l| l + "\n"))
             .collect::<Result<String, _>>()
             .map_err(value_error)
+    }
+
+    /// Pickles through the run's own JSON document (nothing is run again).
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
+        let rebuild = py.get_type::<PyMissionResult>().getattr("_from_state")?;
+        Ok((
+            rebuild,
+            (serde_json::to_string(self).map_err(value_error)?,),
+        ))
+    }
+
+    /// The result of a pickled document (`__reduce__`).
+    #[staticmethod]
+    fn _from_state(text: &str) -> PyResult<Self> {
+        serde_json::from_str(text).map_err(value_error)
     }
 
     fn __repr__(&self) -> String {

@@ -21,24 +21,42 @@ use crate::{IntVector, PyInstance, task_ids, task_indices, value_error};
 
 /// An allocation of one instance, scored against the exact optimum.
 #[pyclass(name = "Result", module = "afg", frozen)]
+#[derive(serde::Serialize, serde::Deserialize)]
 pub struct SolveResult {
     tasks: Vec<i64>,
     card: Scorecard,
     /// Extra figures, by name (the allocator's statistics, or a reallocation's).
-    stats: Vec<(&'static str, f64)>,
+    stats: Vec<(String, f64)>,
 }
 
-fn alloc_stats(s: &AllocStats) -> Vec<(&'static str, f64)> {
-    vec![
+fn alloc_stats(s: &AllocStats) -> Vec<(String, f64)> {
+    [
         ("iterations", s.iterations as f64),
         ("rounds", s.rounds as f64),
         ("messages", s.messages as f64),
         ("wall_time_s", s.wall_time.as_secs_f64()),
     ]
+    .map(|(k, v)| (k.to_owned(), v))
+    .to_vec()
 }
 
 #[pymethods]
 impl SolveResult {
+    /// Pickles through the result's own JSON document (nothing is recomputed).
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
+        let rebuild = py.get_type::<SolveResult>().getattr("_from_state")?;
+        Ok((
+            rebuild,
+            (serde_json::to_string(self).map_err(value_error)?,),
+        ))
+    }
+
+    /// The result of a pickled document (`__reduce__`).
+    #[staticmethod]
+    fn _from_state(text: &str) -> PyResult<Self> {
+        serde_json::from_str(text).map_err(value_error)
+    }
+
     /// Robot i's task, shape (N,), int64 (-1 for none).
     #[getter]
     fn tasks<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
@@ -203,7 +221,7 @@ fn run(py: Python<'_>, instance: &PyInstance, allocator: &dyn Allocator) -> PyRe
     let mut stats = alloc_stats(&row.stats);
     // The crates' whole part of the call (the method, then the optimum it is scored
     // against), for measuring what the binding adds around it.
-    stats.push(("core_s", start.elapsed().as_secs_f64()));
+    stats.push(("core_s".into(), start.elapsed().as_secs_f64()));
     Ok(SolveResult {
         tasks: task_indices(&assignment),
         stats,
@@ -304,14 +322,16 @@ fn reallocate(
     Ok(SolveResult {
         tasks: task_indices(&r.assignment),
         card: Scorecard::with_score(&inst, &r.assignment, score),
-        stats: vec![
+        stats: [
             ("survivors", r.survivors as f64),
             ("moved", r.moved as f64),
             ("placed", r.placed as f64),
             ("opt_changes", r.opt_changes as f64),
             ("scratch_changes", r.scratch_changes as f64),
             ("wall_time_s", r.seconds),
-        ],
+        ]
+        .map(|(k, v)| (k.to_owned(), v))
+        .to_vec(),
     })
 }
 

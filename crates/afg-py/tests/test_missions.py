@@ -64,7 +64,7 @@ def _welfare_of_greedy(instance: afg.Instance) -> float:
     return afg.solve(instance, method="greedy").welfare
 
 
-def test_instances_missions_and_models_pickle_and_cross_processes() -> None:
+def test_every_object_pickles_and_crosses_processes() -> None:
     import multiprocessing
     import pickle
 
@@ -75,6 +75,17 @@ def test_instances_missions_and_models_pickle_and_cross_processes() -> None:
     assert pickle.loads(pickle.dumps(mission)) == mission
     again = pickle.loads(pickle.dumps(model))
     assert (again.allocate(inst).tasks == model.allocate(inst).tasks).all()
+    result = afg.solve(inst, method="da")
+    back = pickle.loads(pickle.dumps(result))
+    assert (back.tasks == result.tasks).all() and back.stats == result.stats
+    assert (back.welfare, back.percent_of_opt, back.coalition_sizes.tolist()) == (
+        result.welfare, result.percent_of_opt, result.coalition_sizes.tolist()
+    )
+    assert (back.moves("selfish") == result.moves("selfish")).all()
+    run = afg.run_mission(mission, method="greedy", trace=True)
+    again = pickle.loads(pickle.dumps(run))
+    assert again.metrics == run.metrics and again.trace_jsonl() == run.trace_jsonl()
+    assert (again.timeline["time"] == run.timeline["time"]).all()
     instances = [afg.generate(robots=20, tasks=4, seed=s) for s in range(3)]
     with multiprocessing.get_context("spawn").Pool(2) as pool:
         far = pool.map(_welfare_of_greedy, instances)
