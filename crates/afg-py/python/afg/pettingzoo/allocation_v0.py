@@ -1,0 +1,120 @@
+"""The paper's sequential allocation MDP as a PettingZoo AEC environment.
+
+Each robot is an agent (``robot_0`` … ``robot_{N-1}``); they act once each, in index
+order, exactly as in ``afg/Allocation-v0`` (the same engine underneath, step for step):
+
+- **action**: ``Discrete(M)``, the task the acting robot joins (``Discrete(M + 1)`` with
+  ``allow_void=True``, action M = stay out);
+- **observation** (``Dict``): ``observation`` (M,) float32 — the agent's own view, the
+  utility it would get in each task given the others' assignment (the row of
+  ``afg/Allocation-v0``'s ``task_features``); ``action_mask`` (actions,) int8 — the tasks
+  the agent may take when it is its turn, all zeros otherwise;
+- **reward**: a team reward: every agent receives each step's change in welfare, so each
+  agent's return is the final welfare;
+- the episode ends for every agent after the last robot acts; ``infos`` then hold
+  ``tasks``, ``welfare``, ``opt_welfare`` and ``percent_of_opt``.
+
+Keyword arguments as ``afg/Allocation-v0``'s: ``robots``, ``tasks``,
+``capacity_slack``, ``eps``, ``beta``, ``units``, ``allow_void``.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Dict, Optional
+
+import numpy as np
+from gymnasium import spaces
+from pettingzoo import AECEnv
+from pettingzoo.utils import wrappers
+
+from ..gym import AllocationEnv
+
+__all__ = ["env", "raw_env"]
+
+
+def env(**kwargs: Any) -> AECEnv:
+    """The environment with PettingZoo's usual checking wrappers."""
+    wrapped: AECEnv = raw_env(**kwargs)
+    wrapped = wrappers.AssertOutOfBoundsWrapper(wrapped)
+    return wrappers.OrderEnforcingWrapper(wrapped)
+
+
+class raw_env(AECEnv):  # noqa: N801 (PettingZoo's name)
+    """Robots as agents of the sequential MDP (see the module docs)."""
+
+    metadata = {"render_modes": [], "name": "allocation_v0", "is_parallelizable": False}
+
+    def __init__(
+        self,
+        robots: int = 20,
+        tasks: int = 5,
+        capacity_slack: Optional[float] = None,
+        eps: Optional[float] = None,
+        beta: float = 1.0,
+        units: str = "bounded",
+        allow_void: bool = False,
+    ) -> None:
+        super().__init__()
+        self._game = AllocationEnv(
+            robots=robots, tasks=tasks, capacity_slack=capacity_slack, eps=eps, beta=beta,
+            units=units, allow_void=allow_void,
+        )
+        self.possible_agents = [f"robot_{i}" for i in range(robots)]
+        self._index = {a: i for i, a in enumerate(self.possible_agents)}
+        actions = int(self._game.action_space.n)
+        self._observation_space = spaces.Dict(
+            {
+                "observation": spaces.Box(-np.inf, np.inf, shape=(tasks,), dtype=np.float32),
+                "action_mask": spaces.Box(0, 1, shape=(actions,), dtype=np.int8),
+            }
+        )
+        self._action_space = spaces.Discrete(actions)
+        self._obs: Dict[str, Any] = {}
+
+    def observation_space(self, agent: str) -> spaces.Space:
+        return self._observation_space
+
+    def action_space(self, agent: str) -> spaces.Space:
+        return self._action_space
+
+    def reset(self, seed: Optional[int] = None, options: Optional[Dict[str, Any]] = None) -> None:
+        self._obs, _ = self._game.reset(seed=seed, options=options)
+        self.agents = self.possible_agents[:]
+        self.rewards = {a: 0.0 for a in self.agents}
+        self._cumulative_rewards = {a: 0.0 for a in self.agents}
+        self.terminations = {a: False for a in self.agents}
+        self.truncations = {a: False for a in self.agents}
+        self.infos = {a: {} for a in self.agents}
+        self.agent_selection = self.agents[0]
+
+    def observe(self, agent: str) -> Dict[str, np.ndarray]:
+        i = self._index[agent]
+        acting = int(self._obs["actor"]) == i
+        mask = self._obs["action_mask"] if acting else np.zeros(self._action_space.n)
+        return {
+            "observation": np.array(self._obs["task_features"][i], dtype=np.float32),
+            "action_mask": np.asarray(mask, dtype=np.int8),
+        }
+
+    def step(self, action: Optional[int]) -> None:
+        agent = self.agent_selection
+        if self.terminations[agent] or self.truncations[agent]:
+            self._was_dead_step(action)
+            return
+        self._cumulative_rewards[agent] = 0.0
+        self._obs, reward, done, _, info = self._game.step(int(action))
+        for a in self.agents:
+            self.rewards[a] = float(reward)
+        if done:
+            for a in self.agents:
+                self.terminations[a] = True
+                self.infos[a] = dict(info)
+        i = self._index[agent]
+        self.agent_selection = self.agents[(i + 1) % len(self.agents)]
+        self._accumulate_rewards()
+
+    def render(self) -> None:
+        return None
+
+    def close(self) -> None:
+        return None
