@@ -257,6 +257,11 @@ fn run_one(args: &RunArgs) -> Result<()> {
         println!("{}", serde_json::to_string(&run.metrics)?);
     } else {
         print_metrics(&planner.name(), &args.mission, &run);
+        if args.looping.latency_factor.is_some() {
+            println!(
+                "  (measured latency: mission times depend on this machine, not reproducible run to run)"
+            );
+        }
     }
     Ok(())
 }
