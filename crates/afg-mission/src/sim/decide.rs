@@ -23,8 +23,9 @@ impl Sim<'_, '_> {
             return Ok(());
         }
         let game = self.game(&alive, &open)?;
+        let places = self.places(&alive, &open);
         let start = Instant::now();
-        let mut assignment = self.plan(&game, &alive, &open).map_err(|e| match e {
+        let mut assignment = self.plan(&game, &open, &places).map_err(|e| match e {
             MissionError::Alloc(source) => MissionError::Decision {
                 time: self.now,
                 robots: alive.len(),
@@ -34,7 +35,7 @@ impl Sim<'_, '_> {
             other => other,
         })?;
         let compute_s = start.elapsed().as_secs_f64();
-        self.keep_places(&game, &alive, &open, &mut assignment);
+        self.keep_places(&game, &places, &mut assignment);
         self.decisions += 1;
         self.pairs += (alive.len() * open.len()) as u64;
         self.compute.push(compute_s);
@@ -68,30 +69,20 @@ impl Sim<'_, '_> {
     fn keep_places(
         &self,
         game: &Instance,
-        alive: &[usize],
-        open: &[usize],
+        places: &[Option<(TaskId, bool)>],
         assignment: &mut Assignment,
     ) {
-        let column: HashMap<usize, usize> = open.iter().enumerate().map(|(k, &j)| (j, k)).collect();
-        let current = |k: usize| {
-            let r = &self.robots[alive[k]];
-            r.task
-                .and_then(|j| column.get(&j))
-                .map(|&c| (TaskId(c as u32), r.there))
-        };
         if self.options.commit {
-            for k in 0..alive.len() {
-                if let Some((task, true)) = current(k) {
+            for (k, place) in places.iter().enumerate() {
+                if let Some((task, true)) = *place {
                     assignment.set(RobotId(k as u32), Some(task));
                 }
             }
             for j in game.task_ids() {
                 let mut over = assignment.size(j).saturating_sub(game.capacity(j));
-                for k in 0..alive.len() {
+                for (k, &place) in places.iter().enumerate() {
                     let robot = RobotId(k as u32);
-                    if over > 0
-                        && assignment.task_of(robot) == Some(j)
-                        && current(k) != Some((j, true))
+                    if over > 0 && assignment.task_of(robot) == Some(j) && place != Some((j, true))
                     {
                         assignment.set(robot, None);
                         over -= 1;
@@ -102,9 +93,9 @@ impl Sim<'_, '_> {
         let Some(threshold) = self.options.hysteresis else {
             return;
         };
-        for k in 0..alive.len() {
+        for (k, &place) in places.iter().enumerate() {
             let robot = RobotId(k as u32);
-            let (Some((old, false)), Some(new)) = (current(k), assignment.task_of(robot)) else {
+            let (Some((old, false)), Some(new)) = (place, assignment.task_of(robot)) else {
                 continue;
             };
             let balanced = afg_game::Preference::Balanced;
@@ -114,6 +105,20 @@ impl Sim<'_, '_> {
                 assignment.set(robot, Some(old));
             }
         }
+    }
+
+    /// Each robot of `alive`: its task as a column of the game of `open` (if still
+    /// open), and whether it is there.
+    fn places(&self, alive: &[usize], open: &[usize]) -> Vec<Option<(TaskId, bool)>> {
+        let column: HashMap<usize, usize> = open.iter().enumerate().map(|(k, &j)| (j, k)).collect();
+        alive
+            .iter()
+            .map(|&i| {
+                let r = &self.robots[i];
+                let task = r.task.and_then(|j| column.get(&j))?;
+                Some((TaskId(*task as u32), r.there))
+            })
+            .collect()
     }
 
     /// The game of the living robots `alive` (at their positions now) and the open tasks
@@ -138,23 +143,20 @@ impl Sim<'_, '_> {
     fn plan(
         &mut self,
         game: &Instance,
-        alive: &[usize],
         open: &[usize],
+        places: &[Option<(TaskId, bool)>],
     ) -> Result<Assignment, MissionError> {
         match self.replan {
             Replan::Scratch(allocator) => Ok(allocator.allocate(game)?.assignment),
             Replan::Warm { first, .. } if !self.decided => Ok(first.allocate(game)?.assignment),
             Replan::Warm { preference, .. } => {
-                let column: HashMap<usize, usize> =
-                    open.iter().enumerate().map(|(k, &j)| (j, k)).collect();
                 let mut a = Assignment::unassigned(game.num_robots(), game.num_tasks());
-                for (k, &i) in alive.iter().enumerate() {
-                    let kept = self.robots[i].task.and_then(|j| column.get(&j));
-                    if let Some(&col) = kept {
-                        let (robot, task) = (RobotId(k as u32), TaskId(col as u32));
-                        if a.has_room(game, robot, task) {
-                            a.set(robot, Some(task));
-                        }
+                for (k, place) in places.iter().enumerate() {
+                    let robot = RobotId(k as u32);
+                    if let Some((task, _)) = *place
+                        && a.has_room(game, robot, task)
+                    {
+                        a.set(robot, Some(task));
                     }
                 }
                 CentralisedDa::new(preference).improve(game, &mut a);
