@@ -246,12 +246,7 @@ fn run_one(args: &RunArgs) -> Result<()> {
         write_atomic_making_dirs(path, mission_html(&mission, &run, &title)?.as_bytes())?;
     }
     if let Some(path) = &args.trace {
-        let lines: String = run
-            .trace
-            .iter()
-            .map(|e| serde_json::to_string(e).map(|l| l + "\n"))
-            .collect::<Result<_, _>>()?;
-        write_atomic_making_dirs(path, lines.as_bytes())?;
+        write_atomic_making_dirs(path, run.trace_jsonl().as_bytes())?;
     }
     if args.json {
         println!("{}", serde_json::to_string(&run.metrics)?);

@@ -215,6 +215,27 @@ pub struct Frame {
     pub left: Vec<f32>,
 }
 
+impl MissionRun {
+    /// The trace as JSON Lines, one event a line (`afg mission run --trace`).
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::Greedy;
+    /// use afg_mission::{MissionConfig, Preset, Replan, RunOptions, simulate};
+    /// let mission = MissionConfig::new(Preset::Static, 5, 2, 1).generate()?;
+    /// let options = RunOptions { trace: true, ..RunOptions::default() };
+    /// let run = simulate(&mission, Replan::Scratch(&Greedy), options)?;
+    /// assert_eq!(run.trace_jsonl().lines().count(), run.trace.len());
+    /// # Ok::<(), afg_mission::MissionError>(())
+    /// ```
+    pub fn trace_jsonl(&self) -> String {
+        self.trace
+            .iter()
+            .map(|e| serde_json::to_string(e).expect("an event serialises") + "\n")
+            .collect()
+    }
+}
+
 /// The work rate of `n` robots at a task of base `eps`: `log_eps(n + eps − 1)` (one
 /// robot: 1), so the coalition value `F_j(n)` is the task's reward rate.
 ///

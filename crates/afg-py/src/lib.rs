@@ -51,6 +51,16 @@ impl IntVector<'_> {
     }
 }
 
+/// What `__reduce__` returns for an object that pickles as a JSON document: the
+/// class's `method` (a static method taking the document) and the document.
+pub(crate) fn reduce_to<'py, T: pyo3::PyTypeInfo>(
+    py: Python<'py>,
+    method: &str,
+    document: String,
+) -> PyResult<(Bound<'py, PyAny>, (String,))> {
+    Ok((py.get_type::<T>().getattr(method)?, (document,)))
+}
+
 /// The value a user named (`"balanced"`, `"bounded"`, …), or a `ValueError` listing the
 /// names there are.
 pub(crate) fn named<T: Named>(name: &str) -> PyResult<T> {
@@ -310,8 +320,7 @@ impl PyInstance {
 
     /// Pickles through the instance's JSON document.
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
-        let parse = py.get_type::<PyInstance>().getattr("parse")?;
-        Ok((parse, (self.inner.to_json(),)))
+        reduce_to::<PyInstance>(py, "parse", self.inner.to_json())
     }
 
     fn __eq__(&self, other: &Self) -> bool {

@@ -151,8 +151,7 @@ impl PyMission {
 
     /// Pickles through the mission's JSON document.
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
-        let parse = py.get_type::<PyMission>().getattr("parse")?;
-        Ok((parse, (self.inner.to_json(),)))
+        crate::reduce_to::<PyMission>(py, "parse", self.inner.to_json())
     }
 
     fn __repr__(&self) -> String {
@@ -235,22 +234,14 @@ impl PyMissionResult {
     }
 
     /// Every event and decision (with `trace=True`), as the JSON Lines of `--trace`.
-    fn trace_jsonl(&self) -> PyResult<String> {
-        self.run
-            .trace
-            .iter()
-            .map(|e| serde_json::to_string(e).map(|l| l + "\n"))
-            .collect::<Result<String, _>>()
-            .map_err(value_error)
+    fn trace_jsonl(&self) -> String {
+        self.run.trace_jsonl()
     }
 
     /// Pickles through the run's own JSON document (nothing is run again).
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
-        let rebuild = py.get_type::<PyMissionResult>().getattr("_from_state")?;
-        Ok((
-            rebuild,
-            (serde_json::to_string(self).map_err(value_error)?,),
-        ))
+        let document = serde_json::to_string(self).map_err(value_error)?;
+        crate::reduce_to::<PyMissionResult>(py, "_from_state", document)
     }
 
     /// The result of a pickled document (`__reduce__`).

@@ -44,11 +44,8 @@ fn alloc_stats(s: &AllocStats) -> Vec<(String, f64)> {
 impl SolveResult {
     /// Pickles through the result's own JSON document (nothing is recomputed).
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
-        let rebuild = py.get_type::<SolveResult>().getattr("_from_state")?;
-        Ok((
-            rebuild,
-            (serde_json::to_string(self).map_err(value_error)?,),
-        ))
+        let document = serde_json::to_string(self).map_err(value_error)?;
+        crate::reduce_to::<SolveResult>(py, "_from_state", document)
     }
 
     /// The result of a pickled document (`__reduce__`).
