@@ -124,6 +124,15 @@ fn afg_mission_runs_and_refuses_a_broken_mission_in_one_line() {
     let args = ["mission", "gen", "--preset", "attrition", "--robots", "12"];
     let made = afg(&[&args[..], &["--tasks", "4", "--out", path]].concat());
     assert_eq!(made.status.code(), Some(0), "{}", stderr(&made));
+    // A knob out of range: one line, exit 1, and the file already there untouched.
+    let before = std::fs::read(&mission).unwrap();
+    let bad = ["--tasks", "4", "--fail-share", "2", "--out", path];
+    let refused = afg(&[&args[..], &bad].concat());
+    assert_eq!(refused.status.code(), Some(1));
+    let err = stderr(&refused);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("share of robots that fail"), "{err}");
+    assert_eq!(std::fs::read(&mission).unwrap(), before);
     let trace = dir.join("t.jsonl");
     let trace_path = trace.to_str().unwrap();
     let ran = afg(&[
