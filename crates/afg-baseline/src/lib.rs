@@ -37,7 +37,9 @@ use thiserror::Error;
 pub use dynamics::{CentralisedDa, DecentralisedDa, DecentralisedRun};
 pub use optimum::{Certificate, Optimum, verify_optimal};
 pub use simple::{Blind, Greedy, Nearest, RandomAllocator};
-pub use swarm::{Failure, Network, Swarm, SwarmMethod, SwarmReport, TracePoint};
+pub use swarm::{
+    DETECT_AFTER, Failure, LiveSwarm, Network, Swarm, SwarmMethod, SwarmReport, TracePoint,
+};
 
 /// `100 · welfare / opt_welfare`, the one "% of OPT" of every table, command, training
 /// validation and summary; `None` when the optimum's welfare is not positive (all

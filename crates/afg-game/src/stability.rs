@@ -161,8 +161,39 @@ impl Instance {
         sizes: &[usize],
         pref: Preference,
     ) -> Option<Option<TaskId>> {
+        self.best_move_among(robot, current, sizes, pref, |_| true)
+    }
+
+    /// [`Instance::best_move_given`] for a robot that can only move to the tasks
+    /// `known` accepts (a robot in a mission that has not heard of every task): the
+    /// others are not candidates. Its own task counts as it is.
+    ///
+    /// # Panics
+    /// If `sizes` has fewer than M entries.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::{Instance, Point, Preference, RobotId, Task, TaskId};
+    /// let at = |x| Task { position: Point::new(x, 0.0), reward: 1.0, eps: 2.0, capacity: None };
+    /// let inst = Instance::new(vec![Point::new(0.9, 0.0)], vec![at(0.0), at(1.0)], 1.0)?;
+    /// let all = inst.best_move_among(RobotId(0), None, &[0, 0], Preference::Selfish, |_| true);
+    /// assert_eq!(all, Some(Some(TaskId(1))));
+    /// // Not knowing of task 1, it goes to task 0.
+    /// let known = |t: TaskId| t == TaskId(0);
+    /// let some = inst.best_move_among(RobotId(0), None, &[0, 0], Preference::Selfish, known);
+    /// assert_eq!(some, Some(Some(TaskId(0))));
+    /// # Ok::<(), afg_game::GameError>(())
+    /// ```
+    pub fn best_move_among(
+        &self,
+        robot: RobotId,
+        current: Option<TaskId>,
+        sizes: &[usize],
+        pref: Preference,
+        known: impl Fn(TaskId) -> bool,
+    ) -> Option<Option<TaskId>> {
         let others = |task: TaskId| sizes[task.index()] - usize::from(current == Some(task));
-        if let Some(task) = self.best_response_given(robot, current, sizes, pref) {
+        if let Some(task) = self.best_response_among(robot, current, sizes, pref, known) {
             // The task beats where the robot is; the void beats it only when it scores < 0.
             let s = self.score_among(robot, task, others(task), pref);
             let void_better = self.allows_void() && current.is_some() && s < 0.0;
@@ -224,10 +255,22 @@ impl Instance {
         sizes: &[usize],
         pref: Preference,
     ) -> Option<TaskId> {
+        self.best_response_among(robot, current, sizes, pref, |_| true)
+    }
+
+    /// [`Instance::best_response_given`] among the tasks `known` accepts.
+    fn best_response_among(
+        &self,
+        robot: RobotId,
+        current: Option<TaskId>,
+        sizes: &[usize],
+        pref: Preference,
+        known: impl Fn(TaskId) -> bool,
+    ) -> Option<TaskId> {
         let others = |task: TaskId| sizes[task.index()] - usize::from(current == Some(task));
         let mut best: Option<(TaskId, f64)> = None;
         for task in self.task_ids() {
-            if Some(task) == current || others(task) >= self.capacity(task) {
+            if Some(task) == current || others(task) >= self.capacity(task) || !known(task) {
                 continue;
             }
             let s = self.score_among(robot, task, others(task), pref);

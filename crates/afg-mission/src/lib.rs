@@ -39,8 +39,8 @@ mod sim;
 pub use generate::{MissionConfig, Preset};
 pub use mission::{Failure, MISSION_FORMAT, MISSION_VERSION, Mission, RobotSpec, TaskSpec};
 pub use sim::{
-    Frame, Latency, Metrics, MissionRun, Replan, RunOptions, TimelinePoint, TraceEvent, simulate,
-    simulate_with, work_rate,
+    Decentralised, Frame, Latency, Metrics, MissionRun, Replan, RunOptions, SwarmMetrics,
+    TimelinePoint, TraceEvent, simulate, simulate_with, work_rate,
 };
 
 use afg_baseline::AllocError;

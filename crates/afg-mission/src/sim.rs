@@ -27,6 +27,9 @@ pub enum Replan<'a> {
     /// prices (a new task starts at [`Optimum::start_price`](afg_baseline::Optimum::start_price)):
     /// the same optimum, found from a warm start.
     IncrementalOpt,
+    /// No central decision: the robots run a decentralised method round by round and
+    /// each heads where its own view says.
+    Decentralised(&'a Decentralised),
 }
 
 /// How long a decision takes in mission time: robots act on it only once it is made.
@@ -187,6 +190,10 @@ pub struct Metrics {
     pub compute_total_s: f64,
     /// Work done on every task (done or not) by the end.
     pub work_done: f64,
+    /// A decentralised method's rounds, traffic and response times (for it, each
+    /// round counts as a decision).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub swarm: Option<SwarmMetrics>,
 }
 
 /// A finished run: its metrics, its timeline, and (if asked) every event.
@@ -367,6 +374,18 @@ pub fn simulate_with(
 ) -> Result<MissionRun, MissionError> {
     check_options(&options)?;
     let mut sim = Sim::new(mission, replan, options);
+    if let Replan::Decentralised(config) = replan {
+        let central = options.replan_every.is_some()
+            || options.latency != Latency::None
+            || options.commit
+            || options.hysteresis.is_some();
+        if central {
+            return Err(MissionError::Invalid(
+                "replanning, latency, commitment and hysteresis are for central decisions; a decentralised method runs at its rounds per time unit".into(),
+            ));
+        }
+        sim.swarm = Some(SwarmState::new(mission, config)?);
+    }
     sim.run(on_time)?;
     Ok(sim.finish())
 }
@@ -433,6 +452,8 @@ struct Sim<'m, 'a> {
     trace: Vec<TraceEvent>,
     frames: Vec<Frame>,
     next_frame: Option<f64>,
+    /// A decentralised method's state, when one runs.
+    swarm: Option<SwarmState>,
 }
 
 /// An event known in advance.
@@ -502,6 +523,7 @@ impl<'m, 'a> Sim<'m, 'a> {
             trace: Vec::new(),
             frames: Vec::new(),
             next_frame: options.frame_every.map(|_| 0.0),
+            swarm: None,
         }
     }
 
@@ -509,9 +531,15 @@ impl<'m, 'a> Sim<'m, 'a> {
     fn run(&mut self, mut on_time: impl FnMut(f64)) -> Result<(), MissionError> {
         loop {
             on_time(self.now);
-            let mut epoch = self.scheduled_events();
+            let mut epoch = self.scheduled_events()?;
             epoch |= self.completions();
             self.arrivals();
+            if let Some(swarm) = &self.swarm {
+                if swarm.next_round() <= self.now {
+                    self.swarm_round()?;
+                }
+                epoch = false;
+            }
             if self.next_tick.is_some_and(|t| t <= self.now) {
                 epoch = true;
                 let every = self.options.replan_every.expect("ticks come from it");
@@ -548,7 +576,7 @@ impl<'m, 'a> Sim<'m, 'a> {
     }
 
     /// The scheduled events due now; whether any is a decision epoch.
-    fn scheduled_events(&mut self) -> bool {
+    fn scheduled_events(&mut self) -> Result<bool, MissionError> {
         let mut epoch = false;
         while let Some(&(time, what)) = self.scheduled.get(self.next_scheduled) {
             if time > self.now {
@@ -560,20 +588,29 @@ impl<'m, 'a> Sim<'m, 'a> {
                 Scheduled::Appears(j) => {
                     self.tasks[j].open = true;
                     self.log(TraceEvent::TaskAppears { time, task: j });
+                    if let Some(swarm) = &mut self.swarm {
+                        swarm.task(j, false, time);
+                    }
                 }
                 Scheduled::Fails(i) => {
                     self.stop(i);
                     self.robots[i].alive = false;
                     self.log(TraceEvent::RobotFails { time, robot: i });
+                    if let Some(swarm) = &mut self.swarm {
+                        swarm.robot(i, false, time)?;
+                    }
                 }
                 Scheduled::Returns(i) => {
                     self.robots[i].alive = true;
                     self.robots[i].since = self.now;
                     self.log(TraceEvent::RobotReturns { time, robot: i });
+                    if let Some(swarm) = &mut self.swarm {
+                        swarm.robot(i, true, time)?;
+                    }
                 }
             }
         }
-        epoch
+        Ok(epoch)
     }
 
     /// Tasks whose workload is done now; their robots are free.
@@ -596,6 +633,9 @@ impl<'m, 'a> Sim<'m, 'a> {
                     time: self.now,
                     task: j,
                 });
+                if let Some(swarm) = &mut self.swarm {
+                    swarm.task(j, true, self.now);
+                }
             }
         }
         any
@@ -721,7 +761,11 @@ impl<'m, 'a> Sim<'m, 'a> {
         if let Some(p) = &self.pending {
             next = next.min(p.ready);
         }
-        for t in [self.next_tick, self.next_frame].into_iter().flatten() {
+        let round = self.swarm.as_ref().map(SwarmState::next_round);
+        for t in [self.next_tick, self.next_frame, round]
+            .into_iter()
+            .flatten()
+        {
             next = next.min(t);
         }
         next
@@ -814,3 +858,7 @@ impl<'m, 'a> Sim<'m, 'a> {
 
 mod decide;
 mod finish;
+mod swarm;
+
+use swarm::SwarmState;
+pub use swarm::{Decentralised, SwarmMetrics};

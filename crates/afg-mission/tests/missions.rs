@@ -3,11 +3,12 @@
 //! failed robots never act again, the incremental optimum is the optimum at every
 //! decision, and a seed gives one trace.
 
-use afg_baseline::{Method, Optimum, verify_optimal};
+use afg_baseline::{Method, Network, Optimum, SwarmMethod, verify_optimal};
 use afg_game::{Assignment, GeneratorConfig, Instance, Point, TaskId};
+use afg_graph::GraphKind;
 use afg_mission::{
-    Latency, Mission, MissionConfig, MissionRun, Preset, Replan, RunOptions, TraceEvent, simulate,
-    work_rate,
+    Decentralised, Latency, Mission, MissionConfig, MissionRun, Preset, Replan, RunOptions,
+    TraceEvent, simulate, work_rate,
 };
 use proptest::prelude::*;
 
@@ -179,7 +180,7 @@ fn event_times_equal_a_fine_step_reference() {
 /// What every traced run must satisfy: robots no faster than their speed (an arrival
 /// comes exactly distance / speed after the decision that sent the robot there),
 /// coalitions within capacity, failed robots idle, work conserved.
-fn check_run(mission: &Mission, run: &MissionRun) {
+fn check_run(mission: &Mission, run: &MissionRun, capacities: bool) {
     let n = mission.robots.len();
     let mut sent: Vec<Option<(f64, [f64; 2], i64)>> = vec![None; n];
     let mut failed = vec![false; n];
@@ -205,7 +206,10 @@ fn check_run(mission: &Mission, run: &MissionRun) {
                 }
                 for (j, &size) in sizes.iter().enumerate() {
                     let cap = mission.tasks[j].capacity.unwrap_or(usize::MAX);
-                    assert!(size <= cap, "task {j}: {size} robots, capacity {cap}");
+                    assert!(
+                        !capacities || size <= cap,
+                        "task {j}: {size} robots, capacity {cap}"
+                    );
                 }
             }
             TraceEvent::Arrival { time, robot, task } => {
@@ -253,7 +257,7 @@ proptest! {
         robots in 2usize..30,
         tasks in 1usize..8,
         capped in any::<bool>(),
-        rule in 0usize..4,
+        rule in 0usize..5,
     ) {
         let mut config = MissionConfig::new(preset, robots, tasks, seed);
         config.horizon = 30.0;
@@ -263,15 +267,27 @@ proptest! {
             f.returns = Some((f.time + 3.0).min(29.0)).filter(|&b| b > f.time);
         }
         let allocator = Method::Greedy.allocator(seed);
+        let grape = Decentralised {
+            sensing: capped.then_some(0.3),
+            rounds_per_time: 20.0,
+            seed,
+            ..Decentralised::new(
+                SwarmMethod::Grape { preference: afg_game::Preference::Selfish },
+                Network { graph: GraphKind::Radius { radius: 0.4 }, loss: 0.2, ..Network::default() },
+            )
+        };
         let replan = match rule {
             0 => Replan::Scratch(allocator.as_ref()),
             1 => Replan::Warm { first: allocator.as_ref(), preference: afg_game::Preference::Balanced },
             2 => Replan::IncrementalOpt,
-            _ => Replan::Scratch(&Optimum),
+            3 => Replan::Scratch(&Optimum),
+            _ => Replan::Decentralised(&grape),
         };
         let options = RunOptions { replan_every: (rule == 3).then_some(2.5), ..traced() };
         let run = simulate(&mission, replan, options).unwrap();
-        check_run(&mission, &run);
+        // Robots acting on views not yet settled may crowd a task past its capacity.
+        check_run(&mission, &run, rule != 4);
+        prop_assert_eq!(run.metrics.swarm.is_some(), rule == 4);
         let again = simulate(&mission, replan, options).unwrap();
         let strip = |r: &MissionRun| -> Vec<TraceEvent> {
             r.trace.iter().cloned().map(|e| match e {
@@ -421,7 +437,7 @@ fn commitment_and_hysteresis_keep_robots_on_their_task() {
             ..traced()
         };
         let run = simulate(&mission, Replan::Scratch(&Optimum), committed).unwrap();
-        check_run(&mission, &run);
+        check_run(&mission, &run, true);
         let mut working: Vec<Option<usize>> = vec![None; 30];
         for e in &run.trace {
             match e {
@@ -448,10 +464,56 @@ fn commitment_and_hysteresis_keep_robots_on_their_task() {
             ..traced()
         };
         let run = simulate(&mission, Replan::Scratch(&Optimum), frozen).unwrap();
-        check_run(&mission, &run);
+        check_run(&mission, &run, true);
         assert_eq!(run.metrics.reassignments, 0, "seed {seed}");
         let free = simulate(&mission, Replan::Scratch(&Optimum), traced()).unwrap();
         held_back += free.metrics.reassignments;
     }
     assert!(held_back > 0, "nothing to hold back");
+}
+
+/// A decentralised method in a mission: central options and a round rate out of range
+/// are refused with what is wrong; over a perfect network where everyone hears
+/// everyone, GRAPE settles after every event of a static mission and its robots all
+/// work.
+#[test]
+fn grape_runs_inside_missions() {
+    let mission = MissionConfig::new(Preset::Waves, 20, 6, 4)
+        .generate()
+        .unwrap();
+    let grape = Decentralised::new(
+        SwarmMethod::Grape {
+            preference: afg_game::Preference::Selfish,
+        },
+        Network {
+            graph: GraphKind::Radius { radius: 2.0 },
+            ..Network::default()
+        },
+    );
+    let replan = Replan::Decentralised(&grape);
+    let late = RunOptions {
+        latency: Latency::Fixed { delay: 1.0 },
+        ..RunOptions::default()
+    };
+    let error = simulate(&mission, replan, late).unwrap_err().to_string();
+    assert!(error.contains("decentralised"), "{error}");
+    let stalled = Decentralised {
+        rounds_per_time: 0.0,
+        ..grape.clone()
+    };
+    let error = simulate(
+        &mission,
+        Replan::Decentralised(&stalled),
+        RunOptions::default(),
+    );
+    assert!(error.unwrap_err().to_string().contains("rounds per time"));
+    let run = simulate(&mission, replan, traced()).unwrap();
+    check_run(&mission, &run, true);
+    let swarm = run.metrics.swarm.as_ref().unwrap();
+    assert_eq!(run.metrics.tasks_done, 6);
+    // Every wave's arrivals settle before the mission ends; only the last completion
+    // cannot (the run stops there).
+    assert!(swarm.response_mean.unwrap() > 0.0);
+    assert!(swarm.unsettled <= 1, "{swarm:?}");
+    assert_eq!(swarm.rounds, run.metrics.decisions);
 }

@@ -20,14 +20,16 @@
 //! robot-steps at N = 10 000, docs/swarm.md). Memory O(N·k) for the links and the
 //! messages in flight, plus the views' shared trees.
 
+use std::borrow::Cow;
 use std::rc::Rc;
 
-use afg_game::{Assignment, Instance, Preference, RobotId, TaskId};
+use afg_game::{Assignment, Instance, Point, Preference, RobotId, TaskId};
 use imbl::Vector;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::network::{Network, Radio, Roster};
+use super::news::News;
 use super::{Outcome, Simulation, TracePoint, Traffic, partition_of};
 use crate::AllocError;
 
@@ -179,7 +181,7 @@ impl MessageSizes {
 
 /// The simulation's state between rounds.
 pub(crate) struct Grape<'a> {
-    instance: &'a Instance,
+    instance: Cow<'a, Instance>,
     preference: Preference,
     radio: Radio<Rc<View>>,
     /// GRAPE's stamps, drawn in robot order, only at changes.
@@ -194,6 +196,9 @@ pub(crate) struct Grape<'a> {
     offered: Vec<u32>,
     /// Crashed robots each robot has noticed.
     noticed: Vec<Vec<u32>>,
+    /// In a mission: the tasks each robot knows of, and how that news spreads
+    /// (`None`: every task is known to every robot).
+    news: Option<News>,
     sizes: MessageSizes,
     traffic: Traffic,
     proposals: u64,
@@ -209,13 +214,31 @@ impl<'a> Grape<'a> {
     pub fn new(
         instance: &'a Instance,
         preference: Preference,
-        network: &'a Network,
+        network: &Network,
         seed: u64,
     ) -> Result<Self, AllocError> {
-        let (n, m) = (instance.num_robots(), instance.num_tasks());
         let radio = Radio::new(instance.robots(), network, seed)?;
+        Ok(Self::with_radio(
+            Cow::Borrowed(instance),
+            preference,
+            radio,
+            seed,
+            None,
+        ))
+    }
+
+    /// A swarm on `radio` where nobody has moved yet; `news` for a mission's robots,
+    /// who know only some tasks.
+    pub(super) fn with_radio(
+        instance: Cow<'a, Instance>,
+        preference: Preference,
+        radio: Radio<Rc<View>>,
+        seed: u64,
+        news: Option<News>,
+    ) -> Self {
+        let (n, m) = (instance.num_robots(), instance.num_tasks());
         let empty = Rc::new(View::empty(n, m));
-        Ok(Grape {
+        Grape {
             instance,
             preference,
             radio,
@@ -226,11 +249,12 @@ impl<'a> Grape<'a> {
             offer: vec![None; n],
             offered: Vec::new(),
             noticed: vec![Vec::new(); n],
+            news,
             sizes: MessageSizes::new(n, m),
             traffic: Traffic::default(),
             proposals: 0,
             adoptions: 0,
-        })
+        }
     }
 
     /// What the run left, and the final partition's view.
@@ -293,7 +317,104 @@ impl<'a> Grape<'a> {
         self.deliver();
         let adopted = self.adopt();
         self.keep_sending(sent);
-        Ok(changed || adopted)
+        let mut learnt = false;
+        if let Some(news) = &mut self.news {
+            let (told, bytes) = news.spread(&mut self.radio);
+            self.traffic.bytes += bytes;
+            self.traffic.delta_bytes += bytes;
+            learnt = !told.is_empty();
+            self.reconsider(told);
+        }
+        Ok(changed || adopted || learnt)
+    }
+
+    /// `robots` reconsider when next awake (they learnt of a task).
+    fn reconsider(&mut self, robots: impl IntoIterator<Item = u32>) {
+        for a in robots {
+            self.unsatisfied.add(a);
+        }
+        self.unsatisfied.sort();
+    }
+
+    /// A mission's news: `task` appeared (or is done); the robots that hear of it
+    /// reconsider.
+    pub fn task_event(&mut self, task: usize, done: bool) {
+        let points = self.instance.robots();
+        let told = match &mut self.news {
+            Some(news) => news.event(task, done, points),
+            None => Vec::new(),
+        };
+        let told: Vec<u32> = told.into_iter().filter(|&a| self.radio.alive(a)).collect();
+        self.reconsider(told);
+    }
+
+    /// The robots are at `points` now: the game's distances are theirs, the links
+    /// are rebuilt (robots with new neighbours resend to those that lag), and robots
+    /// see the tasks now in range. Nothing to do if no robot moved.
+    ///
+    /// # Errors
+    /// [`AllocError::Game`] for a point out of range, [`AllocError::Graph`] if the
+    /// graph cannot be built.
+    pub fn move_to(&mut self, points: Vec<Point>) -> Result<(), AllocError> {
+        if points == self.instance.robots() {
+            return Ok(());
+        }
+        for a in self.radio.relink(&points)? {
+            self.senders.add(a);
+        }
+        if let Some(news) = &mut self.news {
+            let saw = news.sense(&points);
+            let saw: Vec<u32> = saw.into_iter().filter(|&a| self.radio.alive(a)).collect();
+            self.reconsider(saw);
+        }
+        self.instance = Cow::Owned(self.instance.with_robots(points)?);
+        Ok(())
+    }
+
+    /// `robots` fail now; their neighbours notice after `detect_after` rounds.
+    ///
+    /// # Errors
+    /// [`AllocError::Graph`] if the survivors' graph cannot be built.
+    pub fn fail(&mut self, robots: &[u32], detect_after: u64) -> Result<(), AllocError> {
+        let relinked = (self.radio).fail(robots, self.instance.robots(), detect_after)?;
+        for a in relinked {
+            self.senders.add(a);
+        }
+        Ok(())
+    }
+
+    /// `robot` is back, with the view it had, and linked; the others forget they saw
+    /// it fail.
+    ///
+    /// # Errors
+    /// [`AllocError::Graph`] if the graph cannot be built.
+    pub fn revive(&mut self, robot: u32) -> Result<(), AllocError> {
+        self.radio.revive(robot);
+        for noticed in &mut self.noticed {
+            noticed.retain(|&c| c != robot);
+        }
+        for a in self.radio.relink(self.instance.robots())? {
+            self.senders.add(a);
+        }
+        self.reconsider([robot]);
+        self.senders.add(robot);
+        Ok(())
+    }
+
+    /// The task `robot`'s own view gives it.
+    pub fn own_task(&self, robot: u32) -> Option<TaskId> {
+        self.views[robot as usize].tasks[robot as usize]
+    }
+
+    /// Whether every living robot holds the same view.
+    pub fn agreed(&self) -> bool {
+        let mut keys = self.radio.living().map(|i| self.views[i as usize].key());
+        keys.next().is_none_or(|first| keys.all(|k| k == first))
+    }
+
+    /// Messages and bytes sent so far (as [`Traffic`]).
+    pub fn traffic(&self) -> Traffic {
+        self.traffic
     }
 
     /// Every awake unsatisfied robot changes its view once, if it has a change to make.
@@ -315,18 +436,30 @@ impl<'a> Grape<'a> {
     /// where the instance allows it).
     fn next_view(&mut self, a: u32) -> Option<View> {
         let (robot, view) = (RobotId(a), &self.views[a as usize]);
-        let gone: Vec<u32> = self.noticed[a as usize]
+        let mut gone: Vec<u32> = self.noticed[a as usize]
             .iter()
             .copied()
             .filter(|&c| view.tasks[c as usize].is_some())
             .collect();
+        if let Some(news) = &self.news {
+            for task in news.known_done(a).filter(|&j| view.sizes[j] > 0) {
+                let at = |i: &usize| view.tasks[*i] == Some(TaskId(task as u32));
+                gone.extend((0..view.tasks.len()).filter(at).map(|i| i as u32));
+            }
+        }
         if !gone.is_empty() {
             return Some(view.changed(robot, &gone, None, self.stamps.random()));
         }
         let current = view.tasks[a as usize];
-        let place = self
-            .instance
-            .best_move_given(robot, current, &view.sizes, self.preference)?;
+        let place = match &self.news {
+            None => (self.instance).best_move_given(robot, current, &view.sizes, self.preference),
+            Some(news) => {
+                self.instance
+                    .best_move_among(robot, current, &view.sizes, self.preference, |t| {
+                        news.knows_open(a, t.index())
+                    })
+            }
+        }?;
         Some(view.changed(robot, &[a], place, self.stamps.random()))
     }
 

@@ -32,17 +32,22 @@ pub(super) struct Links {
 }
 
 impl Links {
-    /// The graph of `kind` over the robots in `members` (original ids), connected;
-    /// returns it with the number of edges added to connect it.
+    /// The graph of `kind` over the robots in `members` (original ids), connected if
+    /// `connect`; returns it with the number of edges added to connect it.
     pub fn build(
         points: &[Point],
         members: &[u32],
         kind: GraphKind,
         split_x: Option<f64>,
+        connect: bool,
     ) -> Result<(Links, usize), AllocError> {
         let sub: Vec<Point> = members.iter().map(|&i| points[i as usize]).collect();
         let mut graph = RobotGraph::build(&sub, kind)?;
-        let added = graph.connect_components(&sub);
+        let added = if connect {
+            graph.connect_components(&sub)
+        } else {
+            0
+        };
         let mut offsets = vec![0; points.len() + 1];
         for (k, &i) in members.iter().enumerate() {
             offsets[i as usize + 1] = graph.degree(RobotId(k as u32));
@@ -86,6 +91,34 @@ impl Links {
     /// Number of robots each robot hears.
     pub fn degree(&self, robot: u32) -> u64 {
         (self.offsets[robot as usize + 1] - self.offsets[robot as usize]) as u64
+    }
+
+    /// Takes over the loss state of every link that `old` also has (robots that move
+    /// keep their bursts on the links that stay up); returns the robots whose
+    /// neighbours changed. Both graphs' neighbour lists are sorted (no edges added).
+    pub fn carry_from(&mut self, old: &Links) -> Vec<u32> {
+        let mut changed = Vec::new();
+        for robot in 0..self.offsets.len() - 1 {
+            let (start, end) = (self.offsets[robot], self.offsets[robot + 1]);
+            let (old_start, old_end) = (old.offsets[robot], old.offsets[robot + 1]);
+            let new = &self.neighbours[start..end];
+            let was = &old.neighbours[old_start..old_end];
+            debug_assert!(new.is_sorted() && was.is_sorted());
+            if new != was {
+                changed.push(robot as u32);
+            }
+            let mut k = 0;
+            for (slot, &to) in new.iter().enumerate() {
+                while k < was.len() && was[k] < to {
+                    k += 1;
+                }
+                if k < was.len() && was[k] == to {
+                    self.bad[start + slot] = old.bad[old_start + k];
+                    self.drawn[start + slot] = old.drawn[old_start + k];
+                }
+            }
+        }
+        changed
     }
 }
 
@@ -166,7 +199,8 @@ mod tests {
                 ..Network::default()
             };
             let channel = Channel::new(&network);
-            let (mut links, _) = Links::build(&points, &[0, 1], GraphKind::Complete, None).unwrap();
+            let (mut links, _) =
+                Links::build(&points, &[0, 1], GraphKind::Complete, None, true).unwrap();
             let mut rng = ChaCha8Rng::seed_from_u64(every);
             let draws: Vec<bool> = (1..=600_000u64)
                 .step_by(every as usize)
@@ -184,7 +218,8 @@ mod tests {
             loss: 0.3,
             ..Network::default()
         });
-        let (mut links, _) = Links::build(&points, &[0, 1], GraphKind::Complete, None).unwrap();
+        let (mut links, _) =
+            Links::build(&points, &[0, 1], GraphKind::Complete, None, true).unwrap();
         let mut rng = ChaCha8Rng::seed_from_u64(9);
         let draws: Vec<bool> = (1..=200_000u64)
             .map(|round| independent.lost(&mut links, 0, round, &mut rng))
@@ -209,6 +244,7 @@ mod tests {
             &[0, 2, 3],
             GraphKind::Radius { radius: 1.1 },
             Some(1.5),
+            true,
         )
         .unwrap();
         assert_eq!(added, 0);

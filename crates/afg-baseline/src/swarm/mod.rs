@@ -15,7 +15,9 @@
 mod auction;
 mod grape;
 mod links;
+mod live;
 mod network;
+mod news;
 
 use std::time::Duration;
 
@@ -26,6 +28,7 @@ use crate::{AllocError, Allocator, Optimum, percent_of_opt, timed};
 
 use auction::Auction;
 pub(crate) use grape::Grape;
+pub use live::{DETECT_AFTER, LiveSwarm};
 pub use network::{Failure, Network};
 
 /// A point of a run's trace.

@@ -149,12 +149,14 @@ pub(super) struct Radio<M> {
     split_x: Option<f64>,
     alive: Vec<bool>,
     awake: Vec<bool>,
+    /// Whether stray components are linked to the rest (a swarm standing still is
+    /// made connected; a moving one hears only who is in range).
+    connect: bool,
     /// Messages by arrival round modulo the longest delay + 1: (receiver, message).
     in_flight: Vec<Vec<(u32, M)>>,
     in_flight_count: usize,
-    /// (noticer, crashed) pairs due at `notice_round`.
-    to_notice: Vec<(u32, u32)>,
-    notice_round: Option<u64>,
+    /// (round, noticer, crashed): who notices whom, and when.
+    to_notice: Vec<(u64, u32, u32)>,
     /// The current round (from 1).
     pub round: u64,
     /// Edges added to connect the graph (at the start and after the crash).
@@ -172,13 +174,30 @@ pub(super) struct RoundStart {
 }
 
 impl<M> Radio<M> {
-    /// Every robot alive, linked by the network's graph; draws from stream 1 of `seed`.
+    /// Every robot alive, linked by the network's graph made connected; draws from
+    /// stream 1 of `seed`.
     pub fn new(points: &[Point], network: &Network, seed: u64) -> Result<Self, AllocError> {
+        Self::build(points, network, seed, true)
+    }
+
+    /// [`Radio::new`] for robots that move: the links are the graph's alone (a robot
+    /// out of everyone's range hears nobody), rebuilt by [`Radio::relink`].
+    pub fn moving(points: &[Point], network: &Network, seed: u64) -> Result<Self, AllocError> {
+        Self::build(points, network, seed, false)
+    }
+
+    fn build(
+        points: &[Point],
+        network: &Network,
+        seed: u64,
+        connect: bool,
+    ) -> Result<Self, AllocError> {
         network.check()?;
         let n = points.len();
         let split_x = network.partition_until.map(|_| median_x(points));
         let everyone: Vec<u32> = (0..n as u32).collect();
-        let (links, added_edges) = Links::build(points, &everyone, network.graph, split_x)?;
+        let (links, added_edges) =
+            Links::build(points, &everyone, network.graph, split_x, connect)?;
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         rng.set_stream(1);
         Ok(Radio {
@@ -189,10 +208,10 @@ impl<M> Radio<M> {
             split_x,
             alive: vec![true; n],
             awake: vec![true; n],
+            connect,
             in_flight: (0..=network.max_delay).map(|_| Vec::new()).collect(),
             in_flight_count: 0,
             to_notice: Vec::new(),
-            notice_round: None,
             round: 0,
             added_edges,
         })
@@ -208,14 +227,14 @@ impl<M> Radio<M> {
         if let Some(failure) = self.network.failure
             && failure.at_round == self.round
         {
-            crashed = self.crash(points, failure.fraction)?;
-            self.notice_round = Some(self.round + failure.detect_after);
+            crashed = self.crash(points, failure.fraction, failure.detect_after)?;
         }
-        let noticed = if self.notice_round == Some(self.round) {
-            std::mem::take(&mut self.to_notice)
-        } else {
-            Vec::new()
-        };
+        let round = self.round;
+        let (due, later): (Vec<_>, Vec<_>) = std::mem::take(&mut self.to_notice)
+            .into_iter()
+            .partition(|&(at, _, _)| at <= round);
+        self.to_notice = later;
+        let noticed = due.into_iter().map(|(_, a, c)| (a, c)).collect();
         Ok(RoundStart {
             broadcasts: self.wake(),
             crashed,
@@ -239,26 +258,42 @@ impl<M> Radio<M> {
         messages
     }
 
-    /// `fraction` of the living robots stop; each is to be noticed by its living
-    /// neighbours (or its nearest living robot), and the survivors relink. Returns
-    /// the crashed robots.
-    fn crash(&mut self, points: &[Point], fraction: f64) -> Result<Vec<u32>, AllocError> {
-        let living: Vec<u32> = (0..self.alive.len() as u32)
-            .filter(|&i| self.alive[i as usize])
-            .collect();
+    /// `fraction` of the living robots stop (see [`Radio::fail`]). Returns them.
+    fn crash(
+        &mut self,
+        points: &[Point],
+        fraction: f64,
+        detect_after: u64,
+    ) -> Result<Vec<u32>, AllocError> {
+        let living: Vec<u32> = self.living().collect();
         let count = ((fraction * living.len() as f64).round() as usize).min(living.len() - 1);
         let mut crashed: Vec<u32> = rand::seq::index::sample(&mut self.rng, living.len(), count)
             .into_iter()
             .map(|k| living[k])
             .collect();
         crashed.sort_unstable();
+        self.fail(&crashed, points, detect_after)?;
+        Ok(crashed)
+    }
+
+    /// The living robots of `crashed` stop now: each is to be noticed `detect_after`
+    /// rounds from now by its living neighbours (or its nearest living robot), and the
+    /// survivors relink (returned as [`Radio::relink`]).
+    ///
+    /// # Errors
+    /// [`AllocError::Graph`] if the survivors' graph cannot be built.
+    pub fn fail(
+        &mut self,
+        crashed: &[u32],
+        points: &[Point],
+        detect_after: u64,
+    ) -> Result<Vec<u32>, AllocError> {
+        let crashed: Vec<u32> = crashed.iter().copied().filter(|&c| self.alive(c)).collect();
         for &c in &crashed {
             self.alive[c as usize] = false;
         }
-        let survivors: Vec<u32> = living
-            .into_iter()
-            .filter(|&a| self.alive[a as usize])
-            .collect();
+        let survivors: Vec<u32> = self.living().collect();
+        let at = self.round + detect_after;
         for &c in &crashed {
             let mut noticers: Vec<u32> = self
                 .links
@@ -274,12 +309,46 @@ impl<M> Radio<M> {
                     .min_by(|&a, &b| d(a).total_cmp(&d(b)));
                 noticers.extend(nearest);
             }
-            self.to_notice.extend(noticers.into_iter().map(|a| (a, c)));
+            self.to_notice
+                .extend(noticers.into_iter().map(|a| (at, a, c)));
         }
-        let (links, added) = Links::build(points, &survivors, self.network.graph, self.split_x)?;
+        self.relink(points)
+    }
+
+    /// `robot` is back: alive, awake, and no longer to be noticed; it is linked at the
+    /// next [`Radio::relink`].
+    pub fn revive(&mut self, robot: u32) {
+        self.alive[robot as usize] = true;
+        self.awake[robot as usize] = true;
+        self.to_notice.retain(|&(_, _, c)| c != robot);
+    }
+
+    /// Links the living robots anew by the graph rule at `points`; in a moving swarm
+    /// (robots that moved), links that stay keep their loss state. Returns the robots
+    /// whose neighbours changed (in a moving swarm; every survivor otherwise).
+    ///
+    /// # Errors
+    /// [`AllocError::Graph`] if the graph cannot be built.
+    pub fn relink(&mut self, points: &[Point]) -> Result<Vec<u32>, AllocError> {
+        let living: Vec<u32> = self.living().collect();
+        if living.is_empty() {
+            return Ok(living);
+        }
+        let (mut links, added) = Links::build(
+            points,
+            &living,
+            self.network.graph,
+            self.split_x,
+            self.connect,
+        )?;
+        let changed = if self.connect {
+            living
+        } else {
+            links.carry_from(&self.links)
+        };
         self.links = links;
         self.added_edges += added;
-        Ok(crashed)
+        Ok(changed)
     }
 
     /// Whether `robot` is alive.
@@ -312,12 +381,17 @@ impl<M> Radio<M> {
         self.links.degree(robot)
     }
 
-    /// Sends `message` over `link` to `to`: lost, or in flight until its arrival round.
-    pub fn transmit(&mut self, link: usize, to: u32, message: M) {
-        if self
+    /// Whether a message sent over `link` this round gets through (drawn as any
+    /// message's loss).
+    pub fn delivered(&mut self, link: usize) -> bool {
+        !self
             .channel
             .lost(&mut self.links, link, self.round, &mut self.rng)
-        {
+    }
+
+    /// Sends `message` over `link` to `to`: lost, or in flight until its arrival round.
+    pub fn transmit(&mut self, link: usize, to: u32, message: M) {
+        if !self.delivered(link) {
             return;
         }
         let delay = self.channel.delay(&mut self.rng) as usize;
@@ -344,8 +418,7 @@ impl<M> Radio<M> {
             .network
             .failure
             .is_some_and(|f| f.at_round > self.round);
-        let notice_ahead = self.notice_round.is_some_and(|r| r > self.round);
-        self.in_flight_count == 0 && !crash_ahead && !notice_ahead
+        self.in_flight_count == 0 && !crash_ahead && self.to_notice.is_empty()
     }
 }
 

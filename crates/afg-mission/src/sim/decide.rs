@@ -162,6 +162,9 @@ impl Sim<'_, '_> {
                 CentralisedDa::new(preference).improve(game, &mut a);
                 Ok(a)
             }
+            Replan::Decentralised(_) => Err(MissionError::Invalid(
+                "a decentralised method makes no central decision".into(),
+            )),
             Replan::IncrementalOpt => {
                 let (a, prices) = if self.decided {
                     let start: Vec<f64> = open
@@ -198,25 +201,29 @@ impl Sim<'_, '_> {
                 None => {}
             }
         }
-        if self.options.trace {
-            let tasks = self
-                .robots
-                .iter()
-                .map(|r| r.task.map_or(-1, |j| j as i64))
-                .collect();
-            let positions = (0..self.robots.len())
-                .map(|i| {
-                    let p = self.position(i);
-                    [p.x, p.y]
-                })
-                .collect();
-            self.trace.push(TraceEvent::Decision {
-                time: self.now,
-                asked: p.asked,
-                tasks,
-                positions,
-                compute_s: p.compute_s,
-            });
+        self.log_decision(p.asked, p.compute_s);
+    }
+
+    /// Logs where every robot is heading now, decided at `asked` in `compute_s`.
+    pub(super) fn log_decision(&mut self, asked: f64, compute_s: f64) {
+        if !self.options.trace {
+            return;
         }
+        let tasks = (self.robots.iter())
+            .map(|r| r.task.map_or(-1, |j| j as i64))
+            .collect();
+        let positions = (0..self.robots.len())
+            .map(|i| {
+                let p = self.position(i);
+                [p.x, p.y]
+            })
+            .collect();
+        self.trace.push(TraceEvent::Decision {
+            time: self.now,
+            asked,
+            tasks,
+            positions,
+            compute_s,
+        });
     }
 }

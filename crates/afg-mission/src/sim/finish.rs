@@ -1,6 +1,6 @@
 //! The metrics of a finished run.
 
-use super::{Metrics, MissionRun, Sim};
+use super::{Metrics, MissionRun, Sim, SwarmState};
 
 impl Sim<'_, '_> {
     /// The run's metrics, timeline and trace.
@@ -62,6 +62,7 @@ impl Sim<'_, '_> {
             compute_max_s: self.compute.iter().copied().fold(0.0, f64::max),
             compute_total_s: total,
             work_done,
+            swarm: self.swarm.as_ref().map(SwarmState::metrics),
         };
         MissionRun {
             metrics,
