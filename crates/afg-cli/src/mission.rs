@@ -3,12 +3,15 @@
 
 use std::path::{Path, PathBuf};
 
-use afg_baseline::Method;
+use afg_baseline::{Method, Network, SwarmMethod};
 use afg_eval::figures::{mission_html, mission_svg};
-use afg_eval::mission::{Planner, compare, table};
+use afg_eval::mission::{MissionMethod, Planner, compare, swarm_table, table};
+use afg_game::Preference;
 use afg_game::fs::{write_atomic, write_atomic_making_dirs};
 use afg_learn::run::ModelOptions;
-use afg_mission::{Latency, Mission, MissionConfig, MissionRun, Preset, RunOptions};
+use afg_mission::{Decentralised, Latency, Mission, MissionConfig, MissionRun, Preset, RunOptions};
+
+use crate::swarm::RadioArgs;
 use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand};
 
@@ -97,9 +100,32 @@ pub struct LoopArgs {
     /// (balanced score, in the game's welfare units).
     #[arg(long, value_name = "THETA")]
     hysteresis: Option<f64>,
-    /// Seed of the random method.
+    /// Seed of the random method, and of GRAPE's draws and the radio's (grape).
     #[arg(long, default_value_t = 0)]
     seed: u64,
+    #[command(flatten)]
+    swarm: SwarmKnobs,
+}
+
+/// The knobs of `grape`, GRAPE run by the robots over the radio (docs/missions.md).
+#[derive(Args)]
+#[command(next_help_heading = "GRAPE over the radio (--method grape)")]
+pub struct SwarmKnobs {
+    /// Rounds of GRAPE per mission time unit.
+    #[arg(long, default_value_t = 100.0)]
+    rounds_per_time: f64,
+    /// Long-run share of messages lost.
+    #[arg(long, default_value_t = 0.0)]
+    loss: f64,
+    /// Robots see tasks within this distance and hear of the others from their
+    /// neighbours [default: every robot hears of every task at once].
+    #[arg(long)]
+    sensing: Option<f64>,
+    /// GRAPE's preference: selfish (GRAPE's own) or balanced.
+    #[arg(long, value_parser = crate::choice::<Preference>(), default_value = "selfish")]
+    preference: Preference,
+    #[command(flatten)]
+    radio: RadioArgs,
 }
 
 impl LoopArgs {
@@ -126,9 +152,10 @@ pub struct RunArgs {
     /// The mission file (`afg mission gen --out`).
     #[arg(long)]
     mission: PathBuf,
-    /// The allocator (ignored with --model).
-    #[arg(long, default_value_t = Method::Opt)]
-    method: Method,
+    /// The allocator (ignored with --model), or grape: GRAPE run by the robots
+    /// themselves over the radio.
+    #[arg(long, default_value_t = MissionMethod::Central(Method::Opt))]
+    method: MissionMethod,
     /// A trained model's run directory instead of a built-in method.
     #[arg(long)]
     model: Option<PathBuf>,
@@ -152,13 +179,13 @@ pub struct CompareArgs {
     /// Mission files.
     #[arg(long, num_args = 1.., required = true)]
     mission: Vec<PathBuf>,
-    /// The allocators, comma-separated.
+    /// The allocators, comma-separated (grape: GRAPE run by the robots over the radio).
     #[arg(
         long,
         value_delimiter = ',',
         default_value = afg_eval::mission::DEFAULT_METHODS
     )]
-    methods: Vec<Method>,
+    methods: Vec<MissionMethod>,
     /// Trained models' run directories, run beside the methods.
     #[arg(long, num_args = 1..)]
     model: Vec<PathBuf>,
@@ -221,10 +248,28 @@ fn read_mission(path: &Path) -> Result<Mission> {
     Mission::from_json(&text).with_context(|| path.display().to_string())
 }
 
-fn planner(method: Method, model: Option<&Path>, looping: &LoopArgs) -> Result<Planner> {
-    Ok(match model {
-        Some(dir) => Planner::model(dir, ModelOptions::default(), looping.warm)?,
-        None => Planner::method(method, looping.seed, looping.warm),
+fn planner(method: MissionMethod, model: Option<&Path>, looping: &LoopArgs) -> Result<Planner> {
+    Ok(match (model, method) {
+        (Some(dir), _) => Planner::model(dir, ModelOptions::default(), looping.warm)?,
+        (None, MissionMethod::Central(method)) => {
+            Planner::method(method, looping.seed, looping.warm)
+        }
+        (None, MissionMethod::Grape) => {
+            let knobs = &looping.swarm;
+            let method = SwarmMethod::Grape {
+                preference: knobs.preference,
+            };
+            let network = Network {
+                loss: knobs.loss,
+                ..knobs.radio.network()
+            };
+            Planner::swarm(Decentralised {
+                rounds_per_time: knobs.rounds_per_time,
+                sensing: knobs.sensing,
+                seed: looping.seed,
+                ..Decentralised::new(method, network)
+            })
+        }
     })
 }
 
@@ -292,6 +337,20 @@ fn print_metrics(name: &str, path: &Path, run: &MissionRun) {
         1e3 * m.compute_max_s,
         1e3 * m.compute_total_s
     );
+    if let Some(s) = &m.swarm {
+        println!(
+            "  over the radio      {} rounds, {} messages, {:.1} kB",
+            s.rounds,
+            s.messages,
+            s.bytes as f64 / 1e3
+        );
+        println!(
+            "  response time       mean {}, max {}   ({} events never settled)",
+            or_dash(s.response_mean),
+            or_dash(s.response_max),
+            s.unsettled
+        );
+    }
 }
 
 fn run_compare(args: &CompareArgs) -> Result<()> {
@@ -306,7 +365,11 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
         .map(|&m| planner(m, None, &args.looping))
         .collect::<Result<_>>()?;
     for dir in &args.model {
-        planners.push(planner(Method::Opt, Some(dir), &args.looping)?);
+        planners.push(planner(
+            MissionMethod::Central(Method::Opt),
+            Some(dir),
+            &args.looping,
+        )?);
     }
     let bar = afg_eval::report::progress((missions.len() * planners.len()) as u64, "missions");
     let results = compare(&missions, &planners, args.looping.options(false), || {
@@ -338,6 +401,9 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
             }
         );
         print!("{}", table(&rows));
+        if let Some(swarms) = swarm_table(&rows) {
+            println!("\nOver the radio:\n\n{swarms}");
+        }
     }
     Ok(())
 }

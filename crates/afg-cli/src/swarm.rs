@@ -41,26 +41,11 @@ pub struct SwarmArgs {
     /// Your instances instead (an instance JSON or JSON Lines file): each is run.
     #[arg(long, conflicts_with = "robots")]
     input: Option<PathBuf>,
-    /// Link robots within this distance (the arena is the unit square) instead of to
-    /// their 10 nearest.
-    #[arg(long, conflicts_with = "knn")]
-    radius: Option<f64>,
-    /// Link each robot to its K nearest (kept in both directions) [default: 10].
-    #[arg(long)]
-    knn: Option<usize>,
+    #[command(flatten)]
+    radio: RadioArgs,
     /// Long-run shares of messages lost (comma-separated: one run per value).
     #[arg(long, value_delimiter = ',', default_value = "0")]
     loss: Vec<f64>,
-    /// Losses come in bursts of this mean length in rounds (Gilbert–Elliott) instead of
-    /// independently.
-    #[arg(long)]
-    burst: Option<f64>,
-    /// A delivered message arrives 0..=DELAY rounds late (uniform).
-    #[arg(long, default_value_t = 0)]
-    delay: u32,
-    /// Asynchronous robots: each wakes in a round with this chance (1 = synchronous).
-    #[arg(long = "async", default_value_t = 1.0)]
-    activation: f64,
     /// Shares of the robots that crash (comma-separated: one run per value).
     #[arg(long, value_delimiter = ',', default_value = "0")]
     fail: Vec<f64>,
@@ -91,6 +76,47 @@ pub struct SwarmArgs {
     /// Draw welfare and agreement against rounds, one line per grid cell (its first seed).
     #[arg(long)]
     svg: Option<PathBuf>,
+}
+
+/// The radio's knobs but the loss: who hears whom, bursts, delays and asynchrony
+/// (shared by `afg swarm` and `afg mission`).
+#[derive(Args)]
+pub struct RadioArgs {
+    /// Link robots within this distance (the arena is the unit square) instead of to
+    /// their 10 nearest.
+    #[arg(long, conflicts_with = "knn")]
+    radius: Option<f64>,
+    /// Link each robot to its K nearest (kept in both directions) [default: 10].
+    #[arg(long)]
+    knn: Option<usize>,
+    /// Losses come in bursts of this mean length in rounds (Gilbert–Elliott) instead of
+    /// independently.
+    #[arg(long)]
+    burst: Option<f64>,
+    /// A delivered message arrives 0..=DELAY rounds late (uniform).
+    #[arg(long, default_value_t = 0)]
+    delay: u32,
+    /// Asynchronous robots: each wakes in a round with this chance (1 = synchronous).
+    #[arg(long = "async", default_value_t = 1.0)]
+    activation: f64,
+}
+
+impl RadioArgs {
+    /// The network these knobs give, with no loss, failures or partition.
+    pub fn network(&self) -> Network {
+        let graph = match (self.radius, self.knn) {
+            (Some(radius), _) => GraphKind::Radius { radius },
+            (None, Some(k)) => GraphKind::Knn { k },
+            (None, None) => GraphKind::default(),
+        };
+        Network {
+            graph,
+            burst: self.burst,
+            max_delay: self.delay,
+            activation: self.activation,
+            ..Network::default()
+        }
+    }
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -151,11 +177,6 @@ fn grid(args: &SwarmArgs) -> Result<SwarmGrid> {
             })
             .collect::<Result<_>>()?,
     };
-    let graph = match (args.radius, args.knn) {
-        (Some(radius), _) => GraphKind::Radius { radius },
-        (None, Some(k)) => GraphKind::Knn { k },
-        (None, None) => GraphKind::default(),
-    };
     let methods = args
         .method
         .iter()
@@ -172,12 +193,8 @@ fn grid(args: &SwarmArgs) -> Result<SwarmGrid> {
         methods,
         instances,
         network: Network {
-            graph,
-            burst: args.burst,
-            max_delay: args.delay,
-            activation: args.activation,
             partition_until: args.partition_until,
-            ..Network::default()
+            ..args.radio.network()
         },
         losses: args.loss.clone(),
         failing: args.fail.clone(),

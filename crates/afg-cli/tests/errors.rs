@@ -157,6 +157,21 @@ fn afg_mission_runs_and_refuses_a_broken_mission_in_one_line() {
             .all(|l| serde_json::from_str::<serde_json::Value>(l).is_ok())
     );
     assert!(events.contains("\"event\":\"robot_fails\""));
+    // GRAPE over the radio: its rounds and traffic in the JSON; a central knob with it
+    // is one line and exit 1, the trace already written untouched.
+    let grape = ["mission", "run", "--mission", path, "--method", "grape"];
+    let ran = afg(&[&grape[..], &["--radius", "0.5", "--loss", "0.2", "--json"]].concat());
+    assert_eq!(ran.status.code(), Some(0), "{}", stderr(&ran));
+    let metrics: serde_json::Value = serde_json::from_slice(&ran.stdout).unwrap();
+    assert!(metrics["swarm"]["rounds"].as_u64().unwrap() > 0);
+    assert!(metrics["swarm"]["messages"].as_u64().unwrap() > 0);
+    let before = std::fs::read(&trace).unwrap();
+    let refused = afg(&[&grape[..], &["--latency", "1", "--trace", trace_path]].concat());
+    assert_eq!(refused.status.code(), Some(1));
+    let err = stderr(&refused);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("decentralised"), "{err}");
+    assert_eq!(std::fs::read(&trace).unwrap(), before);
     // A Q network built for M = 5 among 4 open tasks: the decision says so.
     let model = concat!(
         env!("CARGO_MANIFEST_DIR"),

@@ -6,10 +6,10 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Duration;
 
-use afg_baseline::{Allocator, Method};
+use afg_baseline::{Allocator, Method, SwarmMethod};
 use afg_game::Preference;
 use afg_learn::run::{ModelOptions, load_model};
-use afg_mission::{Metrics, Mission, MissionRun, Replan, RunOptions, simulate_with};
+use afg_mission::{Decentralised, Metrics, Mission, MissionRun, Replan, RunOptions, simulate_with};
 use serde::Serialize;
 
 use crate::EvalError;
@@ -17,6 +17,47 @@ use crate::report::duration;
 
 /// The methods a mission comparison runs unless told otherwise.
 pub const DEFAULT_METHODS: &str = "opt,da,da-balanced,greedy,nearest";
+
+/// A method in a mission, as the front ends name it: a built-in allocator deciding
+/// centrally, or `grape`: GRAPE run by the robots themselves over the radio.
+///
+/// # Examples
+/// ```
+/// use afg_baseline::Method;
+/// use afg_eval::mission::MissionMethod;
+/// assert_eq!("grape".parse::<MissionMethod>()?, MissionMethod::Grape);
+/// assert_eq!("greedy".parse::<MissionMethod>()?, MissionMethod::Central(Method::Greedy));
+/// assert!("gpare".parse::<MissionMethod>().unwrap_err().contains("grape"));
+/// # Ok::<(), String>(())
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MissionMethod {
+    /// A built-in allocator deciding for every robot at each decision.
+    Central(Method),
+    /// GRAPE run by the robots over the radio, each on its own view.
+    Grape,
+}
+
+impl std::str::FromStr for MissionMethod {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        if s == "grape" {
+            return Ok(MissionMethod::Grape);
+        }
+        s.parse()
+            .map(MissionMethod::Central)
+            .map_err(|e: String| format!("{e}, or grape (decentralised, over the radio)"))
+    }
+}
+
+impl std::fmt::Display for MissionMethod {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            MissionMethod::Central(method) => method.fmt(f),
+            MissionMethod::Grape => f.write_str("grape"),
+        }
+    }
+}
 
 /// An allocator in the loop and how it replans.
 ///
@@ -34,9 +75,17 @@ pub const DEFAULT_METHODS: &str = "opt,da,da-balanced,greedy,nearest";
 /// ```
 pub struct Planner {
     name: String,
-    allocator: Box<dyn Allocator>,
-    method: Option<Method>,
-    warm: bool,
+    rule: Rule,
+}
+
+/// Who decides: an allocator for everyone, or each robot over the radio.
+enum Rule {
+    Central {
+        allocator: Box<dyn Allocator>,
+        method: Option<Method>,
+        warm: bool,
+    },
+    Swarm(Decentralised),
 }
 
 impl Planner {
@@ -45,9 +94,23 @@ impl Planner {
     pub fn method(method: Method, seed: u64, warm: bool) -> Self {
         Planner {
             name: method.to_string(),
-            allocator: method.allocator(seed),
-            method: Some(method),
-            warm,
+            rule: Rule::Central {
+                allocator: method.allocator(seed),
+                method: Some(method),
+                warm,
+            },
+        }
+    }
+
+    /// A decentralised method run by the robots inside the mission.
+    pub fn swarm(config: Decentralised) -> Self {
+        let name = match config.method {
+            SwarmMethod::Grape { .. } => "grape",
+            SwarmMethod::Auction { .. } => "auction",
+        };
+        Planner {
+            name: format!("{name} (swarm)"),
+            rule: Rule::Swarm(config),
         }
     }
 
@@ -59,29 +122,43 @@ impl Planner {
         let allocator = load_model(dir, options)?;
         Ok(Planner {
             name: allocator.name(),
-            allocator,
-            method: None,
-            warm,
+            rule: Rule::Central {
+                allocator,
+                method: None,
+                warm,
+            },
         })
     }
 
     /// The planner's name in tables: the method's, with "(incremental)" for the
-    /// warm-started optimum and "(warm)" for other warm starts.
+    /// warm-started optimum, "(warm)" for other warm starts and "(swarm)" for a
+    /// decentralised method.
     pub fn name(&self) -> String {
-        match (self.warm, self.method) {
-            (true, Some(Method::Opt)) => format!("{} (incremental)", self.name),
-            (true, _) => format!("{} (warm)", self.name),
-            (false, _) => self.name.clone(),
+        match self.rule {
+            Rule::Central {
+                warm: true,
+                method: Some(Method::Opt),
+                ..
+            } => format!("{} (incremental)", self.name),
+            Rule::Central { warm: true, .. } => format!("{} (warm)", self.name),
+            _ => self.name.clone(),
         }
     }
 
     /// The replanning rule: from scratch; or, warm-started, the optimum re-solved from
     /// its previous prices, and for every other method its answer at the first
     /// decision and then survivors kept and best-response dynamics (GRAPE's selfish
-    /// ones for `da`, balanced for the rest).
+    /// ones for `da`, balanced for the rest); a decentralised method runs as itself.
     pub fn replan(&self) -> Replan<'_> {
-        let first = self.allocator.as_ref();
-        match (self.warm, self.method) {
+        let (first, warm, method) = match &self.rule {
+            Rule::Swarm(config) => return Replan::Decentralised(config),
+            Rule::Central {
+                allocator,
+                method,
+                warm,
+            } => (allocator.as_ref(), *warm, *method),
+        };
+        match (warm, method) {
             (false, _) => Replan::Scratch(first),
             (true, Some(Method::Opt)) => Replan::IncrementalOpt,
             (true, Some(Method::Da | Method::DaDecentralised)) => Replan::Warm {
@@ -210,4 +287,69 @@ pub fn table(rows: &[CompareRow]) -> String {
         );
     }
     out
+}
+
+/// The Markdown table of what the decentralised rows of [`compare`] add (rounds,
+/// traffic, response times; means over the missions), or `None` if no row is
+/// decentralised.
+///
+/// # Examples
+/// ```
+/// use afg_baseline::{Method, Network, SwarmMethod};
+/// use afg_eval::mission::{Planner, compare, swarm_table};
+/// use afg_game::Preference;
+/// use afg_mission::{Decentralised, MissionConfig, Preset, RunOptions};
+/// let missions = vec![MissionConfig::new(Preset::Waves, 20, 4, 1).generate()?];
+/// let grape = Decentralised::new(SwarmMethod::Grape { preference: Preference::Selfish }, Network::default());
+/// let planners = [Planner::method(Method::Greedy, 0, false), Planner::swarm(grape)];
+/// let rows: Vec<_> = compare(&missions, &planners, RunOptions::default(), || {})?
+///     .into_iter().map(|(row, _)| row).collect();
+/// let text = swarm_table(&rows).expect("one row is decentralised");
+/// assert!(text.contains("| grape (swarm) |") && !text.contains("| greedy |"));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn swarm_table(rows: &[CompareRow]) -> Option<String> {
+    let mut out = String::from(
+        "| method | rounds | messages / robot | kB on the air / robot | response mean | response max | events never settled |\n|---|---|---|---|---|---|---|\n",
+    );
+    let mut any = false;
+    for row in rows {
+        let swarms: Vec<&afg_mission::SwarmMetrics> = row
+            .missions
+            .iter()
+            .filter_map(|m| m.swarm.as_ref())
+            .collect();
+        if swarms.is_empty() {
+            continue;
+        }
+        any = true;
+        let k = swarms.len() as f64;
+        let mean = |f: &dyn Fn(&afg_mission::SwarmMetrics, f64) -> f64| {
+            swarms
+                .iter()
+                .map(|s| f(s, s.robots.max(1) as f64))
+                .sum::<f64>()
+                / k
+        };
+        let settled: Vec<f64> = swarms.iter().filter_map(|s| s.response_mean).collect();
+        let response = if settled.is_empty() {
+            "—".to_string()
+        } else {
+            format!("{:.3}", settled.iter().sum::<f64>() / settled.len() as f64)
+        };
+        let max = (swarms.iter())
+            .filter_map(|s| s.response_max)
+            .reduce(f64::max)
+            .map_or("—".into(), |v| format!("{v:.3}"));
+        let _ = writeln!(
+            out,
+            "| {} | {:.0} | {:.0} | {:.1} | {response} | {max} | {:.1} |",
+            row.method,
+            mean(&|s, _| s.rounds as f64),
+            mean(&|s, n| s.messages as f64 / n),
+            mean(&|s, n| s.bytes as f64 / n / 1e3),
+            mean(&|s, _| s.unsettled as f64),
+        );
+    }
+    any.then_some(out)
 }

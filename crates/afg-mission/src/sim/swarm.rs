@@ -60,6 +60,8 @@ impl Decentralised {
 /// What a decentralised run adds to the metrics.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SwarmMetrics {
+    /// Robots in the swarm (failed ones included).
+    pub robots: usize,
     /// Rounds run.
     pub rounds: u64,
     /// Messages sent (every awake robot to each neighbour every round).
@@ -79,6 +81,7 @@ pub struct SwarmMetrics {
 /// The swarm's state in a run.
 pub(super) struct SwarmState {
     live: LiveSwarm,
+    robots: usize,
     rounds_per_time: f64,
     /// The next round's index (round k runs at time k / rounds_per_time).
     next: u64,
@@ -115,6 +118,7 @@ impl SwarmState {
         )?;
         Ok(SwarmState {
             live,
+            robots: mission.robots.len(),
             rounds_per_time: rate,
             next: 0,
             awaiting: Vec::new(),
@@ -152,6 +156,7 @@ impl SwarmState {
     pub fn metrics(&self) -> SwarmMetrics {
         let n = self.responses.len();
         SwarmMetrics {
+            robots: self.robots,
             rounds: self.live.rounds(),
             messages: self.live.messages(),
             bytes: self.live.bytes(),
