@@ -6,11 +6,14 @@ use std::path::PathBuf;
 use std::str::FromStr;
 use std::sync::Arc;
 
-use afg_baseline::Method;
-use afg_eval::mission::Planner;
+use afg_baseline::{Network, SwarmMethod};
+use afg_eval::mission::{MissionMethod, Planner};
+use afg_game::Preference;
+use afg_graph::GraphKind;
 use afg_learn::run::ModelOptions;
 use afg_mission::{
-    Latency, Metrics, Mission, MissionConfig, MissionRun, Preset, RunOptions, TraceEvent,
+    Decentralised, Latency, Metrics, Mission, MissionConfig, MissionRun, Preset, RunOptions,
+    TraceEvent,
 };
 use numpy::ndarray::{Array1, Array2};
 use numpy::{IntoPyArray, PyArray1, PyArray2};
@@ -261,12 +264,18 @@ impl PyMissionResult {
 
 fn metrics_dict<'py>(py: Python<'py>, m: &Metrics) -> PyResult<Bound<'py, PyDict>> {
     let value = serde_json::to_value(m).map_err(value_error)?;
+    object_dict(py, &value)
+}
+
+/// A JSON object of numbers, nulls and such objects (the metrics) as a dict.
+fn object_dict<'py>(py: Python<'py>, value: &serde_json::Value) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     for (k, v) in value.as_object().expect("metrics are an object") {
         match v {
             serde_json::Value::Null => d.set_item(k, py.None())?,
             serde_json::Value::Number(x) if x.is_u64() => d.set_item(k, x.as_u64())?,
             serde_json::Value::Number(x) => d.set_item(k, x.as_f64())?,
+            serde_json::Value::Object(_) => d.set_item(k, object_dict(py, v)?)?,
             other => d.set_item(k, other.to_string())?,
         }
     }
@@ -280,8 +289,14 @@ fn metrics_dict<'py>(py: Python<'py>, m: &Metrics) -> PyResult<Bound<'py, PyDict
 /// allocator's measured compute time times F; `commit=True` keeps robots at work until
 /// their task is done, `hysteresis=THETA` lets a travelling robot switch only for a
 /// gain above THETA; `trace=True` keeps every decision.
+///
+/// `method="grape"` has the robots run GRAPE themselves over the radio:
+/// `rounds_per_time` rounds per time unit, links between robots within `radius` (else
+/// to their 10 nearest) re-evaluated as they move, a share `loss` of messages lost,
+/// and tasks seen within `sensing` (else heard of at once); its metrics gain a
+/// "swarm" dict (rounds, messages, bytes, response times).
 #[pyfunction]
-#[pyo3(signature = (mission, method=None, model=None, warm=false, replan=None, latency=None, latency_factor=None, commit=false, hysteresis=None, seed=0, trace=false))]
+#[pyo3(signature = (mission, method=None, model=None, warm=false, replan=None, latency=None, latency_factor=None, commit=false, hysteresis=None, seed=0, trace=false, rounds_per_time=100.0, radius=None, loss=0.0, sensing=None))]
 // Python's keyword arguments, one per option.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run_mission(
@@ -297,6 +312,10 @@ pub(crate) fn run_mission(
     hysteresis: Option<f64>,
     seed: u64,
     trace: bool,
+    rounds_per_time: f64,
+    radius: Option<f64>,
+    loss: f64,
+    sensing: Option<f64>,
 ) -> PyResult<PyMissionResult> {
     let planner = match (method, model) {
         (_, Some(dir)) if method.is_some() => {
@@ -308,10 +327,28 @@ pub(crate) fn run_mission(
         (_, Some(dir)) => {
             Planner::model(&dir, ModelOptions::default(), warm).map_err(value_error)?
         }
-        (name, None) => {
-            let method = Method::from_str(name.unwrap_or("opt")).map_err(PyValueError::new_err)?;
-            Planner::method(method, seed, warm)
-        }
+        (name, None) => match MissionMethod::from_str(name.unwrap_or("opt")) {
+            Ok(MissionMethod::Central(method)) => Planner::method(method, seed, warm),
+            Ok(MissionMethod::Grape) => {
+                let grape = SwarmMethod::Grape {
+                    preference: Preference::Selfish,
+                };
+                let mut network = Network {
+                    loss,
+                    ..Network::default()
+                };
+                if let Some(radius) = radius {
+                    network.graph = GraphKind::Radius { radius };
+                }
+                Planner::swarm(Decentralised {
+                    rounds_per_time,
+                    sensing,
+                    seed,
+                    ..Decentralised::new(grape, network)
+                })
+            }
+            Err(message) => return Err(PyValueError::new_err(message)),
+        },
     };
     let latency = match (latency, latency_factor) {
         (Some(_), Some(_)) => {

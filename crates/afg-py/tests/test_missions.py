@@ -46,6 +46,21 @@ def test_run_mission_gives_metrics_timeline_and_decisions() -> None:
     assert (late.decisions[0] >= 0.5 - 1e-12).all()
 
 
+def test_grape_runs_over_the_radio_inside_a_mission() -> None:
+    mission = afg.Mission.generate("waves", robots=30, tasks=6, seed=2)
+    res = afg.run_mission(mission, method="grape", radius=0.5, loss=0.2, seed=1, trace=True)
+    swarm = res.metrics["swarm"]
+    assert swarm["robots"] == 30 and swarm["rounds"] == res.metrics["decisions"] > 0
+    assert swarm["messages"] > 0 and swarm["bytes"] > 0
+    again = afg.run_mission(mission, method="grape", radius=0.5, loss=0.2, seed=1, trace=True)
+    assert (again.decisions[1] == res.decisions[1]).all()
+    assert "swarm" not in afg.run_mission(mission, method="greedy").metrics
+    with pytest.raises(ValueError, match="decentralised"):
+        afg.run_mission(mission, method="grape", latency=1.0)
+    with pytest.raises(ValueError, match="loss"):
+        afg.run_mission(mission, method="grape", loss=1.5)
+
+
 def test_bad_missions_and_options_raise_with_a_message(tmp_path: Path) -> None:
     with pytest.raises(ValueError, match="unknown preset"):
         afg.Mission.generate("storm", robots=5, tasks=2)

@@ -213,7 +213,7 @@ class MissionResult:
     """One run of a mission: metrics, timeline, decisions."""
 
     @property
-    def metrics(self) -> Dict[str, Optional[float]]: ...
+    def metrics(self) -> Dict[str, Any]: ...
     @property
     def timeline(self) -> Dict[str, npt.NDArray[Any]]: ...
     @property
@@ -232,4 +232,8 @@ def run_mission(
     hysteresis: Optional[float] = None,
     seed: int = 0,
     trace: bool = False,
+    rounds_per_time: float = 100.0,
+    radius: Optional[float] = None,
+    loss: float = 0.0,
+    sensing: Optional[float] = None,
 ) -> MissionResult: ...
