@@ -3,7 +3,7 @@
 
 use afg_baseline::Method;
 use afg_mission::Preset;
-use afg_repro::mission_study::{MissionPlan, study};
+use afg_repro::mission_study::{MissionPlan, SwarmPlan, study, swarm_study};
 use anyhow::Result;
 use clap::Args;
 
@@ -32,10 +32,26 @@ pub struct MissionStudyArgs {
     /// Also run every mission with each decision this many time units late.
     #[arg(long)]
     latency: Option<f64>,
+    /// The decentralised study instead: GRAPE run by the robots over the radio beside
+    /// the central optimum and GRAPE's centralised twin (warm-started).
+    #[arg(long, conflicts_with_all = ["methods", "latency"])]
+    swarm: bool,
+    /// Communication radii as multiples of the connectivity radius sqrt(ln N / (π N)) (--swarm).
+    #[arg(long, value_delimiter = ',', default_value = "1,2")]
+    radius_factors: Vec<f64>,
+    /// Shares of messages lost (--swarm).
+    #[arg(long, value_delimiter = ',', default_value = "0,0.3")]
+    losses: Vec<f64>,
+    /// GRAPE's rounds per time unit (--swarm).
+    #[arg(long, default_value_t = 100.0)]
+    rounds_per_time: f64,
 }
 
 /// Runs the study and prints its tables.
 pub fn run(args: MissionStudyArgs) -> Result<()> {
+    if args.swarm {
+        return run_swarm(args);
+    }
     let plan = MissionPlan {
         robots: args.robots,
         tasks: args.tasks,
@@ -51,6 +67,27 @@ pub fn run(args: MissionStudyArgs) -> Result<()> {
         * (1 + u64::from(plan.latency.is_some()));
     let bar = afg_eval::report::progress(runs, "missions");
     let text = study(&plan, || bar.inc(1))?;
+    bar.finish_and_clear();
+    print!("{text}");
+    Ok(())
+}
+
+/// The decentralised study.
+fn run_swarm(args: MissionStudyArgs) -> Result<()> {
+    let plan = SwarmPlan {
+        robots: args.robots,
+        tasks: args.tasks,
+        count: args.count,
+        presets: args.presets,
+        radius_factors: args.radius_factors,
+        losses: args.losses,
+        rounds_per_time: args.rounds_per_time,
+    };
+    let runs = plan.presets.len() as u64
+        * plan.count
+        * (2 + (plan.radius_factors.len() * plan.losses.len()) as u64);
+    let bar = afg_eval::report::progress(runs, "missions");
+    let text = swarm_study(&plan, || bar.inc(1))?;
     bar.finish_and_clear();
     print!("{text}");
     Ok(())

@@ -8,6 +8,7 @@ use std::time::Duration;
 
 use afg_baseline::{Allocator, Method, SwarmMethod};
 use afg_game::Preference;
+use afg_graph::GraphKind;
 use afg_learn::run::{ModelOptions, load_model};
 use afg_mission::{Decentralised, Metrics, Mission, MissionRun, Replan, RunOptions, simulate_with};
 use serde::Serialize;
@@ -102,14 +103,28 @@ impl Planner {
         }
     }
 
-    /// A decentralised method run by the robots inside the mission.
+    /// A decentralised method run by the robots inside the mission, named with its
+    /// radio: `grape (swarm, r 0.12, loss 30 %)`.
     pub fn swarm(config: Decentralised) -> Self {
-        let name = match config.method {
-            SwarmMethod::Grape { .. } => "grape",
-            SwarmMethod::Auction { .. } => "auction",
+        let mut name = match config.method {
+            SwarmMethod::Grape { .. } => "grape (swarm".to_string(),
+            SwarmMethod::Auction { .. } => "auction (swarm".to_string(),
         };
+        match config.network.graph {
+            GraphKind::Radius { radius } => write!(name, ", r {radius:.3}"),
+            GraphKind::Knn { k } => write!(name, ", {k}-NN"),
+            GraphKind::Complete => write!(name, ", all linked"),
+        }
+        .expect("writing to a string");
+        if config.network.loss > 0.0 {
+            let _ = write!(name, ", loss {:.0} %", 100.0 * config.network.loss);
+        }
+        if let Some(range) = config.sensing {
+            let _ = write!(name, ", sensing {range}");
+        }
+        name.push(')');
         Planner {
-            name: format!("{name} (swarm)"),
+            name,
             rule: Rule::Swarm(config),
         }
     }
@@ -305,7 +320,7 @@ pub fn table(rows: &[CompareRow]) -> String {
 /// let rows: Vec<_> = compare(&missions, &planners, RunOptions::default(), || {})?
 ///     .into_iter().map(|(row, _)| row).collect();
 /// let text = swarm_table(&rows).expect("one row is decentralised");
-/// assert!(text.contains("| grape (swarm) |") && !text.contains("| greedy |"));
+/// assert!(text.contains("| grape (swarm, 10-NN) |") && !text.contains("| greedy |"));
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn swarm_table(rows: &[CompareRow]) -> Option<String> {
