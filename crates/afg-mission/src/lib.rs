@@ -39,8 +39,9 @@ mod sim;
 pub use generate::{MissionConfig, Preset};
 pub use mission::{Failure, MISSION_FORMAT, MISSION_VERSION, Mission, RobotSpec, TaskSpec};
 pub use sim::{
-    Decentralised, Frame, Latency, Metrics, MissionRun, Replan, RunOptions, SwarmMetrics,
-    TimelinePoint, TraceEvent, simulate, simulate_with, work_rate,
+    Decentralised, EnvStep, Frame, Latency, Metrics, MissionEnv, MissionRun, Perception,
+    ROBOT_FEATURES, Replan, RunOptions, SwarmMetrics, TASK_FEATURES, TimelinePoint, TraceEvent,
+    simulate, simulate_with, work_rate,
 };
 
 use afg_baseline::AllocError;

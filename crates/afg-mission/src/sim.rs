@@ -1,6 +1,7 @@
 //! The event-driven simulator: exact arrival and completion times, a decision at every
 //! event, any allocator in the loop.
 
+use std::borrow::Cow;
 use std::cmp::Ordering;
 use std::collections::{BinaryHeap, HashMap};
 
@@ -190,6 +191,9 @@ pub struct Metrics {
     pub compute_total_s: f64,
     /// Work done on every task (done or not) by the end.
     pub work_done: f64,
+    /// `Σ r_j` times the work done on each task (done or not): the reward done plus
+    /// the value of the work on tasks left unfinished.
+    pub work_value: f64,
     /// A decentralised method's rounds, traffic and response times (for it, each
     /// round counts as a decision).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -373,7 +377,7 @@ pub fn simulate_with(
     on_time: impl FnMut(f64),
 ) -> Result<MissionRun, MissionError> {
     check_options(&options)?;
-    let mut sim = Sim::new(mission, replan, options);
+    let mut sim = Sim::new(Cow::Borrowed(mission), Some(replan), options);
     if let Replan::Decentralised(config) = replan {
         let central = options.replan_every.is_some()
             || options.latency != Latency::None
@@ -422,8 +426,9 @@ fn check_options(options: &RunOptions) -> Result<(), MissionError> {
 
 /// The simulator's state.
 struct Sim<'m, 'a> {
-    mission: &'m Mission,
-    replan: Replan<'a>,
+    mission: Cow<'m, Mission>,
+    /// How decisions are made (`None`: from outside, by [`MissionEnv`]'s agents).
+    replan: Option<Replan<'a>>,
     options: RunOptions,
     now: f64,
     robots: Vec<Robot>,
@@ -465,7 +470,8 @@ enum Scheduled {
 }
 
 impl<'m, 'a> Sim<'m, 'a> {
-    fn new(mission: &'m Mission, replan: Replan<'a>, options: RunOptions) -> Self {
+    fn new(mission: Cow<'m, Mission>, replan: Option<Replan<'a>>, options: RunOptions) -> Self {
+        let n = mission.robots.len();
         let robots = mission
             .robots
             .iter()
@@ -511,7 +517,7 @@ impl<'m, 'a> Sim<'m, 'a> {
             pending: None,
             wanted: false,
             due: BinaryHeap::new(),
-            legs: vec![0; mission.robots.len()],
+            legs: vec![0; n],
             decided: false,
             prices: HashMap::new(),
             distance: 0.0,
@@ -531,43 +537,58 @@ impl<'m, 'a> Sim<'m, 'a> {
     fn run(&mut self, mut on_time: impl FnMut(f64)) -> Result<(), MissionError> {
         loop {
             on_time(self.now);
-            let mut epoch = self.scheduled_events()?;
-            epoch |= self.completions();
-            self.arrivals();
-            if let Some(swarm) = &self.swarm {
-                if swarm.next_round() <= self.now {
-                    self.swarm_round()?;
-                }
-                epoch = false;
+            if self.events_now()? {
+                self.decide()?;
             }
-            if self.next_tick.is_some_and(|t| t <= self.now) {
-                epoch = true;
-                let every = self.options.replan_every.expect("ticks come from it");
-                self.next_tick = Some(self.now + every);
-            }
-            if self.pending.as_ref().is_some_and(|p| p.ready <= self.now) {
-                self.land();
-                epoch |= std::mem::take(&mut self.wanted);
-            }
-            if epoch {
-                if self.pending.is_some() {
-                    self.wanted = true;
-                } else {
-                    self.decide()?;
-                }
-            }
-            self.record();
-            self.snapshot();
-            if self.over() {
-                return Ok(());
-            }
-            let next = self.next_event().min(self.mission.horizon);
-            self.advance(next);
-            if self.now >= self.mission.horizon {
-                self.record();
+            if !self.move_on() {
                 return Ok(());
             }
         }
+    }
+
+    /// What happens now: scheduled events, completions, arrivals, a swarm round, a
+    /// replanning tick, a decision landing. Whether a decision is to be made now.
+    fn events_now(&mut self) -> Result<bool, MissionError> {
+        let mut epoch = self.scheduled_events()?;
+        epoch |= self.completions();
+        self.arrivals();
+        if let Some(swarm) = &self.swarm {
+            if swarm.next_round() <= self.now {
+                self.swarm_round()?;
+            }
+            epoch = false;
+        }
+        if self.next_tick.is_some_and(|t| t <= self.now) {
+            epoch = true;
+            let every = self.options.replan_every.expect("ticks come from it");
+            self.next_tick = Some(self.now + every);
+        }
+        if self.pending.as_ref().is_some_and(|p| p.ready <= self.now) {
+            self.land();
+            epoch |= std::mem::take(&mut self.wanted);
+        }
+        if epoch && self.pending.is_some() {
+            self.wanted = true;
+            epoch = false;
+        }
+        Ok(epoch)
+    }
+
+    /// After any decision now: records, then moves time to the next event. Whether the
+    /// run goes on (false once every task is done or the horizon is reached).
+    fn move_on(&mut self) -> bool {
+        self.record();
+        self.snapshot();
+        if self.over() {
+            return false;
+        }
+        let next = self.next_event().min(self.mission.horizon);
+        self.advance(next);
+        if self.now >= self.mission.horizon {
+            self.record();
+            return false;
+        }
+        true
     }
 
     /// Whether nothing more can happen: every task done.
@@ -857,8 +878,10 @@ impl<'m, 'a> Sim<'m, 'a> {
 }
 
 mod decide;
+mod env;
 mod finish;
 mod swarm;
 
+pub use env::{EnvStep, MissionEnv, Perception, ROBOT_FEATURES, TASK_FEATURES};
 use swarm::SwarmState;
 pub use swarm::{Decentralised, SwarmMetrics};

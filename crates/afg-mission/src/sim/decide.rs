@@ -146,7 +146,12 @@ impl Sim<'_, '_> {
         open: &[usize],
         places: &[Option<(TaskId, bool)>],
     ) -> Result<Assignment, MissionError> {
-        match self.replan {
+        let Some(replan) = self.replan else {
+            return Err(MissionError::Invalid(
+                "decisions are made by the environment's agents".into(),
+            ));
+        };
+        match replan {
             Replan::Scratch(allocator) => Ok(allocator.allocate(game)?.assignment),
             Replan::Warm { first, .. } if !self.decided => Ok(first.allocate(game)?.assignment),
             Replan::Warm { preference, .. } => {

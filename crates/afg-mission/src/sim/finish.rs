@@ -28,12 +28,10 @@ impl Sim<'_, '_> {
             })
             .map(|i| self.robots[i].from.distance(self.position(i)))
             .sum();
-        let work_done = self
-            .tasks
-            .iter()
-            .zip(&self.mission.tasks)
-            .map(|(t, spec)| spec.workload - t.remaining)
-            .sum();
+        let work = |t: &super::TaskState, spec: &crate::TaskSpec| spec.workload - t.remaining;
+        let pairs = || self.tasks.iter().zip(&self.mission.tasks);
+        let work_done = pairs().map(|(t, spec)| work(t, spec)).sum();
+        let work_value = pairs().map(|(t, spec)| spec.reward * work(t, spec)).sum();
         let total: f64 = self.compute.iter().sum();
         let metrics = Metrics {
             tasks_done: n,
@@ -62,6 +60,7 @@ impl Sim<'_, '_> {
             compute_max_s: self.compute.iter().copied().fold(0.0, f64::max),
             compute_total_s: total,
             work_done,
+            work_value,
             swarm: self.swarm.as_ref().map(SwarmState::metrics),
         };
         MissionRun {

@@ -1,0 +1,111 @@
+//! The mission as a multi-agent environment ([`MissionEnv`]): what each robot may do
+//! and perceive, the team reward, failures leaving the episode, and one seed one
+//! episode.
+
+use afg_mission::{MissionConfig, MissionEnv, Perception, Preset, ROBOT_FEATURES, TASK_FEATURES};
+
+/// Plays an episode where every agent takes the first action its mask allows;
+/// returns every epoch's (agents, observations, masks, reward).
+type Epoch = (Vec<usize>, Vec<Vec<f32>>, Vec<Vec<bool>>, f64);
+
+fn play(env: &mut MissionEnv) -> Vec<Epoch> {
+    let mut epochs = Vec::new();
+    loop {
+        let agents = env.agents();
+        let obs: Vec<Vec<f32>> = agents.iter().map(|&i| env.observe(i)).collect();
+        let masks: Vec<Vec<bool>> = agents.iter().map(|&i| env.mask(i)).collect();
+        let actions: Vec<(usize, usize)> = agents
+            .iter()
+            .zip(&masks)
+            .map(|(&i, m)| (i, m.iter().position(|&ok| ok).unwrap()))
+            .collect();
+        let step = env.step(&actions).unwrap();
+        for i in &step.failed {
+            assert!(
+                agents.contains(i) && !env.agents().contains(i),
+                "{i} {agents:?} {:?} {step:?}",
+                env.agents()
+            );
+        }
+        epochs.push((agents, obs, masks, step.reward));
+        if step.terminated || step.truncated {
+            assert!(env.agents().is_empty());
+            return epochs;
+        }
+    }
+}
+
+/// The rewards of an episode add up to the value of the work done; the same mission
+/// gives the same episode; robots that fail leave it.
+#[test]
+fn rewards_add_up_and_a_seed_gives_one_episode() {
+    let mission = MissionConfig::new(Preset::Attrition, 20, 6, 3)
+        .generate()
+        .unwrap();
+    let mut env = MissionEnv::new(mission.clone(), Perception::default()).unwrap();
+    let epochs = play(&mut env);
+    let total: f64 = epochs.iter().map(|e| e.3).sum();
+    let run = env.into_run();
+    assert!((total - run.metrics.work_value).abs() < 1e-9);
+    assert!(run.metrics.reward_done <= run.metrics.work_value + 1e-9);
+    let mut again = MissionEnv::new(mission.clone(), Perception::default()).unwrap();
+    assert_eq!(play(&mut again), epochs);
+    // Attrition: some robots fail, and later epochs have fewer agents.
+    assert!(epochs.last().unwrap().0.len() < 20);
+    // Nobody ever moving does no work: every reward is 0.
+    let mut idle = MissionEnv::new(mission, Perception::default()).unwrap();
+    loop {
+        let keep: Vec<(usize, usize)> = idle.agents().iter().map(|&i| (i, 6)).collect();
+        let step = idle.step(&keep).unwrap();
+        assert_eq!(step.reward, 0.0);
+        if step.truncated {
+            break;
+        }
+        assert!(!step.terminated);
+    }
+}
+
+/// A robot knows the open tasks it sees, or that a neighbour knew at the last epoch;
+/// its mask allows those and keeping its own; the observation has the task's features
+/// exactly where it knows it, zeros elsewhere.
+#[test]
+fn robots_see_and_hear_only_what_is_in_range() {
+    let mut config = MissionConfig::new(Preset::Static, 30, 5, 2);
+    config.arena = 10.0;
+    let mission = config.generate().unwrap();
+    let deaf = Perception {
+        sensing: Some(2.0),
+        comm_radius: 0.0,
+        decide_every: None,
+    };
+    let env = MissionEnv::new(mission.clone(), deaf).unwrap();
+    for i in env.agents() {
+        let mask = env.mask(i);
+        let obs = env.observe(i);
+        assert_eq!(obs.len(), ROBOT_FEATURES + TASK_FEATURES * 5);
+        assert!(mask[5], "keeping one's own is always allowed");
+        for (j, t) in mission.tasks.iter().enumerate() {
+            let seen = mission.robots[i].position.distance(t.position) <= 2.0;
+            assert_eq!(mask[j], seen, "robot {i}, task {j}");
+            let row = &obs[ROBOT_FEATURES + TASK_FEATURES * j..][..TASK_FEATURES];
+            assert_eq!(row[0], f32::from(u8::from(seen)));
+            if seen {
+                let d = mission.robots[i].position.distance(t.position) as f32;
+                assert!((row[3] - d).abs() < 1e-5);
+            } else {
+                assert!(row.iter().all(|&x| x == 0.0));
+            }
+        }
+    }
+    // Bad actions and knobs are refused with what is wrong.
+    let mut env = MissionEnv::new(mission.clone(), Perception::default()).unwrap();
+    let error = env.step(&[(0, 7)]).unwrap_err().to_string();
+    assert!(error.contains("actions 0..=5"), "{error}");
+    let error = env.step(&[(30, 0)]).unwrap_err().to_string();
+    assert!(error.contains("robots are 0..30"), "{error}");
+    let bad = Perception {
+        sensing: Some(-1.0),
+        ..Perception::default()
+    };
+    assert!(MissionEnv::new(mission, bad).is_err());
+}
