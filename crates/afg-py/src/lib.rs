@@ -18,6 +18,7 @@ use pyo3::prelude::*;
 
 mod env;
 mod mission;
+mod mission_env;
 mod solve;
 
 /// A Rust error as a `ValueError` carrying the same message.
@@ -393,5 +394,6 @@ fn _afg(m: &Bound<'_, PyModule>) -> PyResult<()> {
     solve::register(m)?;
     env::register(m)?;
     mission::register(m)?;
+    mission_env::register(m)?;
     Ok(())
 }

@@ -43,3 +43,52 @@ def test_the_aec_environment_is_the_gymnasium_one_step_by_step() -> None:
     # A team reward: every robot's return is the final welfare.
     assert all(r == pytest.approx(info["welfare"]) for r in returns.values())
     assert len(returns) == 10
+
+
+def test_mission_parallel_environment_passes_pettingzoo_tests() -> None:
+    from pettingzoo.test import parallel_api_test, parallel_seed_test
+
+    from afg.pettingzoo import mission_v0
+
+    parallel_api_test(mission_v0.parallel_env(robots=8, tasks=4, preset="attrition"), num_cycles=200)
+    parallel_api_test(
+        mission_v0.parallel_env(robots=8, tasks=4, sensing=0.3, comm_radius=0.2, decide_every=2.0),
+        num_cycles=200,
+    )
+    parallel_seed_test(lambda: mission_v0.parallel_env(robots=8, tasks=4, preset="poisson"), num_cycles=50)
+    api_test(mission_v0.env(robots=6, tasks=3), num_cycles=50)
+    seed_test(lambda: mission_v0.env(robots=6, tasks=3), num_cycles=50)
+
+
+def test_mission_episode_returns_add_up_and_failed_robots_leave() -> None:
+    from afg.pettingzoo import mission_v0
+
+    env = mission_v0.parallel_env(robots=12, tasks=5, preset="attrition", fail_share=0.5)
+    obs, _ = env.reset(seed=3)
+    assert set(obs) == set(env.possible_agents)
+    total, ended = 0.0, set()
+    while env.agents:
+        # Every agent heads for the nearest task it may take (or keeps its own).
+        actions = {}
+        for agent, o in obs.items():
+            if agent not in env.agents:
+                continue
+            rows = o["observation"][5:].reshape(5, 9)
+            allowed = np.flatnonzero(o["action_mask"][:5])
+            actions[agent] = int(allowed[np.argmin(rows[allowed, 3])]) if len(allowed) else 5
+        obs, rewards, terminations, truncations, _ = env.step(actions)
+        assert len(set(rewards.values())) <= 1, "a team reward"
+        total += next(iter(rewards.values()), 0.0)
+        for agent in rewards:
+            if terminations[agent] or truncations[agent]:
+                assert agent not in ended and agent not in env.agents
+                ended.add(agent)
+    assert ended == set(env.possible_agents)
+    assert total > 0.0
+    # Robots that never move do no work: every reward is 0.
+    obs, _ = env.reset(seed=3)
+    while env.agents:
+        _, rewards, _, _, _ = env.step({a: 5 for a in env.agents})
+        assert set(rewards.values()) <= {0.0}
+    with pytest.raises(ValueError, match="unknown preset"):
+        mission_v0.parallel_env(preset="storm")

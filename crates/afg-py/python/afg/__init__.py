@@ -3,8 +3,9 @@
 A thin Python layer over the Rust crates of https://example.invalid/afg: instances and
 their generator, every allocator (the exact optimum, GRAPE DA, balanced DA, greedy,
 nearest, random, trained models), warm-start reallocation, the exact action values Q*,
-missions over time (``afg.Mission``, ``afg.run_mission``), and (in ``afg.gym``) the
-paper's sequential MDP as a Gymnasium environment.
+missions over time (``afg.Mission``, ``afg.run_mission``, ``afg.MissionEnv``), (in
+``afg.gym``) the paper's sequential MDP as a Gymnasium environment, and (in
+``afg.pettingzoo``) both as PettingZoo environments.
 
 >>> import afg
 >>> inst = afg.generate(robots=60, tasks=5, seed=1)
@@ -19,6 +20,7 @@ from ._afg import (
     EnvCore,
     Instance,
     Mission,
+    MissionEnv,
     MissionResult,
     Model,
     Result,
@@ -39,6 +41,7 @@ __all__ = [
     "EnvCore",
     "Instance",
     "Mission",
+    "MissionEnv",
     "MissionResult",
     "Model",
     "Result",

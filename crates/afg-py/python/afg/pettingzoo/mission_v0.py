@@ -1,0 +1,140 @@
+"""A mission over time as a PettingZoo Parallel environment: every robot an agent.
+
+Each episode is a mission drawn by ``afg.Mission.generate`` (a new one per reset,
+seeded by ``reset(seed=…)``). At every decision epoch — a task appears or is done, a
+robot fails, and every ``decide_every`` time units if given — every robot still in the
+episode picks, at once, a task it knows is open or keeps its own; the mission then
+runs (exact, event-driven time) to the next epoch:
+
+- **action**: ``Discrete(K + 1)`` for the mission's K tasks: ``k < K`` heads for task k,
+  ``K`` keeps the robot's own task (or idles). An action the mask forbids keeps its own.
+- **observation** (``Dict``): ``observation`` float32 of length ``5 + 9 K`` — the
+  robot's own view: its x, y and one-hot state (idle, travelling, working), then per
+  task: known and open, dx, dy, distance, reward over the mission's largest, eps, share
+  of the work left, share of its neighbours heading there, whether it is its own task
+  (all zero for a task it does not know is open); ``action_mask`` int8 of length
+  ``K + 1``.
+- **what a robot knows**: with ``sensing=None`` every open task; with ``sensing=s`` the
+  open tasks within s of it and those a robot within ``comm_radius`` knew at the last
+  epoch (news spreads one hop per epoch). ``comm_radius`` also bounds the neighbours
+  whose heading it sees.
+- **reward**: a team reward: every agent receives ``Σ r_j`` times the work done on each
+  task since the last epoch, so an episode's return is the value of all the work done.
+- **end**: a robot that fails is terminated and leaves; when every task is done all
+  are terminated, at the horizon all are truncated. ``infos`` are empty dicts.
+
+Keyword arguments: ``robots``, ``tasks`` and ``preset`` ("static", "waves", "poisson",
+"attrition"), every knob of ``afg.Mission.generate`` (``workload``, ``speed``,
+``arena``, ``horizon``, ``waves``, ``interval``, ``rate``, ``fail_share``,
+``capacity_slack``, ``allow_void``), and ``sensing``, ``comm_radius``,
+``decide_every``.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Dict, List, Optional, Tuple
+
+import numpy as np
+from gymnasium import spaces
+from pettingzoo import AECEnv, ParallelEnv
+from pettingzoo.utils import parallel_to_aec, wrappers
+
+from .. import Mission, MissionEnv
+
+__all__ = ["env", "parallel_env", "raw_env"]
+
+
+def parallel_env(**kwargs: Any) -> "MissionParallelEnv":
+    """The Parallel environment."""
+    return MissionParallelEnv(**kwargs)
+
+
+def raw_env(**kwargs: Any) -> AECEnv:
+    """The same environment as an AEC one (robots in index order)."""
+    return parallel_to_aec(parallel_env(**kwargs))
+
+
+def env(**kwargs: Any) -> AECEnv:
+    """The AEC environment with PettingZoo's usual checking wrappers."""
+    wrapped: AECEnv = raw_env(**kwargs)
+    wrapped = wrappers.AssertOutOfBoundsWrapper(wrapped)
+    return wrappers.OrderEnforcingWrapper(wrapped)
+
+
+class MissionParallelEnv(ParallelEnv):
+    """Robots as agents of a mission (see the module docs)."""
+
+    metadata = {"render_modes": [], "name": "mission_v0", "is_parallelizable": True}
+
+    def __init__(
+        self,
+        robots: int = 20,
+        tasks: int = 8,
+        preset: str = "waves",
+        sensing: Optional[float] = None,
+        comm_radius: float = 0.25,
+        decide_every: Optional[float] = None,
+        **knobs: Any,
+    ) -> None:
+        self._draw = lambda seed: Mission.generate(preset, robots, tasks, seed=seed, **knobs)
+        self._perception = dict(sensing=sensing, comm_radius=comm_radius, decide_every=decide_every)
+        # Check every knob now: a bad one raises here, not at the first reset.
+        MissionEnv(self._draw(0), **self._perception)
+        self.possible_agents = [f"robot_{i}" for i in range(robots)]
+        self._index = {a: i for i, a in enumerate(self.possible_agents)}
+        length = 5 + 9 * tasks
+        observation = spaces.Dict(
+            {
+                "observation": spaces.Box(-np.inf, np.inf, shape=(length,), dtype=np.float32),
+                "action_mask": spaces.Box(0, 1, shape=(tasks + 1,), dtype=np.int8),
+            }
+        )
+        self._observation_spaces = {a: observation for a in self.possible_agents}
+        self._action_spaces = {a: spaces.Discrete(tasks + 1) for a in self.possible_agents}
+        self._rng = np.random.default_rng()
+        self._env: Optional[MissionEnv] = None
+        self.agents: List[str] = []
+        self.render_mode: Optional[str] = None
+
+    def observation_space(self, agent: str) -> spaces.Space:
+        return self._observation_spaces[agent]
+
+    def action_space(self, agent: str) -> spaces.Space:
+        return self._action_spaces[agent]
+
+    def _observe(self, agents: List[str]) -> Dict[str, Dict[str, np.ndarray]]:
+        assert self._env is not None
+        obs, masks = self._env.observations(), self._env.masks()
+        return {
+            a: {"observation": obs[self._index[a]], "action_mask": masks[self._index[a]]}
+            for a in agents
+        }
+
+    def reset(
+        self, seed: Optional[int] = None, options: Optional[Dict[str, Any]] = None
+    ) -> Tuple[Dict[str, Any], Dict[str, Dict[str, Any]]]:
+        if seed is not None:
+            self._rng = np.random.default_rng(seed)
+        mission = self._draw(int(self._rng.integers(2**63)))
+        self._env = MissionEnv(mission, **self._perception)
+        self.agents = [self.possible_agents[i] for i in self._env.agents()]
+        return self._observe(self.agents), {a: {} for a in self.agents}
+
+    def step(self, actions: Dict[str, Any]) -> Tuple[
+        Dict[str, Any], Dict[str, float], Dict[str, bool], Dict[str, bool], Dict[str, Dict[str, Any]]
+    ]:
+        if self._env is None:
+            raise RuntimeError("call reset() before step()")
+        chosen = np.full(len(self.possible_agents), -1, dtype=np.int64)
+        for agent, action in actions.items():
+            if agent in self.agents:
+                chosen[self._index[agent]] = int(action)
+        acting = self.agents
+        reward, failed, terminated, truncated = self._env.step(chosen)
+        gone = {self.possible_agents[i] for i in failed}
+        self.agents = [self.possible_agents[i] for i in self._env.agents()]
+        observations = self._observe(acting)
+        rewards = {a: reward for a in acting}
+        terminations = {a: terminated or a in gone for a in acting}
+        truncations = {a: truncated and a not in gone for a in acting}
+        return observations, rewards, terminations, truncations, {a: {} for a in acting}
