@@ -2,9 +2,11 @@
 //! Markdown tables of docs/missions.md.
 
 use afg_baseline::Method;
+use afg_baseline::SwarmMethod;
+use afg_game::Preference;
 use afg_mission::Preset;
 use afg_repro::mission_study::{MissionPlan, SwarmPlan, study, swarm_study};
-use anyhow::Result;
+use anyhow::{Result, bail};
 use clap::Args;
 
 /// The study's missions and allocators.
@@ -32,8 +34,8 @@ pub struct MissionStudyArgs {
     /// Also run every mission with each decision this many time units late.
     #[arg(long)]
     latency: Option<f64>,
-    /// The decentralised study instead: GRAPE run by the robots over the radio beside
-    /// the central optimum and GRAPE's centralised twin (warm-started).
+    /// The decentralised study instead: GRAPE and the auction run by the robots over
+    /// the radio beside the central optimum and GRAPE's centralised twin (warm-started).
     #[arg(long, conflicts_with_all = ["methods", "latency"])]
     swarm: bool,
     /// Communication radii as multiples of the connectivity radius sqrt(ln N / (π N)) (--swarm).
@@ -42,7 +44,10 @@ pub struct MissionStudyArgs {
     /// Shares of messages lost (--swarm).
     #[arg(long, value_delimiter = ',', default_value = "0,0.3")]
     losses: Vec<f64>,
-    /// GRAPE's rounds per time unit (--swarm).
+    /// The decentralised methods (--swarm), comma-separated: grape, auction.
+    #[arg(long, value_delimiter = ',', default_value = "grape,auction")]
+    swarm_methods: Vec<String>,
+    /// Rounds per time unit (--swarm).
     #[arg(long, default_value_t = 100.0)]
     rounds_per_time: f64,
 }
@@ -81,11 +86,22 @@ fn run_swarm(args: MissionStudyArgs) -> Result<()> {
         presets: args.presets,
         radius_factors: args.radius_factors,
         losses: args.losses,
+        methods: args
+            .swarm_methods
+            .iter()
+            .map(|name| match name.as_str() {
+                "grape" => Ok(SwarmMethod::Grape {
+                    preference: Preference::Selfish,
+                }),
+                "auction" => Ok(SwarmMethod::Auction { epsilon: 1e-3 }),
+                other => bail!("unknown decentralised method '{other}': grape or auction"),
+            })
+            .collect::<Result<_>>()?,
         rounds_per_time: args.rounds_per_time,
     };
     let runs = plan.presets.len() as u64
         * plan.count
-        * (2 + (plan.radius_factors.len() * plan.losses.len()) as u64);
+        * (2 + (plan.methods.len() * plan.radius_factors.len() * plan.losses.len()) as u64);
     let bar = afg_eval::report::progress(runs, "missions");
     let text = swarm_study(&plan, || bar.inc(1))?;
     bar.finish_and_clear();

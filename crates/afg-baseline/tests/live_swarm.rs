@@ -2,7 +2,7 @@
 //! that appear and are done, robots that fail and come back, links that follow the
 //! robots.
 
-use afg_baseline::{AllocError, Failure, LiveSwarm, Network, SwarmMethod};
+use afg_baseline::{AllocError, Allocator, Failure, LiveSwarm, Network, Optimum, SwarmMethod};
 use afg_game::{Assignment, GeneratorConfig, Instance, Point, Preference, RobotId, TaskId};
 use afg_graph::GraphKind;
 use proptest::prelude::*;
@@ -10,6 +10,8 @@ use proptest::prelude::*;
 const GRAPE: SwarmMethod = SwarmMethod::Grape {
     preference: Preference::Selfish,
 };
+const EPSILON: f64 = 1e-3;
+const AUCTION: SwarmMethod = SwarmMethod::Auction { epsilon: EPSILON };
 
 /// Everyone hears everyone: the swarm is one component wherever the robots go.
 fn everyone(loss: f64) -> Network {
@@ -49,19 +51,22 @@ proptest! {
     #![proptest_config(ProptestConfig::with_cases(16))]
 
     /// Tasks appear one by one, one is done, a robot fails: after each event the swarm
-    /// settles, every robot's own view is one partition, and it is stable under
-    /// GRAPE's preference among the tasks still open and the robots still alive (over a
-    /// lossy network too).
+    /// settles and every robot's own view is one partition. GRAPE's is stable under its
+    /// preference among the tasks still open and the robots still alive; the auction's
+    /// is within 2Nε of the optimum of those robots and tasks (over a lossy network
+    /// too).
     #[test]
     fn after_every_event_the_swarm_settles_on_a_stable_partition(
         seed in 0u64..500,
         n in 2usize..25,
         m in 2usize..5,
         lossy in any::<bool>(),
+        auction in any::<bool>(),
     ) {
         let game = GeneratorConfig::paper(n, m, seed).generate().unwrap();
         let network = everyone(if lossy { 0.3 } else { 0.0 });
-        let mut swarm = LiveSwarm::new(game.clone(), GRAPE, &network, None, seed).unwrap();
+        let method = if auction { AUCTION } else { GRAPE };
+        let mut swarm = LiveSwarm::new(game.clone(), method, &network, None, seed).unwrap();
         let points = game.robots().to_vec();
         let mut alive: Vec<usize> = (0..n).collect();
         let check = |swarm: &LiveSwarm, alive: &[usize], open: &[usize]| {
@@ -69,9 +74,20 @@ proptest! {
             for i in sub.robot_ids() {
                 let task = a.task_of(i).map(|t| t.index());
                 assert!(task.is_none_or(|j| open.contains(&j)), "robot on a closed task");
+                if auction {
+                    continue;
+                }
                 // Stable among the open tasks: no open task it strictly prefers.
                 let best = sub.best_move_among(i, a.task_of(i), a.sizes(), Preference::Selfish, |t| open.contains(&t.index()));
                 assert_eq!(best, None, "robot {i} would move");
+            }
+            if auction {
+                let tasks = open.iter().map(|&j| game.tasks()[j]).collect();
+                let open_game = Instance::new(sub.robots().to_vec(), tasks, game.beta()).unwrap();
+                let opt = open_game.welfare(&Optimum.allocate(&open_game).unwrap().assignment);
+                let slack = 2.0 * alive.len() as f64 * EPSILON + 1e-9 * opt.abs().max(1.0);
+                let welfare = sub.welfare(&a);
+                assert!(welfare >= opt - slack, "auction {welfare} against the optimum {opt}");
             }
         };
         let mut open = Vec::new();
@@ -168,16 +184,18 @@ fn robots_take_only_the_tasks_they_know_of() {
 fn a_robot_that_returns_rejoins() {
     let game = GeneratorConfig::paper(12, 3, 5).generate().unwrap();
     let points = game.robots().to_vec();
-    let mut swarm = LiveSwarm::new(game, GRAPE, &everyone(0.0), None, 2).unwrap();
-    for j in 0..3 {
-        swarm.task_appears(j);
+    for method in [GRAPE, AUCTION] {
+        let mut swarm = LiveSwarm::new(game.clone(), method, &everyone(0.0), None, 2).unwrap();
+        for j in 0..3 {
+            swarm.task_appears(j);
+        }
+        settle(&mut swarm, &points);
+        swarm.fail(4).unwrap();
+        settle(&mut swarm, &points);
+        swarm.revive(4).unwrap();
+        settle(&mut swarm, &points);
+        assert!((0..12).all(|i| swarm.task_of(i).is_some()), "{method:?}");
     }
-    settle(&mut swarm, &points);
-    swarm.fail(4).unwrap();
-    settle(&mut swarm, &points);
-    swarm.revive(4).unwrap();
-    settle(&mut swarm, &points);
-    assert!((0..12).all(|i| swarm.task_of(i).is_some()));
 }
 
 /// Knobs out of range are refused with what is wrong.
@@ -194,8 +212,8 @@ fn bad_knobs_are_refused() {
         Err(AllocError::InvalidParameter(what)) => what,
         _ => panic!("accepted"),
     };
-    let auction = SwarmMethod::Auction { epsilon: 1e-3 };
-    assert!(refused(auction, &Network::default(), None).contains("auction"));
+    let bad_auction = SwarmMethod::Auction { epsilon: 0.0 };
+    assert!(refused(bad_auction, &Network::default(), None).contains("ε"));
     let failing = Network {
         failure: Some(Failure::new(0.1, 5)),
         ..Network::default()

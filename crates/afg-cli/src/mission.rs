@@ -107,11 +107,12 @@ pub struct LoopArgs {
     swarm: SwarmKnobs,
 }
 
-/// The knobs of `grape`, GRAPE run by the robots over the radio (docs/missions.md).
+/// The knobs of `grape` and `auction`, run by the robots over the radio
+/// (docs/missions.md).
 #[derive(Args)]
-#[command(next_help_heading = "GRAPE over the radio (--method grape)")]
+#[command(next_help_heading = "Decentralised over the radio (--method grape or auction)")]
 pub struct SwarmKnobs {
-    /// Rounds of GRAPE per mission time unit.
+    /// Rounds per mission time unit.
     #[arg(long, default_value_t = 100.0)]
     rounds_per_time: f64,
     /// Long-run share of messages lost.
@@ -124,6 +125,9 @@ pub struct SwarmKnobs {
     /// GRAPE's preference: selfish (GRAPE's own) or balanced.
     #[arg(long, value_parser = crate::choice::<Preference>(), default_value = "selfish")]
     preference: Preference,
+    /// The auction's least price increment ε.
+    #[arg(long, default_value_t = 1e-3)]
+    epsilon: f64,
     #[command(flatten)]
     radio: RadioArgs,
 }
@@ -152,8 +156,8 @@ pub struct RunArgs {
     /// The mission file (`afg mission gen --out`).
     #[arg(long)]
     mission: PathBuf,
-    /// The allocator (ignored with --model), or grape: GRAPE run by the robots
-    /// themselves over the radio.
+    /// The allocator (ignored with --model), or grape / auction: GRAPE or the auction
+    /// run by the robots themselves over the radio.
     #[arg(long, default_value_t = MissionMethod::Central(Method::Opt))]
     method: MissionMethod,
     /// A trained model's run directory instead of a built-in method.
@@ -179,7 +183,7 @@ pub struct CompareArgs {
     /// Mission files.
     #[arg(long, num_args = 1.., required = true)]
     mission: Vec<PathBuf>,
-    /// The allocators, comma-separated (grape: GRAPE run by the robots over the radio).
+    /// The allocators, comma-separated (grape, auction: run by the robots over the radio).
     #[arg(
         long,
         value_delimiter = ',',
@@ -254,10 +258,16 @@ fn planner(method: MissionMethod, model: Option<&Path>, looping: &LoopArgs) -> R
         (None, MissionMethod::Central(method)) => {
             Planner::method(method, looping.seed, looping.warm)
         }
-        (None, MissionMethod::Grape) => {
+        (None, swarm) => {
             let knobs = &looping.swarm;
-            let method = SwarmMethod::Grape {
-                preference: knobs.preference,
+            let method = if swarm == MissionMethod::Auction {
+                SwarmMethod::Auction {
+                    epsilon: knobs.epsilon,
+                }
+            } else {
+                SwarmMethod::Grape {
+                    preference: knobs.preference,
+                }
             };
             let network = Network {
                 loss: knobs.loss,

@@ -20,13 +20,15 @@ use crate::report::duration;
 pub const DEFAULT_METHODS: &str = "opt,da,da-balanced,greedy,nearest";
 
 /// A method in a mission, as the front ends name it: a built-in allocator deciding
-/// centrally, or `grape`: GRAPE run by the robots themselves over the radio.
+/// centrally, or `grape` / `auction`: GRAPE or the auction run by the robots
+/// themselves over the radio.
 ///
 /// # Examples
 /// ```
 /// use afg_baseline::Method;
 /// use afg_eval::mission::MissionMethod;
 /// assert_eq!("grape".parse::<MissionMethod>()?, MissionMethod::Grape);
+/// assert_eq!("auction".parse::<MissionMethod>()?, MissionMethod::Auction);
 /// assert_eq!("greedy".parse::<MissionMethod>()?, MissionMethod::Central(Method::Greedy));
 /// assert!("gpare".parse::<MissionMethod>().unwrap_err().contains("grape"));
 /// # Ok::<(), String>(())
@@ -37,17 +39,20 @@ pub enum MissionMethod {
     Central(Method),
     /// GRAPE run by the robots over the radio, each on its own view.
     Grape,
+    /// The consensus-based auction run by the robots over the radio.
+    Auction,
 }
 
 impl std::str::FromStr for MissionMethod {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        if s == "grape" {
-            return Ok(MissionMethod::Grape);
+        match s {
+            "grape" => Ok(MissionMethod::Grape),
+            "auction" => Ok(MissionMethod::Auction),
+            _ => s.parse().map(MissionMethod::Central).map_err(|e: String| {
+                format!("{e}, or grape or auction (decentralised, over the radio)")
+            }),
         }
-        s.parse()
-            .map(MissionMethod::Central)
-            .map_err(|e: String| format!("{e}, or grape (decentralised, over the radio)"))
     }
 }
 
@@ -56,6 +61,7 @@ impl std::fmt::Display for MissionMethod {
         match self {
             MissionMethod::Central(method) => method.fmt(f),
             MissionMethod::Grape => f.write_str("grape"),
+            MissionMethod::Auction => f.write_str("auction"),
         }
     }
 }

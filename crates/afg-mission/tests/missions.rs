@@ -276,12 +276,14 @@ proptest! {
                 Network { graph: GraphKind::Radius { radius: 0.4 }, loss: 0.2, ..Network::default() },
             )
         };
+        let auction = Decentralised { method: SwarmMethod::Auction { epsilon: 1e-3 }, ..grape.clone() };
         let replan = match rule {
             0 => Replan::Scratch(allocator.as_ref()),
             1 => Replan::Warm { first: allocator.as_ref(), preference: afg_game::Preference::Balanced },
             2 => Replan::IncrementalOpt,
             3 => Replan::Scratch(&Optimum),
-            _ => Replan::Decentralised(&grape),
+            _ if seed % 2 == 0 => Replan::Decentralised(&grape),
+            _ => Replan::Decentralised(&auction),
         };
         let options = RunOptions { replan_every: (rule == 3).then_some(2.5), ..traced() };
         let run = simulate(&mission, replan, options).unwrap();

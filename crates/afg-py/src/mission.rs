@@ -290,7 +290,8 @@ fn object_dict<'py>(py: Python<'py>, value: &serde_json::Value) -> PyResult<Boun
 /// their task is done, `hysteresis=THETA` lets a travelling robot switch only for a
 /// gain above THETA; `trace=True` keeps every decision.
 ///
-/// `method="grape"` has the robots run GRAPE themselves over the radio:
+/// `method="grape"` (or `"auction"`) has the robots run GRAPE (or the auction)
+/// themselves over the radio:
 /// `rounds_per_time` rounds per time unit, links between robots within `radius` (else
 /// to their 10 nearest) re-evaluated as they move, a share `loss` of messages lost,
 /// and tasks seen within `sensing` (else heard of at once); its metrics gain a
@@ -329,9 +330,13 @@ pub(crate) fn run_mission(
         }
         (name, None) => match MissionMethod::from_str(name.unwrap_or("opt")) {
             Ok(MissionMethod::Central(method)) => Planner::method(method, seed, warm),
-            Ok(MissionMethod::Grape) => {
-                let grape = SwarmMethod::Grape {
-                    preference: Preference::Selfish,
+            Ok(swarm) => {
+                let method = if swarm == MissionMethod::Auction {
+                    SwarmMethod::Auction { epsilon: 1e-3 }
+                } else {
+                    SwarmMethod::Grape {
+                        preference: Preference::Selfish,
+                    }
                 };
                 let mut network = Network {
                     loss,
@@ -344,7 +349,7 @@ pub(crate) fn run_mission(
                     rounds_per_time,
                     sensing,
                     seed,
-                    ..Decentralised::new(grape, network)
+                    ..Decentralised::new(method, network)
                 })
             }
             Err(message) => return Err(PyValueError::new_err(message)),

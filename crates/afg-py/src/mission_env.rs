@@ -93,7 +93,10 @@ impl PyMissionEnv {
     /// The robots act — `actions[i]` for robot i, −1 for a robot not acting — and the
     /// mission runs to the next epoch. Returns (reward, failed robots, terminated,
     /// truncated).
-    fn step(&mut self, actions: PyReadonlyArray1<'_, i64>) -> PyResult<(f64, Vec<usize>, bool, bool)> {
+    fn step(
+        &mut self,
+        actions: PyReadonlyArray1<'_, i64>,
+    ) -> PyResult<(f64, Vec<usize>, bool, bool)> {
         let actions = actions.as_slice()?;
         if actions.len() != self.env.num_robots() {
             return Err(PyValueError::new_err(format!(

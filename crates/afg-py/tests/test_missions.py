@@ -55,6 +55,8 @@ def test_grape_runs_over_the_radio_inside_a_mission() -> None:
     again = afg.run_mission(mission, method="grape", radius=0.5, loss=0.2, seed=1, trace=True)
     assert (again.decisions[1] == res.decisions[1]).all()
     assert "swarm" not in afg.run_mission(mission, method="greedy").metrics
+    auction = afg.run_mission(mission, method="auction", radius=0.5).metrics
+    assert auction["tasks"] == 6 and auction["swarm"]["rounds"] > 0
     with pytest.raises(ValueError, match="decentralised"):
         afg.run_mission(mission, method="grape", latency=1.0)
     with pytest.raises(ValueError, match="loss"):

@@ -5,7 +5,6 @@
 use afg_baseline::{Method, Network, SwarmMethod};
 use afg_eval::EvalError;
 use afg_eval::mission::{CompareRow, Planner, compare, swarm_table, table};
-use afg_game::Preference;
 use afg_graph::GraphKind;
 use afg_mission::{Decentralised, Latency, Mission, MissionConfig, Preset, RunOptions};
 
@@ -125,8 +124,8 @@ pub fn connectivity_radius(robots: usize) -> f64 {
     (n.ln() / (std::f64::consts::PI * n)).sqrt()
 }
 
-/// The decentralised study: GRAPE run by the robots over the radio, beside the
-/// central optimum and GRAPE's centralised twin (both warm-started).
+/// The decentralised study: GRAPE and the auction run by the robots over the radio,
+/// beside the central optimum and GRAPE's centralised twin (both warm-started).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SwarmPlan {
     /// Robots N.
@@ -141,7 +140,9 @@ pub struct SwarmPlan {
     pub radius_factors: Vec<f64>,
     /// Shares of messages lost.
     pub losses: Vec<f64>,
-    /// GRAPE's rounds per time unit.
+    /// The decentralised methods.
+    pub methods: Vec<SwarmMethod>,
+    /// Their rounds per time unit.
     pub rounds_per_time: f64,
 }
 
@@ -152,11 +153,14 @@ pub struct SwarmPlan {
 ///
 /// # Examples
 /// ```
+/// use afg_baseline::SwarmMethod;
+/// use afg_game::Preference;
 /// use afg_mission::Preset;
 /// use afg_repro::mission_study::{SwarmPlan, swarm_study};
 /// let plan = SwarmPlan {
 ///     robots: 20, tasks: 4, count: 1, presets: vec![Preset::Waves],
 ///     radius_factors: vec![2.0], losses: vec![0.0, 0.3], rounds_per_time: 50.0,
+///     methods: vec![SwarmMethod::Grape { preference: Preference::Selfish }],
 /// };
 /// let text = swarm_study(&plan, || {})?;
 /// assert!(text.contains("| opt (incremental) |") && text.contains("loss 30 %)"));
@@ -172,12 +176,11 @@ pub fn swarm_study(plan: &SwarmPlan, mut on_run: impl FnMut()) -> Result<String,
         Planner::method(Method::Opt, 0, true),
         Planner::method(Method::Da, 0, true),
     ];
-    let grape = SwarmMethod::Grape {
-        preference: Preference::Selfish,
-    };
     let threshold = connectivity_radius(plan.robots);
-    for &factor in &plan.radius_factors {
-        for &loss in &plan.losses {
+    for &method in &plan.methods {
+        for (&factor, &loss) in
+            (plan.radius_factors.iter()).flat_map(|f| plan.losses.iter().map(move |l| (f, l)))
+        {
             let network = Network {
                 graph: GraphKind::Radius {
                     radius: factor * threshold,
@@ -187,7 +190,7 @@ pub fn swarm_study(plan: &SwarmPlan, mut on_run: impl FnMut()) -> Result<String,
             };
             planners.push(Planner::swarm(Decentralised {
                 rounds_per_time: plan.rounds_per_time,
-                ..Decentralised::new(grape, network)
+                ..Decentralised::new(method, network)
             }));
         }
     }
@@ -196,7 +199,7 @@ pub fn swarm_study(plan: &SwarmPlan, mut on_run: impl FnMut()) -> Result<String,
         let missions = missions(preset, plan.robots, plan.tasks, plan.count)?;
         let rows = rows(&missions, &planners, RunOptions::default(), &mut on_run)?;
         out.push_str(&format!(
-            "**{}**, N = {}, K = {}, {} mission(s); GRAPE over the radio at {} rounds per time unit, radius in multiples of the connectivity radius {threshold:.3}\n\n{}\n{}\n",
+            "**{}**, N = {}, K = {}, {} mission(s); over the radio at {} rounds per time unit, radius in multiples of the connectivity radius {threshold:.3}\n\n{}\n{}\n",
             afg_game::Named::name(preset),
             plan.robots,
             plan.tasks,

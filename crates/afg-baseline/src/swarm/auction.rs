@@ -46,11 +46,15 @@
 //! simulated: a robot keeps sending a place's record while some neighbour holds a
 //! lower one; every broadcast is counted.
 
-use afg_game::{Instance, RobotId, TaskId};
+use std::borrow::Cow;
+
+use afg_game::{Instance, Point, RobotId, TaskId};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+use super::live::{move_swarm, revive, tell};
 use super::network::{Network, Radio, Roster};
+use super::news::News;
 use super::{Outcome, Simulation, TracePoint, Traffic, partition_of};
 use crate::AllocError;
 
@@ -65,7 +69,7 @@ const HEADER_BYTES: u64 = 8;
 
 /// One place's state in a robot's table.
 #[derive(Clone, Copy, Debug, PartialEq)]
-struct Record {
+pub(super) struct Record {
     /// The auction's epoch: raised each time it restarts after a crash.
     epoch: u32,
     price: f64,
@@ -93,7 +97,7 @@ impl Record {
 }
 
 /// A place: (task, index from 0).
-type Place = (u32, u32);
+pub(super) type Place = (u32, u32);
 
 /// The void task's one place, held by every robot that stays out ([`Auction::choose`]).
 const VOID: Place = (u32::MAX, 0);
@@ -149,7 +153,9 @@ impl Table {
 
 /// The auction's state between rounds.
 pub(crate) struct Auction<'a> {
-    instance: &'a Instance,
+    instance: Cow<'a, Instance>,
+    /// In a mission: the tasks each robot knows of (`None`: every task known).
+    news: Option<News>,
     epsilon: f64,
     radio: Radio<(Place, Record)>,
     /// Each task's place values `v_jk`, k from 0, as many as it has places.
@@ -157,6 +163,9 @@ pub(crate) struct Auction<'a> {
     tables: Vec<Table>,
     /// The place each robot believes it holds.
     holding: Vec<Option<Place>>,
+    /// The task of the last place each robot held (`None`: none, or the void): where a
+    /// robot in a mission keeps heading while it bids again.
+    last_task: Vec<Option<TaskId>>,
     /// Robots to bid when next awake.
     bidders: Roster,
     /// Places whose record some neighbour may lack, per robot, and the robots with any.
@@ -183,6 +192,22 @@ impl<'a> Auction<'a> {
         network: &Network,
         seed: u64,
     ) -> Result<Self, AllocError> {
+        let radio = Radio::new(instance.robots(), network, seed)?;
+        Self::with_radio(Cow::Borrowed(instance), epsilon, radio, seed, None)
+    }
+
+    /// An auction on `radio` where nobody has bid yet; `news` for a mission's robots,
+    /// who know only some tasks.
+    ///
+    /// # Errors
+    /// [`AllocError::InvalidParameter`] for ε not finite and positive.
+    pub(super) fn with_radio(
+        instance: Cow<'a, Instance>,
+        epsilon: f64,
+        radio: Radio<(Place, Record)>,
+        seed: u64,
+        news: Option<News>,
+    ) -> Result<Self, AllocError> {
         if !(epsilon.is_finite() && epsilon > 0.0) {
             return Err(AllocError::InvalidParameter(format!(
                 "auction increment ε = {epsilon} must be finite and positive"
@@ -200,11 +225,13 @@ impl<'a> Auction<'a> {
             .collect();
         Ok(Auction {
             instance,
+            news,
             epsilon,
-            radio: Radio::new(instance.robots(), network, seed)?,
+            radio,
             values,
             tables: vec![Table::open(0, m); n],
             holding: vec![None; n],
+            last_task: vec![None; n],
             bidders: Roster::everyone(n),
             pending: vec![Vec::new(); n],
             senders: Roster::empty(n),
@@ -276,6 +303,7 @@ impl<'a> Auction<'a> {
                 && let Some((place, price)) = self.choose(a)
             {
                 self.holding[a as usize] = Some(place);
+                self.last_task[a as usize] = (place != VOID).then_some(TaskId(place.0));
                 acted = true;
                 if place == VOID {
                     continue; // nothing to tell anyone
@@ -313,7 +341,12 @@ impl<'a> Auction<'a> {
         // (net value, place, price) of every place worth bidding for: the places bid
         // for so far, then each task's first open one.
         let mut options: Vec<(f64, Place, f64)> = Vec::new();
-        for j in self.instance.task_ids() {
+        let known = |j: TaskId| {
+            self.news
+                .as_ref()
+                .is_none_or(|n| n.knows_open(a, j.index()))
+        };
+        for j in self.instance.task_ids().filter(|&j| known(j)) {
             let cost = self.instance.cost(robot, j);
             let values = &self.values[j.index()];
             let places = &table.tasks[j.index()];
@@ -430,21 +463,113 @@ impl<'a> Auction<'a> {
     }
 }
 
+impl Auction<'_> {
+    /// `robots` will send every record of their tables again (they have new
+    /// neighbours, who may hold older ones).
+    fn resend(&mut self, robots: Vec<u32>) {
+        for a in robots {
+            let table = &self.tables[a as usize];
+            let places = table
+                .tasks
+                .iter()
+                .enumerate()
+                .flat_map(|(j, places)| (0..places.len() as u32).map(move |k| (j as u32, k)));
+            self.pending[a as usize].extend(places);
+            self.senders.add(a);
+        }
+    }
+
+    /// `robots` heard news: they open a new epoch (one for all of them), which spreads
+    /// with their bids. The auction's prices only rise, so a new task, a task done or
+    /// a task seen is a restart among those who hear of it.
+    fn renew(&mut self, robots: Vec<u32>) {
+        if robots.is_empty() {
+            return;
+        }
+        self.epochs += 1;
+        for a in robots {
+            if self.tables[a as usize].epoch < self.epochs {
+                self.restart(a, self.epochs);
+            }
+        }
+    }
+
+    /// A mission's news: `task` appeared (or is done); the robots that hear of it
+    /// restart the auction.
+    pub fn task_event(&mut self, task: usize, done: bool) {
+        let told = tell(&mut self.news, &self.radio, &self.instance, task, done);
+        self.renew(told);
+    }
+
+    /// The robots are at `points` now (see [`move_swarm`]): robots with new neighbours
+    /// resend their tables, and robots that see a task restart the auction.
+    ///
+    /// # Errors
+    /// As [`move_swarm`].
+    pub fn move_to(&mut self, points: Vec<Point>) -> Result<(), AllocError> {
+        let (relinked, saw) =
+            move_swarm(&mut self.instance, &mut self.radio, &mut self.news, points)?;
+        self.resend(relinked);
+        self.renew(saw);
+        Ok(())
+    }
+
+    /// `robots` fail now; their neighbours notice after `detect_after` rounds and
+    /// restart the auction among the survivors.
+    ///
+    /// # Errors
+    /// [`AllocError::Graph`] if the survivors' graph cannot be built.
+    pub fn fail(&mut self, robots: &[u32], detect_after: u64) -> Result<(), AllocError> {
+        let relinked = (self.radio).fail(robots, self.instance.robots(), detect_after)?;
+        self.resend(relinked);
+        Ok(())
+    }
+
+    /// `robot` is back and linked, and bids in the auction's current epoch.
+    ///
+    /// # Errors
+    /// [`AllocError::Graph`] if the graph cannot be built.
+    pub fn revive(&mut self, robot: u32) -> Result<(), AllocError> {
+        let relinked = revive(&mut self.radio, &self.instance, robot)?;
+        self.restart(robot, self.epochs);
+        self.resend(relinked);
+        Ok(())
+    }
+
+    /// The task of the place `robot` believes it holds, or, while it bids again (it
+    /// was outbid, or the auction restarted), of the last place it held if it does not
+    /// know that task is done.
+    pub fn own_task(&self, robot: u32) -> Option<TaskId> {
+        let known =
+            |j: &TaskId| (self.news.as_ref()).is_none_or(|n| n.knows_open(robot, j.index()));
+        self.last_task[robot as usize].filter(known)
+    }
+
+    /// Whether every living robot's table gives the same partition (O(N · places)).
+    pub fn agreed(&self) -> bool {
+        let n = self.tables.len();
+        let mut partitions = self
+            .radio
+            .living()
+            .map(|a| self.tables[a as usize].partition(n));
+        partitions
+            .next()
+            .is_none_or(|first| partitions.all(|p| p == first))
+    }
+
+    /// Messages and bytes sent so far.
+    pub fn traffic(&self) -> Traffic {
+        self.traffic
+    }
+}
+
 impl Simulation for Auction<'_> {
     fn round(&mut self) -> Result<bool, AllocError> {
         let start = self.radio.next_round(self.instance.robots())?;
         if !start.crashed.is_empty() {
             // The survivors relinked: new neighbours may hold older tables.
             let living: Vec<u32> = self.radio.living().collect();
-            for a in living {
-                let table = &self.tables[a as usize];
-                let places =
-                    table.tasks.iter().enumerate().flat_map(|(j, places)| {
-                        (0..places.len() as u32).map(move |k| (j as u32, k))
-                    });
-                self.pending[a as usize].extend(places);
-                self.senders.add(a);
-            }
+            self.resend(living);
         }
         if !start.noticed.is_empty() {
             self.epochs += 1;

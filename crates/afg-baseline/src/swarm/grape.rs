@@ -28,6 +28,7 @@ use imbl::Vector;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+use super::live::{move_swarm, revive, tell};
 use super::network::{Network, Radio, Roster};
 use super::news::News;
 use super::{Outcome, Simulation, TracePoint, Traffic, partition_of};
@@ -339,35 +340,22 @@ impl<'a> Grape<'a> {
     /// A mission's news: `task` appeared (or is done); the robots that hear of it
     /// reconsider.
     pub fn task_event(&mut self, task: usize, done: bool) {
-        let points = self.instance.robots();
-        let told = match &mut self.news {
-            Some(news) => news.event(task, done, points),
-            None => Vec::new(),
-        };
-        let told: Vec<u32> = told.into_iter().filter(|&a| self.radio.alive(a)).collect();
+        let told = tell(&mut self.news, &self.radio, &self.instance, task, done);
         self.reconsider(told);
     }
 
-    /// The robots are at `points` now: the game's distances are theirs, the links
-    /// are rebuilt (robots with new neighbours resend to those that lag), and robots
-    /// see the tasks now in range. Nothing to do if no robot moved.
+    /// The robots are at `points` now (see [`move_swarm`]): robots with new neighbours
+    /// resend to those that lag, and robots that see a task reconsider.
     ///
     /// # Errors
-    /// [`AllocError::Game`] for a point out of range, [`AllocError::Graph`] if the
-    /// graph cannot be built.
+    /// As [`move_swarm`].
     pub fn move_to(&mut self, points: Vec<Point>) -> Result<(), AllocError> {
-        if points == self.instance.robots() {
-            return Ok(());
-        }
-        for a in self.radio.relink(&points)? {
+        let (relinked, saw) =
+            move_swarm(&mut self.instance, &mut self.radio, &mut self.news, points)?;
+        for a in relinked {
             self.senders.add(a);
         }
-        if let Some(news) = &mut self.news {
-            let saw = news.sense(&points);
-            let saw: Vec<u32> = saw.into_iter().filter(|&a| self.radio.alive(a)).collect();
-            self.reconsider(saw);
-        }
-        self.instance = Cow::Owned(self.instance.with_robots(points)?);
+        self.reconsider(saw);
         Ok(())
     }
 
@@ -389,15 +377,13 @@ impl<'a> Grape<'a> {
     /// # Errors
     /// [`AllocError::Graph`] if the graph cannot be built.
     pub fn revive(&mut self, robot: u32) -> Result<(), AllocError> {
-        self.radio.revive(robot);
         for noticed in &mut self.noticed {
             noticed.retain(|&c| c != robot);
         }
-        for a in self.radio.relink(self.instance.robots())? {
+        for a in revive(&mut self.radio, &self.instance, robot)? {
             self.senders.add(a);
         }
         self.reconsider([robot]);
-        self.senders.add(robot);
         Ok(())
     }
 

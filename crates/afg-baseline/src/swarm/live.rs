@@ -3,10 +3,10 @@
 //! radio.
 
 use std::borrow::Cow;
-use std::rc::Rc;
 
 use afg_game::{Instance, Point};
 
+use super::auction::Auction;
 use super::grape::Grape;
 use super::network::{Network, Radio};
 use super::news::News;
@@ -16,10 +16,13 @@ use crate::AllocError;
 /// Rounds of silence before a neighbour removes a failed robot (as [`Failure::new`](super::Failure::new)).
 pub const DETECT_AFTER: u64 = 3;
 
-/// GRAPE run round by round inside a mission. The game holds every robot at its
-/// current position and every task of the mission; a robot considers only the tasks
-/// it knows have appeared and are not done, and heads for the task its own view gives
-/// it, settled or not. Links follow the robots ([`LiveSwarm::round`] relinks them by
+/// GRAPE or the auction run round by round inside a mission. The game holds every
+/// robot at its current position and every task of the mission; a robot considers
+/// only the tasks it knows have appeared and are not done, and heads for the task its
+/// own view (GRAPE) or the place it believes it holds (the auction) gives it, settled
+/// or not. The auction's prices only rise, so every piece of news (a task appearing,
+/// done, or seen) restarts it among the robots that hear it, in a new epoch that
+/// spreads with their bids; a robot that comes back bids in the current epoch. Links follow the robots ([`LiveSwarm::round`] relinks them by
 /// the network's graph rule, with no edges added to connect the swarm). A robot that
 /// fails is noticed by its neighbours [`DETECT_AFTER`] rounds later; one that comes
 /// back keeps the view it had.
@@ -51,9 +54,25 @@ pub const DETECT_AFTER: u64 = 3;
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub struct LiveSwarm {
-    grape: Grape<'static>,
+    engine: Engine,
     /// Whether a round since the last change did nothing.
     quiet: bool,
+}
+
+/// The method running.
+enum Engine {
+    Grape(Grape<'static>),
+    Auction(Auction<'static>),
+}
+
+/// Calls the same method on whichever engine runs.
+macro_rules! on_engine {
+    ($engine:expr, $sim:ident => $call:expr) => {
+        match $engine {
+            Engine::Grape($sim) => $call,
+            Engine::Auction($sim) => $call,
+        }
+    };
 }
 
 impl LiveSwarm {
@@ -62,10 +81,10 @@ impl LiveSwarm {
     /// (`None`: all hear of every task at once).
     ///
     /// # Errors
-    /// [`AllocError::InvalidParameter`] for the auction (not yet run in missions), a
-    /// network with its own failures (a mission has its own), a sensing radius that is
-    /// not positive, or a network knob out of range; [`AllocError::Graph`] if the
-    /// graph cannot be built.
+    /// [`AllocError::InvalidParameter`] for a network with its own failures (a mission
+    /// has its own), a sensing radius that is not positive, an auction increment that
+    /// is not, or a network knob out of range; [`AllocError::Graph`] if the graph
+    /// cannot be built.
     pub fn new(
         game: Instance,
         method: SwarmMethod,
@@ -74,9 +93,6 @@ impl LiveSwarm {
         seed: u64,
     ) -> Result<Self, AllocError> {
         let bad = |what: &str| Err(AllocError::InvalidParameter(what.into()));
-        let SwarmMethod::Grape { preference } = method else {
-            return bad("the auction does not run inside missions yet; use GRAPE");
-        };
         if network.failure.is_some() {
             return bad(
                 "in a mission robots fail at the mission's failure times, not the network's",
@@ -85,25 +101,40 @@ impl LiveSwarm {
         if sensing.is_some_and(|r| !(r.is_finite() && r > 0.0)) {
             return bad("the sensing radius must be finite and positive");
         }
-        let radio: Radio<Rc<_>> = Radio::moving(game.robots(), network, seed)?;
         let places = game.tasks().iter().map(|t| t.position).collect();
-        let news = News::new(game.num_robots(), places, sensing);
-        let grape = Grape::with_radio(Cow::Owned(game), preference, radio, seed, Some(news));
+        let news = Some(News::new(game.num_robots(), places, sensing));
+        let engine = match method {
+            SwarmMethod::Grape { preference } => {
+                let radio = Radio::moving(game.robots(), network, seed)?;
+                Engine::Grape(Grape::with_radio(
+                    Cow::Owned(game),
+                    preference,
+                    radio,
+                    seed,
+                    news,
+                ))
+            }
+            SwarmMethod::Auction { epsilon } => {
+                let radio = Radio::moving(game.robots(), network, seed)?;
+                let auction = Auction::with_radio(Cow::Owned(game), epsilon, radio, seed, news)?;
+                Engine::Auction(auction)
+            }
+        };
         Ok(LiveSwarm {
-            grape,
+            engine,
             quiet: false,
         })
     }
 
     /// `task` appears: the robots that see it (all, without a sensing radius) know it.
     pub fn task_appears(&mut self, task: usize) {
-        self.grape.task_event(task, false);
+        on_engine!(&mut self.engine, sim => sim.task_event(task, false));
         self.quiet = false;
     }
 
     /// `task` is done: the robots that see it know it, and drop it from their views.
     pub fn task_done(&mut self, task: usize) {
-        self.grape.task_event(task, true);
+        on_engine!(&mut self.engine, sim => sim.task_event(task, true));
         self.quiet = false;
     }
 
@@ -113,7 +144,7 @@ impl LiveSwarm {
     /// [`AllocError::Graph`] if the survivors' graph cannot be built.
     pub fn fail(&mut self, robot: usize) -> Result<(), AllocError> {
         self.quiet = false;
-        self.grape.fail(&[robot as u32], DETECT_AFTER)
+        on_engine!(&mut self.engine, sim => sim.fail(&[robot as u32], DETECT_AFTER))
     }
 
     /// `robot` is back.
@@ -122,7 +153,7 @@ impl LiveSwarm {
     /// [`AllocError::Graph`] if the graph cannot be built.
     pub fn revive(&mut self, robot: usize) -> Result<(), AllocError> {
         self.quiet = false;
-        self.grape.revive(robot as u32)
+        on_engine!(&mut self.engine, sim => sim.revive(robot as u32))
     }
 
     /// One round with the robots at `positions`: relink, sense, then the method's round.
@@ -131,20 +162,24 @@ impl LiveSwarm {
     /// [`AllocError::Game`] for a position out of range, [`AllocError::Graph`] if
     /// the graph cannot be built.
     pub fn round(&mut self, positions: &[Point]) -> Result<(), AllocError> {
-        self.grape.move_to(positions.to_vec())?;
-        let active = self.grape.round()?;
-        self.quiet = !active && self.grape.quiet();
+        let quiet = on_engine!(&mut self.engine, sim => {
+            sim.move_to(positions.to_vec())?;
+            let active = sim.round()?;
+            !active && sim.quiet()
+        });
+        self.quiet = quiet;
         Ok(())
     }
 
     /// The task `robot`'s own view gives it.
     pub fn task_of(&self, robot: usize) -> Option<usize> {
-        self.grape.own_task(robot as u32).map(|t| t.index())
+        on_engine!(&self.engine, sim => sim.own_task(robot as u32)).map(|t| t.index())
     }
 
-    /// Whether every living robot holds the same view.
+    /// Whether every living robot holds the same partition (GRAPE: the same view; the
+    /// auction: tables giving the same partition).
     pub fn agreed(&self) -> bool {
-        self.grape.agreed()
+        on_engine!(&self.engine, sim => sim.agreed())
     }
 
     /// Whether the last round changed nothing, nothing is in flight and all agree:
@@ -155,16 +190,73 @@ impl LiveSwarm {
 
     /// Rounds run.
     pub fn rounds(&self) -> u64 {
-        self.grape.rounds()
+        on_engine!(&self.engine, sim => sim.rounds())
     }
 
     /// Messages sent (every awake robot to each neighbour every round).
     pub fn messages(&self) -> u64 {
-        self.grape.traffic().messages
+        on_engine!(&self.engine, sim => sim.traffic()).messages
     }
 
-    /// Bytes on the air: whole partitions, as GRAPE sends them, and the news of tasks.
+    /// Bytes on the air: whole partitions (GRAPE) or tables (the auction), as the
+    /// methods send them, and the news of tasks.
     pub fn bytes(&self) -> u64 {
-        self.grape.traffic().bytes
+        on_engine!(&self.engine, sim => sim.traffic()).bytes
     }
+}
+
+/// The living robots told of `task` appearing (or done) by `news` (none without).
+pub(super) fn tell<M>(
+    news: &mut Option<News>,
+    radio: &Radio<M>,
+    instance: &Instance,
+    task: usize,
+    done: bool,
+) -> Vec<u32> {
+    let Some(news) = news else {
+        return Vec::new();
+    };
+    let told = news.event(task, done, instance.robots());
+    told.into_iter().filter(|&a| radio.alive(a)).collect()
+}
+
+/// The robots are at `points` now: the game's distances are theirs, the links are
+/// rebuilt, and robots see the tasks now in range. Returns the robots whose neighbours
+/// changed and the living robots that saw a task anew (nothing if no robot moved).
+///
+/// # Errors
+/// [`AllocError::Game`] for a point out of range, [`AllocError::Graph`] if the graph
+/// cannot be built.
+pub(super) fn move_swarm<M>(
+    instance: &mut Cow<'_, Instance>,
+    radio: &mut Radio<M>,
+    news: &mut Option<News>,
+    points: Vec<Point>,
+) -> Result<(Vec<u32>, Vec<u32>), AllocError> {
+    if points == instance.robots() {
+        return Ok((Vec::new(), Vec::new()));
+    }
+    let relinked = radio.relink(&points)?;
+    let saw = news
+        .as_mut()
+        .map_or_else(Vec::new, |news| news.sense(&points));
+    let saw = saw.into_iter().filter(|&a| radio.alive(a)).collect();
+    *instance = Cow::Owned(instance.with_robots(points)?);
+    Ok((relinked, saw))
+}
+
+/// `robot` is back, awake and linked; returns the robots whose neighbours changed (it
+/// among them).
+///
+/// # Errors
+/// [`AllocError::Graph`] if the graph cannot be built.
+pub(super) fn revive<M>(
+    radio: &mut Radio<M>,
+    instance: &Instance,
+    robot: u32,
+) -> Result<Vec<u32>, AllocError> {
+    radio.revive(robot);
+    let mut relinked = radio.relink(instance.robots())?;
+    relinked.push(robot);
+    Ok(relinked)
 }
