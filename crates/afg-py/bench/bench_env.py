@@ -123,22 +123,29 @@ def main() -> None:
         numpy_env = NumpyAllocationEnv(inst)
         env = gym.make("afg/Allocation-v0", robots=n, tasks=m).unwrapped
         env.reset(seed=0, options={"instance": inst})
-        venv = gym.make_vec("afg/Allocation-v0", num_envs=args.envs, vectorization_mode="vector_entry_point", robots=n, tasks=m)
+        make = lambda copy: gym.make_vec(  # noqa: E731
+            "afg/Allocation-v0", num_envs=args.envs, vectorization_mode="vector_entry_point",
+            robots=n, tasks=m, copy=copy,
+        )
         row = {
             "robots": n,
             "numpy": rate(single(numpy_env, m, rng), args.seconds),
             "afg": rate(single(env, m, rng), args.seconds),
-            "afg_vector": rate(vector(venv, args.envs, n, m, rng), args.seconds),
+            "afg_vector": rate(vector(make(True), args.envs, n, m, rng), args.seconds),
+            "afg_vector_shared": rate(vector(make(False), args.envs, n, m, rng), args.seconds),
         }
         rows.append(row)
     solves = [solve_overhead(n, 50) for n in (1000, 10000)]
     if args.json:
         print(json.dumps({"environments": rows, "solve": solves}, indent=2))
         return
-    print(f"| N | numpy env (steps/s) | afg env | afg vector env (K = {args.envs}) | vector / numpy |")
-    print("|---|---|---|---|---|")
+    print(f"| N | numpy env (steps/s) | afg env | afg vector env (K = {args.envs}) | the same, copy=False | vector / numpy | vector / afg env |")
+    print("|---|---|---|---|---|---|---|")
     for r in rows:
-        print(f"| {r['robots']} | {r['numpy']:,.0f} | {r['afg']:,.0f} | {r['afg_vector']:,.0f} | {r['afg_vector'] / r['numpy']:.1f}x |")
+        print(
+            f"| {r['robots']} | {r['numpy']:,.0f} | {r['afg']:,.0f} | {r['afg_vector']:,.0f} | {r['afg_vector_shared']:,.0f} "
+            f"| {r['afg_vector'] / r['numpy']:.1f}x | {r['afg_vector'] / r['afg']:.2f}x |"
+        )
     print()
     print("| N (M = 5) | afg.solve(method=\"opt\") from Python | the same inside Rust | overhead |")
     print("|---|---|---|---|")

@@ -7,8 +7,8 @@ use std::sync::Arc;
 use afg_game::{Assignment, GeneratorKnobs, Instance, TaskId};
 use afg_graph::{StateParts, Units};
 use afg_learn::env::{Env, Shaping};
-use numpy::ndarray::{Array1, Array2, Array3};
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3};
+use numpy::ndarray::{Array1, Array2};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use rayon::prelude::*;
@@ -120,10 +120,11 @@ impl Episode {
         .map_err(|e| e.to_string())
     }
 
-    /// Writes the observation into `nu` and `mu` (N×M each, zeroed) and `mask` (one
-    /// per action): returns the actor (N once the episode is over).
+    /// Writes the observation into `nu` and `mu` (N×M each) and `mask` (one per
+    /// action): returns the actor (N once the episode is over).
     fn observe_into(&mut self, nu: &mut [f32], mu: &mut [f32], mask: &mut [i8]) -> usize {
         let (n, m) = (self.instance.num_robots(), self.instance.num_tasks());
+        nu.fill(0.0);
         self.with_env(|env| {
             for (i, t) in env.state().assignment().tasks().iter().enumerate() {
                 if let Some(j) = t {
@@ -294,6 +295,18 @@ type StepArrays<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<bool>>);
 pub struct VecEnvCore {
     episodes: Vec<Episode>,
     draw: Draw,
+    /// The stacked observation arrays, made once and overwritten by every
+    /// `observations` call (a fresh half-megabyte per step cost more in page faults
+    /// than the step itself at N = 1000).
+    buffers: Option<Buffers>,
+}
+
+/// The arrays `VecEnvCore::observations` fills.
+struct Buffers {
+    nu: Py<PyArray3<f32>>,
+    mu: Py<PyArray3<f32>>,
+    actors: Py<PyArray1<i64>>,
+    masks: Py<PyArray2<i8>>,
 }
 
 #[pymethods]
@@ -334,6 +347,7 @@ impl VecEnvCore {
         Ok(VecEnvCore {
             episodes: vec![episode; num_envs],
             draw,
+            buffers: None,
         })
     }
 
@@ -401,41 +415,48 @@ impl VecEnvCore {
     }
 
     /// Stacked observations: `(robot_features (K, N, M), task_features (K, N, M),
-    /// actors (K,), action_masks (K, actions))`.
-    fn observations<'py>(&mut self, py: Python<'py>) -> VecObservationArrays<'py> {
+    /// actors (K,), action_masks (K, actions))`. The same four arrays every call,
+    /// overwritten: copy them to keep them past the next call.
+    fn observations<'py>(&mut self, py: Python<'py>) -> PyResult<VecObservationArrays<'py>> {
         let (k, n, m) = (self.episodes.len(), self.draw.robots, self.draw.tasks);
         let actions = m + usize::from(self.draw.allow_void);
-        let mut nu = Array3::zeros((k, n, m));
-        let mut mu = Array3::zeros((k, n, m));
-        let mut masks = Array2::zeros((k, actions));
-        let mut actors = Array1::zeros(k);
         let min_len = self.min_len();
-        let episodes = &mut self.episodes;
-        py.detach(|| {
-            let nus = nu.as_slice_mut().expect("contiguous").par_chunks_mut(n * m);
-            let mus = mu.as_slice_mut().expect("contiguous").par_chunks_mut(n * m);
-            let rows = masks
-                .as_slice_mut()
-                .expect("contiguous")
-                .par_chunks_mut(actions);
-            let actors = actors.as_slice_mut().expect("contiguous").par_iter_mut();
-            episodes
-                .par_iter_mut()
-                .zip(nus)
-                .zip(mus)
-                .zip(rows)
-                .zip(actors)
-                .with_min_len(min_len)
-                .for_each(|((((e, nu), mu), mask), actor)| {
-                    *actor = e.observe_into(nu, mu, mask) as i64;
-                });
+        let buffers = self.buffers.get_or_insert_with(|| Buffers {
+            nu: PyArray3::zeros(py, (k, n, m), false).unbind(),
+            mu: PyArray3::zeros(py, (k, n, m), false).unbind(),
+            actors: PyArray1::zeros(py, k, false).unbind(),
+            masks: PyArray2::zeros(py, (k, actions), false).unbind(),
         });
-        (
-            nu.into_pyarray(py),
-            mu.into_pyarray(py),
-            actors.into_pyarray(py),
-            masks.into_pyarray(py),
-        )
+        let (nu, mu) = (buffers.nu.bind(py).clone(), buffers.mu.bind(py).clone());
+        let (actors, masks) = (
+            buffers.actors.bind(py).clone(),
+            buffers.masks.bind(py).clone(),
+        );
+        {
+            let (mut nu_w, mut mu_w) = (nu.readwrite(), mu.readwrite());
+            let (mut actors_w, mut masks_w) = (actors.readwrite(), masks.readwrite());
+            let nu_s = nu_w.as_slice_mut()?;
+            let mu_s = mu_w.as_slice_mut()?;
+            let actors_s = actors_w.as_slice_mut()?;
+            let masks_s = masks_w.as_slice_mut()?;
+            let episodes = &mut self.episodes;
+            py.detach(|| {
+                let nus = nu_s.par_chunks_mut(n * m);
+                let mus = mu_s.par_chunks_mut(n * m);
+                let rows = masks_s.par_chunks_mut(actions);
+                episodes
+                    .par_iter_mut()
+                    .zip(nus)
+                    .zip(mus)
+                    .zip(rows)
+                    .zip(actors_s.par_iter_mut())
+                    .with_min_len(min_len)
+                    .for_each(|((((e, nu), mu), mask), actor)| {
+                        *actor = e.observe_into(nu, mu, mask) as i64;
+                    });
+            });
+        }
+        Ok((nu, mu, actors, masks))
     }
 
     /// Environment `index`'s assignment so far.

@@ -107,6 +107,21 @@ def test_the_vector_env_equals_k_single_envs_step_by_step() -> None:
     assert (rewards == 0).all() and not terminated.any() and (obs["actor"] == 0).all()
 
 
+def test_the_vector_env_copies_its_observations_unless_told_not_to() -> None:
+    make = lambda copy: gym.make_vec(  # noqa: E731
+        "afg/Allocation-v0", num_envs=2, vectorization_mode="vector_entry_point", robots=6, tasks=3, copy=copy
+    )
+    for copy in (True, False):
+        venv = make(copy)
+        first, _ = venv.reset(seed=1)
+        kept = first["robot_features"].copy()
+        second, *_ = venv.step(np.zeros(2, dtype=np.int64))
+        assert (second["robot_features"] != kept).any()  # robot 0 joined task 0
+        # A copy keeps the old observation; the shared buffer now holds the new one.
+        assert (first["robot_features"] == kept).all() == copy
+        assert (second["robot_features"] is first["robot_features"]) == (not copy)
+
+
 def test_grapes_game_adds_the_void_action() -> None:
     env = gym.make("afg/Allocation-v0", robots=10, tasks=3, allow_void=True)
     check_env(env.unwrapped, skip_render_check=True)
