@@ -92,3 +92,24 @@ def test_mission_episode_returns_add_up_and_failed_robots_leave() -> None:
         assert set(rewards.values()) <= {0.0}
     with pytest.raises(ValueError, match="unknown preset"):
         mission_v0.parallel_env(preset="storm")
+
+
+def test_the_mission_environment_steps_from_any_thread() -> None:
+    import threading
+
+    from afg.pettingzoo import mission_v0
+
+    env = mission_v0.parallel_env(robots=6, tasks=3)
+    env.reset(seed=0)
+    errors = []
+
+    def step() -> None:
+        try:
+            env.step({a: 3 for a in env.agents})
+        except BaseException as e:  # a panic would be a PanicException
+            errors.append(e)
+
+    thread = threading.Thread(target=step)
+    thread.start()
+    thread.join()
+    assert errors == []
