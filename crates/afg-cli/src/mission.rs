@@ -163,8 +163,6 @@ pub struct RunArgs {
     /// A trained model's run directory instead of a built-in method.
     #[arg(long)]
     model: Option<PathBuf>,
-    #[command(flatten)]
-    looping: LoopArgs,
     /// Print the metrics as JSON.
     #[arg(long)]
     json: bool,
@@ -175,6 +173,8 @@ pub struct RunArgs {
     /// no server), robots coloured by task moving, tasks sized by the work left.
     #[arg(long)]
     animate: Option<PathBuf>,
+    #[command(flatten)]
+    looping: LoopArgs,
 }
 
 /// `afg mission compare`: several allocators on the same missions.
@@ -193,14 +193,14 @@ pub struct CompareArgs {
     /// Trained models' run directories, run beside the methods.
     #[arg(long, num_args = 1..)]
     model: Vec<PathBuf>,
-    #[command(flatten)]
-    looping: LoopArgs,
     /// Print JSON (each method's metrics per mission) instead of the table.
     #[arg(long)]
     json: bool,
     /// Draw the first mission's tasks open, tasks done and reward against time.
     #[arg(long)]
     svg: Option<PathBuf>,
+    #[command(flatten)]
+    looping: LoopArgs,
 }
 
 /// Runs `afg mission …`.
