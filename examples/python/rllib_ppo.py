@@ -28,7 +28,8 @@ import gymnasium as gym
 import numpy as np
 
 ROBOTS, TASKS = 20, 5
-MISSION = dict(robots=10, tasks=8, preset="waves", horizon=30.0)
+#: Short missions in a wide arena: travel matters, and not every task can be done.
+MISSION = dict(robots=10, tasks=12, preset="waves", arena=3.0, horizon=10.0, waves=3, interval=3.0)
 
 
 class AllocationForRLlib(gym.Env):
