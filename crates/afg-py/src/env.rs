@@ -103,42 +103,34 @@ impl Episode {
     /// The acting robot takes `action` (M: stays out): the (shaped) reward and whether
     /// it was the last.
     fn step(&mut self, action: i64) -> Result<(f64, bool), String> {
-        let m = self.instance.num_tasks();
-        let out_of_range = || format!("action {action} is not one of 0..{}", self.actions());
-        let action = usize::try_from(action).map_err(|_| out_of_range())?;
-        if action >= self.actions() {
-            return Err(out_of_range());
-        }
-        let shaping = self.shaping;
-        self.with_env(|env| {
-            if action == m {
-                env.stay_out()
-            } else {
-                env.step_shaped(TaskId(action as u32), shaping)
-            }
-        })
-        .map_err(|e| e.to_string())
+        let (m, actions, shaping) = (self.instance.num_tasks(), self.actions(), self.shaping);
+        self.with_env(|env| act(env, action, m, actions, shaping))
     }
 
     /// Writes the observation into `nu` and `mu` (N×M each) and `mask` (one per
     /// action): returns the actor (N once the episode is over).
     fn observe_into(&mut self, nu: &mut [f32], mu: &mut [f32], mask: &mut [i8]) -> usize {
         let (n, m) = (self.instance.num_robots(), self.instance.num_tasks());
-        nu.fill(0.0);
+        self.with_env(|env| write_observation(env, n, m, nu, mu, mask))
+    }
+
+    /// [`Episode::step`] with `action` (if given), then [`Episode::observe_into`], on
+    /// one view of the state: `((reward, last), actor)`.
+    fn step_and_observe(
+        &mut self,
+        action: Option<i64>,
+        nu: &mut [f32],
+        mu: &mut [f32],
+        mask: &mut [i8],
+    ) -> Result<((f64, bool), usize), String> {
+        let (n, m) = (self.instance.num_robots(), self.instance.num_tasks());
+        let (actions, shaping) = (self.actions(), self.shaping);
         self.with_env(|env| {
-            for (i, t) in env.state().assignment().tasks().iter().enumerate() {
-                if let Some(j) = t {
-                    nu[i * m + j.index()] = 1.0;
-                }
-            }
-            mu.copy_from_slice(env.state().mu_matrix());
-            for (out, allowed) in mask.iter_mut().zip(env.action_mask()) {
-                *out = i8::from(allowed);
-            }
-            if let Some(void) = mask.get_mut(m) {
-                *void = i8::from(env.may_stay_out());
-            }
-            env.actor().map_or(n, |r| r.index())
+            let moved = match action {
+                Some(a) => act(env, a, m, actions, shaping)?,
+                None => (0.0, false),
+            };
+            Ok((moved, write_observation(env, n, m, nu, mu, mask)))
         })
     }
 
@@ -163,6 +155,54 @@ type ObservationArrays<'py> = (
     usize,
     Bound<'py, PyArray1<i8>>,
 );
+
+/// The acting robot of `env` takes `action` of `actions` (M = `m`: stays out): the
+/// (shaped) reward and whether it was the last.
+fn act(
+    env: &mut Env<'_>,
+    action: i64,
+    m: usize,
+    actions: usize,
+    shaping: Shaping,
+) -> Result<(f64, bool), String> {
+    let out_of_range = || format!("action {action} is not one of 0..{actions}");
+    let action = usize::try_from(action).map_err(|_| out_of_range())?;
+    if action >= actions {
+        return Err(out_of_range());
+    }
+    if action == m {
+        env.stay_out()
+    } else {
+        env.step_shaped(TaskId(action as u32), shaping)
+    }
+    .map_err(|e| e.to_string())
+}
+
+/// Writes `env`'s observation into `nu` and `mu` (N×M each) and `mask` (one per
+/// action): returns the actor (`n` once the episode is over).
+fn write_observation(
+    env: &Env<'_>,
+    n: usize,
+    m: usize,
+    nu: &mut [f32],
+    mu: &mut [f32],
+    mask: &mut [i8],
+) -> usize {
+    nu.fill(0.0);
+    for (i, t) in env.state().assignment().tasks().iter().enumerate() {
+        if let Some(j) = t {
+            nu[i * m + j.index()] = 1.0;
+        }
+    }
+    mu.copy_from_slice(env.state().mu_matrix());
+    for (out, allowed) in mask.iter_mut().zip(env.action_mask()) {
+        *out = i8::from(allowed);
+    }
+    if let Some(void) = mask.get_mut(m) {
+        *void = i8::from(env.may_stay_out());
+    }
+    env.actor().map_or(n, |r| r.index())
+}
 
 /// One episode of the sequential MDP, driven by `afg.gym.AllocationEnv`.
 #[pyclass(module = "afg")]
@@ -376,13 +416,16 @@ impl VecEnvCore {
         Ok(())
     }
 
-    /// Every environment whose `skip` is false takes its action: `(rewards, terminated)`.
+    /// Every environment whose `skip` is false takes its action, and every one is
+    /// observed, in one pass over the cores: `(rewards, terminated, robot_features,
+    /// task_features, actors, action_masks)` (the observation arrays as
+    /// [`VecEnvCore::observations`] gives them).
     fn step<'py>(
         &mut self,
         py: Python<'py>,
         actions: Vec<i64>,
         skip: Vec<bool>,
-    ) -> PyResult<StepArrays<'py>> {
+    ) -> PyResult<(StepArrays<'py>, VecObservationArrays<'py>)> {
         let k = self.episodes.len();
         if actions.len() != k || skip.len() != k {
             return Err(PyValueError::new_err(format!(
@@ -391,72 +434,16 @@ impl VecEnvCore {
                 skip.len()
             )));
         }
-        let min_len = self.min_len();
-        let episodes = &mut self.episodes;
-        let results = py
-            .detach(|| {
-                episodes
-                    .par_iter_mut()
-                    .zip(actions.par_iter().zip(&skip))
-                    .enumerate()
-                    .with_min_len(min_len)
-                    .map(|(i, (e, (&a, &skip)))| {
-                        if skip {
-                            Ok((0.0, false))
-                        } else {
-                            e.step(a).map_err(|why| format!("environment {i}: {why}"))
-                        }
-                    })
-                    .collect::<Result<Vec<_>, String>>()
-            })
-            .map_err(PyValueError::new_err)?;
+        let (results, observed) = self.pass(py, Some((&actions, &skip)))?;
         let (rewards, done): (Vec<f64>, Vec<bool>) = results.into_iter().unzip();
-        Ok((rewards.into_pyarray(py), done.into_pyarray(py)))
+        Ok(((rewards.into_pyarray(py), done.into_pyarray(py)), observed))
     }
 
     /// Stacked observations: `(robot_features (K, N, M), task_features (K, N, M),
     /// actors (K,), action_masks (K, actions))`. The same four arrays every call,
     /// overwritten: copy them to keep them past the next call.
     fn observations<'py>(&mut self, py: Python<'py>) -> PyResult<VecObservationArrays<'py>> {
-        let (k, n, m) = (self.episodes.len(), self.draw.robots, self.draw.tasks);
-        let actions = m + usize::from(self.draw.allow_void);
-        let min_len = self.min_len();
-        let buffers = self.buffers.get_or_insert_with(|| Buffers {
-            nu: PyArray3::zeros(py, (k, n, m), false).unbind(),
-            mu: PyArray3::zeros(py, (k, n, m), false).unbind(),
-            actors: PyArray1::zeros(py, k, false).unbind(),
-            masks: PyArray2::zeros(py, (k, actions), false).unbind(),
-        });
-        let (nu, mu) = (buffers.nu.bind(py).clone(), buffers.mu.bind(py).clone());
-        let (actors, masks) = (
-            buffers.actors.bind(py).clone(),
-            buffers.masks.bind(py).clone(),
-        );
-        {
-            let (mut nu_w, mut mu_w) = (nu.readwrite(), mu.readwrite());
-            let (mut actors_w, mut masks_w) = (actors.readwrite(), masks.readwrite());
-            let nu_s = nu_w.as_slice_mut()?;
-            let mu_s = mu_w.as_slice_mut()?;
-            let actors_s = actors_w.as_slice_mut()?;
-            let masks_s = masks_w.as_slice_mut()?;
-            let episodes = &mut self.episodes;
-            py.detach(|| {
-                let nus = nu_s.par_chunks_mut(n * m);
-                let mus = mu_s.par_chunks_mut(n * m);
-                let rows = masks_s.par_chunks_mut(actions);
-                episodes
-                    .par_iter_mut()
-                    .zip(nus)
-                    .zip(mus)
-                    .zip(rows)
-                    .zip(actors_s.par_iter_mut())
-                    .with_min_len(min_len)
-                    .for_each(|((((e, nu), mu), mask), actor)| {
-                        *actor = e.observe_into(nu, mu, mask) as i64;
-                    });
-            });
-        }
-        Ok((nu, mu, actors, masks))
+        Ok(self.pass(py, None)?.1)
     }
 
     /// Environment `index`'s assignment so far.
@@ -479,6 +466,63 @@ impl VecEnvCore {
 }
 
 impl VecEnvCore {
+    /// One pass over the cores: each environment takes its action (if `moves` are
+    /// given and it is not skipped), then writes its observation into the buffers
+    /// (made at the first pass). Returns each step's (reward, terminated).
+    fn pass<'py>(
+        &mut self,
+        py: Python<'py>,
+        moves: Option<(&[i64], &[bool])>,
+    ) -> PyResult<(Vec<(f64, bool)>, VecObservationArrays<'py>)> {
+        let (k, n, m) = (self.episodes.len(), self.draw.robots, self.draw.tasks);
+        let actions = m + usize::from(self.draw.allow_void);
+        let min_len = self.min_len();
+        let buffers = self.buffers.get_or_insert_with(|| Buffers {
+            nu: PyArray3::zeros(py, (k, n, m), false).unbind(),
+            mu: PyArray3::zeros(py, (k, n, m), false).unbind(),
+            actors: PyArray1::zeros(py, k, false).unbind(),
+            masks: PyArray2::zeros(py, (k, actions), false).unbind(),
+        });
+        let (nu, mu) = (buffers.nu.bind(py).clone(), buffers.mu.bind(py).clone());
+        let (actors, masks) = (
+            buffers.actors.bind(py).clone(),
+            buffers.masks.bind(py).clone(),
+        );
+        let results = {
+            let (mut nu_w, mut mu_w) = (nu.readwrite(), mu.readwrite());
+            let (mut actors_w, mut masks_w) = (actors.readwrite(), masks.readwrite());
+            let nu_s = nu_w.as_slice_mut()?;
+            let mu_s = mu_w.as_slice_mut()?;
+            let actors_s = actors_w.as_slice_mut()?;
+            let masks_s = masks_w.as_slice_mut()?;
+            let episodes = &mut self.episodes;
+            py.detach(|| {
+                let nus = nu_s.par_chunks_mut(n * m);
+                let mus = mu_s.par_chunks_mut(n * m);
+                let rows = masks_s.par_chunks_mut(actions);
+                episodes
+                    .par_iter_mut()
+                    .zip(nus)
+                    .zip(mus)
+                    .zip(rows)
+                    .zip(actors_s.par_iter_mut())
+                    .enumerate()
+                    .with_min_len(min_len)
+                    .map(|(i, ((((e, nu), mu), mask), actor))| {
+                        let action = moves.and_then(|(a, skip)| (!skip[i]).then_some(a[i]));
+                        let (moved, acting) = e
+                            .step_and_observe(action, nu, mu, mask)
+                            .map_err(|why| format!("environment {i}: {why}"))?;
+                        *actor = acting as i64;
+                        Ok(moved)
+                    })
+                    .collect::<Result<Vec<_>, String>>()
+            })
+            .map_err(PyValueError::new_err)?
+        };
+        Ok((results, (nu, mu, actors, masks)))
+    }
+
     /// Sub-environments per rayon task: enough that a task does about 4 096 robots'
     /// work (a small N then stays on one thread, where splitting costs more than it
     /// saves).

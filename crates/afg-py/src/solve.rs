@@ -212,17 +212,21 @@ fn load_model(
 fn run(py: Python<'_>, instance: &PyInstance, allocator: &dyn Allocator) -> PyResult<SolveResult> {
     let inst = instance.inner.clone();
     let start = Instant::now();
-    let (row, assignment) = py
-        .detach(|| Row::compute(&inst, allocator))
+    let (row, assignment, card) = py
+        .detach(|| {
+            let (row, assignment) = Row::compute(&inst, allocator)?;
+            let card = Scorecard::with_score(&inst, &assignment, row.score);
+            Ok::<_, afg_eval::EvalError>((row, assignment, card))
+        })
         .map_err(value_error)?;
     let mut stats = alloc_stats(&row.stats);
-    // The crates' whole part of the call (the method, then the optimum it is scored
-    // against), for measuring what the binding adds around it.
+    // The crates' whole part of the call (the method, the optimum it is scored
+    // against, and its stability and NS rates), for measuring what the binding adds.
     stats.push(("core_s".into(), start.elapsed().as_secs_f64()));
     Ok(SolveResult {
         tasks: task_indices(&assignment),
         stats,
-        card: Scorecard::with_score(&inst, &assignment, row.score),
+        card,
     })
 }
 

@@ -158,7 +158,12 @@ class VecEnvCore:
     def reset(self, indices: Sequence[int], seeds: Sequence[int]) -> None: ...
     def step(
         self, actions: Sequence[int], skip: Sequence[bool]
-    ) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.bool_]]: ...
+    ) -> Tuple[
+        Tuple[npt.NDArray[np.float64], npt.NDArray[np.bool_]],
+        Tuple[
+            npt.NDArray[np.float32], npt.NDArray[np.float32], npt.NDArray[np.int64], npt.NDArray[np.int8]
+        ],
+    ]: ...
     def observations(
         self,
     ) -> Tuple[
