@@ -4,7 +4,8 @@
 
 use std::sync::LazyLock;
 
-use afg_game::io::{PreviousAssignment, parse_dataset};
+use afg_game::io::parse_dataset;
+use afg_game::realloc::PreviousAssignment;
 use afg_game::{Assignment, Instance};
 use libfuzzer_sys::fuzz_target;
 

@@ -5,10 +5,10 @@
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    if let Ok(network) = serde_json::from_slice::<afg_learn::NetworkConfig>(data) {
+    if let Ok(network) = serde_json::from_slice::<afg_learn::nets::NetworkConfig>(data) {
         let _ = network.check();
     }
-    if let Ok(config) = serde_json::from_slice::<afg_learn::TrainConfig>(data) {
+    if let Ok(config) = serde_json::from_slice::<afg_learn::train::TrainConfig>(data) {
         let _ = config.check();
     }
 });
