@@ -11,7 +11,9 @@ use libfuzzer_sys::fuzz_target;
 
 static INSTANCE: LazyLock<Instance> = LazyLock::new(|| {
     let text = include_str!("../../datasets/n20.jsonl");
-    parse_dataset(text).expect("the committed dataset").remove(0)
+    parse_dataset(text)
+        .expect("the committed dataset")
+        .remove(0)
 });
 
 fuzz_target!(|data: &[u8]| {
