@@ -6,7 +6,7 @@ use std::cmp::Ordering;
 use std::collections::{BinaryHeap, HashMap};
 
 use afg_baseline::Allocator;
-use afg_game::{Point, Preference};
+use afg_game::{Instance, Point, Preference, Task};
 use serde::{Deserialize, Serialize};
 
 use crate::{Mission, MissionError};
@@ -262,6 +262,24 @@ pub fn work_rate(n: usize, eps: f64) -> f64 {
     } else {
         (n as f64 + eps - 1.0).ln() / eps.ln()
     }
+}
+
+/// The paper's game of `robots` (where they are) and `tasks` of `mission`: GRAPE's game
+/// where the mission allows idling, or where the tasks cannot hold every robot (the
+/// extra robots then idle).
+fn mission_game(
+    mission: &Mission,
+    robots: Vec<Point>,
+    tasks: Vec<Task>,
+) -> Result<Instance, MissionError> {
+    let room = (tasks.iter())
+        .map(|t| t.capacity.unwrap_or(usize::MAX))
+        .fold(0usize, usize::saturating_add);
+    Ok(if mission.allow_void || room < robots.len() {
+        Instance::with_void(robots, tasks, mission.beta)?
+    } else {
+        Instance::new(robots, tasks, mission.beta)?
+    })
 }
 
 /// A robot's state.
@@ -865,6 +883,18 @@ impl<'m, 'a> Sim<'m, 'a> {
         if self.timeline.last() != Some(&point) {
             self.timeline.push(point);
         }
+    }
+
+    /// Work done on each task so far, with its task's spec.
+    fn work(&self) -> impl Iterator<Item = (f64, &crate::TaskSpec)> + '_ {
+        (self.tasks.iter())
+            .zip(&self.mission.tasks)
+            .map(|(t, spec)| (spec.workload - t.remaining, spec))
+    }
+
+    /// `Σ r_j` times the work done on each task so far.
+    fn work_value(&self) -> f64 {
+        self.work().map(|(w, spec)| spec.reward * w).sum()
     }
 
     fn reward_done(&self) -> f64 {

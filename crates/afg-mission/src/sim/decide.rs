@@ -6,7 +6,7 @@ use std::time::Instant;
 use afg_baseline::{CentralisedDa, Optimum};
 use afg_game::{Assignment, Instance, RobotId, TaskId};
 
-use super::{Latency, Pending, Replan, Sim, TraceEvent};
+use super::{Latency, Pending, Replan, Sim, TraceEvent, mission_game};
 use crate::MissionError;
 
 impl Sim<'_, '_> {
@@ -126,17 +126,8 @@ impl Sim<'_, '_> {
     /// cannot hold every robot (the extra robots then idle).
     fn game(&self, alive: &[usize], open: &[usize]) -> Result<Instance, MissionError> {
         let robots = alive.iter().map(|&i| self.position(i)).collect();
-        let tasks: Vec<_> = open.iter().map(|&j| self.mission.tasks[j].task()).collect();
-        let room = tasks
-            .iter()
-            .map(|t| t.capacity.unwrap_or(usize::MAX))
-            .fold(0usize, usize::saturating_add);
-        let beta = self.mission.beta;
-        Ok(if self.mission.allow_void || room < alive.len() {
-            Instance::with_void(robots, tasks, beta)?
-        } else {
-            Instance::new(robots, tasks, beta)?
-        })
+        let tasks = open.iter().map(|&j| self.mission.tasks[j].task()).collect();
+        mission_game(&self.mission, robots, tasks)
     }
 
     /// The assignment of `game` by the replanning rule.

@@ -251,7 +251,7 @@ impl MissionEnv {
         self.sim.decisions += 1;
         let alive: Vec<bool> = self.sim.robots.iter().map(|r| r.alive).collect();
         let going_on = self.sim.move_on() && self.run_to_epoch()? && !self.sim.over();
-        let value = self.work_value();
+        let value = self.sim.work_value();
         let reward = value - self.value;
         self.value = value;
         let failed: Vec<usize> = (0..n)
@@ -307,14 +307,6 @@ impl MissionEnv {
                 }
             }
         }
-    }
-
-    /// `Σ r_j` times the work done on every task so far.
-    fn work_value(&self) -> f64 {
-        (self.sim.tasks.iter())
-            .zip(&self.sim.mission.tasks)
-            .map(|(t, spec)| spec.reward * (spec.workload - t.remaining))
-            .sum()
     }
 
     /// The run so far: its metrics, timeline and trace.

@@ -28,10 +28,8 @@ impl Sim<'_, '_> {
             })
             .map(|i| self.robots[i].from.distance(self.position(i)))
             .sum();
-        let work = |t: &super::TaskState, spec: &crate::TaskSpec| spec.workload - t.remaining;
-        let pairs = || self.tasks.iter().zip(&self.mission.tasks);
-        let work_done = pairs().map(|(t, spec)| work(t, spec)).sum();
-        let work_value = pairs().map(|(t, spec)| spec.reward * work(t, spec)).sum();
+        let work_done = self.work().map(|(w, _)| w).sum();
+        let work_value = self.work_value();
         let total: f64 = self.compute.iter().sum();
         let metrics = Metrics {
             tasks_done: n,

@@ -4,10 +4,10 @@
 use std::time::Instant;
 
 use afg_baseline::{LiveSwarm, Network, SwarmMethod};
-use afg_game::{Instance, Point};
+use afg_game::Point;
 use serde::{Deserialize, Serialize};
 
-use super::Sim;
+use super::{Sim, mission_game};
 use crate::{Mission, MissionError};
 
 /// A decentralised method run inside a mission (docs/missions.md): the robots run it
@@ -99,16 +99,9 @@ impl SwarmState {
                 "the rounds per time unit must be finite and positive".into(),
             ));
         }
-        let robots: Vec<Point> = mission.robots.iter().map(|r| r.position).collect();
-        let tasks: Vec<_> = mission.tasks.iter().map(|t| t.task()).collect();
-        let room = (tasks.iter())
-            .map(|t| t.capacity.unwrap_or(usize::MAX))
-            .fold(0usize, usize::saturating_add);
-        let game = if mission.allow_void || room < robots.len() {
-            Instance::with_void(robots, tasks, mission.beta)?
-        } else {
-            Instance::new(robots, tasks, mission.beta)?
-        };
+        let robots = mission.robots.iter().map(|r| r.position).collect();
+        let tasks = mission.tasks.iter().map(|t| t.task()).collect();
+        let game = mission_game(mission, robots, tasks)?;
         let live = LiveSwarm::new(
             game,
             config.method,
