@@ -29,7 +29,7 @@ use crate::{Mission, MissionError};
 /// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct Decentralised {
-    /// The method (GRAPE; the auction does not run in missions yet).
+    /// The method: GRAPE, or the auction (restarted in a new epoch by every news).
     pub method: SwarmMethod,
     /// The radio: who hears whom (re-evaluated every round as robots move), losses,
     /// delays, asynchrony. Its own failures are refused: robots fail at the mission's.
