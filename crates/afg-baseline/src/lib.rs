@@ -35,7 +35,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 pub use dynamics::{CentralisedDa, DecentralisedDa, DecentralisedRun};
-pub use optimum::{Certificate, Optimum, verify_optimal};
+pub use optimum::{Certificate, IncrementalOptimum, Optimum, verify_optimal};
 pub use simple::{Blind, Greedy, Nearest, RandomAllocator};
 pub use swarm::{
     DETECT_AFTER, Failure, LiveSwarm, Network, Swarm, SwarmMethod, SwarmReport, TracePoint,

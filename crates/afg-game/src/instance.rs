@@ -82,6 +82,57 @@ pub struct Task {
     pub capacity: Option<usize>,
 }
 
+/// A task's coalition value `F(n) = r log_eps(n + eps − 1)`, with `1 / ln(eps)` kept
+/// because it is evaluated in every inner loop. The one definition of the game's
+/// values: [`Instance::coalition_value`] and [`Instance::marginal_value`] read it.
+///
+/// # Examples
+/// ```
+/// use afg_game::{Point, Task, ValueFunction};
+/// let task = Task { position: Point::new(0.0, 0.0), reward: 3.0, eps: 2.0, capacity: None };
+/// let f = ValueFunction::of(&task);
+/// assert_eq!(f.value(0), 0.0);
+/// assert!((f.value(3) - 6.0).abs() < 1e-12); // eps = 2: F(3) = r log2(4) = 2r
+/// assert!((f.marginal(3) - (f.value(3) - f.value(2))).abs() < 1e-12);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ValueFunction {
+    reward: f64,
+    eps: f64,
+    inv_ln_eps: f64,
+}
+
+impl ValueFunction {
+    /// The value function of `task`.
+    pub fn of(task: &Task) -> Self {
+        ValueFunction {
+            reward: task.reward,
+            eps: task.eps,
+            inv_ln_eps: 1.0 / task.eps.ln(),
+        }
+    }
+
+    /// `F(n)`, with `F(0) = 0`.
+    #[inline]
+    pub fn value(&self, n: usize) -> f64 {
+        if n == 0 {
+            return 0.0;
+        }
+        self.reward * (n as f64 + self.eps - 1.0).ln() * self.inv_ln_eps
+    }
+
+    /// The marginal value of the n-th member, `F(n) − F(n − 1)` (n ≥ 1); decreasing in n.
+    #[inline]
+    pub fn marginal(&self, n: usize) -> f64 {
+        debug_assert!(n >= 1);
+        if n == 1 {
+            return self.reward;
+        }
+        // log((n + eps - 1) / (n + eps - 2)) loses less precision than a difference of logs.
+        self.reward * (1.0 / (n as f64 + self.eps - 2.0)).ln_1p() * self.inv_ln_eps
+    }
+}
+
 /// One game: N robots, M tasks, the distance penalty beta.
 ///
 /// Built only through [`Instance::new`] (or deserialisation, which calls it),
@@ -107,8 +158,8 @@ pub struct Instance {
     generator: Option<GeneratorConfig>,
     /// Whether robots may join the void task (GRAPE's game).
     allow_void: bool,
-    /// 1 / ln(eps_j), cached because F_j is evaluated in every inner loop.
-    inv_ln_eps: Vec<f64>,
+    /// F_j of every task.
+    values: Vec<ValueFunction>,
 }
 
 impl Instance {
@@ -220,14 +271,14 @@ impl Instance {
                 });
             }
         }
-        let inv_ln_eps = tasks.iter().map(|t| 1.0 / t.eps.ln()).collect();
+        let values = tasks.iter().map(ValueFunction::of).collect();
         Ok(Instance {
             robots,
             tasks,
             beta,
             generator: None,
             allow_void,
-            inv_ln_eps,
+            values,
         })
     }
 
@@ -341,23 +392,19 @@ impl Instance {
     /// ```
     #[inline]
     pub fn coalition_value(&self, task: TaskId, n: usize) -> f64 {
-        if n == 0 {
-            return 0.0;
-        }
-        let t = &self.tasks[task.index()];
-        t.reward * (n as f64 + t.eps - 1.0).ln() * self.inv_ln_eps[task.index()]
+        self.values[task.index()].value(n)
     }
 
     /// Marginal value of the n-th member, `F_j(n) - F_j(n - 1)` (n ≥ 1); decreasing in n.
     #[inline]
     pub fn marginal_value(&self, task: TaskId, n: usize) -> f64 {
-        debug_assert!(n >= 1);
-        let t = &self.tasks[task.index()];
-        if n == 1 {
-            return t.reward;
-        }
-        // log((n + eps - 1) / (n + eps - 2)) loses less precision than a difference of logs.
-        t.reward * (1.0 / (n as f64 + t.eps - 2.0)).ln_1p() * self.inv_ln_eps[task.index()]
+        self.values[task.index()].marginal(n)
+    }
+
+    /// F_j of a task.
+    #[inline]
+    pub fn value_function(&self, task: TaskId) -> ValueFunction {
+        self.values[task.index()]
     }
 
     /// Utility of robot i in a coalition of size n at task j (paper eq. 2):

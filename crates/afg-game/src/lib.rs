@@ -40,6 +40,6 @@ pub use assignment::Assignment;
 pub use error::GameError;
 pub use generate::{CapacityRange, GeneratorConfig, GeneratorKnobs};
 pub use ids::{RobotId, TaskId};
-pub use instance::{GOLDEN_RATIO, Instance, MAX_VALUE, Point, Task};
+pub use instance::{GOLDEN_RATIO, Instance, MAX_VALUE, Point, Task, ValueFunction};
 pub use named::Named;
 pub use stability::{Preference, TOLERANCE, strictly_better};

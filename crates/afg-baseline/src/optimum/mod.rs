@@ -31,12 +31,14 @@
 
 mod augmenting;
 mod certificate;
+mod incremental;
 mod movers;
 mod transport;
 
 use afg_game::{Assignment, Instance, RobotId, TaskId};
 
 pub use certificate::{Certificate, verify_optimal};
+pub use incremental::IncrementalOptimum;
 
 use crate::{AllocError, AllocStats, Allocation, Allocator, timed};
 

@@ -42,6 +42,7 @@ impl Ord for Entry {
 /// is j: a robot that leaves j leaves stale entries behind, dropped when they reach the
 /// top. A robot that comes back to j pushes an entry with the same key again, which is
 /// harmless. Most pairs never lose their cheapest robot, so most heaps are never built.
+#[derive(Clone)]
 pub(super) struct Movers {
     m: usize,
     /// `top[j * m + k]`: the cheapest live entry of pair (j, k); [`Entry::NONE`] if j
@@ -50,6 +51,8 @@ pub(super) struct Movers {
     heaps: Vec<Option<BinaryHeap<Entry>>>,
     /// Every robot that ever entered each task (some have left again).
     members: Vec<Vec<u32>>,
+    /// Columns no robot may move to (removed tasks).
+    closed: Vec<bool>,
 }
 
 impl Entry {
@@ -69,6 +72,7 @@ impl Movers {
             top: vec![Entry::NONE; m * m],
             heaps: (0..m * m).map(|_| None).collect(),
             members: vec![Vec::new(); m],
+            closed: vec![false; m],
         };
         for (robot, &task) in task_of.iter().enumerate() {
             if task != NOWHERE {
@@ -87,7 +91,7 @@ impl Movers {
     /// Records that `robot` (with cost row `costs`) has entered `task`.
     pub fn enter(&mut self, robot: u32, task: usize, costs: &[f64]) {
         self.members[task].push(robot);
-        for k in (0..self.m).filter(|&k| k != task) {
+        for k in (0..self.m).filter(|&k| k != task && !self.closed[k]) {
             let pair = task * self.m + k;
             let entry = Entry {
                 key: costs[k] - costs[task],
@@ -134,5 +138,56 @@ impl Movers {
                 heap.pop();
             }
         }
+    }
+
+    /// Closes column `k`: no robot may move to it or from it (its robots have left or
+    /// are about to, without refreshing its pairs).
+    pub fn close(&mut self, k: usize) {
+        self.closed[k] = true;
+        self.members[k].clear();
+        for j in 0..self.m {
+            for pair in [k * self.m + j, j * self.m + k] {
+                self.top[pair] = Entry::NONE;
+                self.heaps[pair] = None;
+            }
+        }
+    }
+
+    /// Opens closed column `k` (no robot in it yet): every robot of `task_of` may move
+    /// to it at the cost its row of `costs` says. One pass over the robots.
+    pub fn open(&mut self, k: usize, task_of: &[u32], costs: &[f64]) {
+        self.closed[k] = false;
+        for (robot, &j) in task_of.iter().enumerate() {
+            if j == NOWHERE {
+                continue;
+            }
+            let row = &costs[robot * self.m..][..self.m];
+            let entry = Entry {
+                key: row[k] - row[j as usize],
+                robot: robot as u32,
+            };
+            let pair = j as usize * self.m + k;
+            if entry > self.top[pair] {
+                self.top[pair] = entry;
+            }
+        }
+    }
+
+    /// Makes room for `wider` columns, the new ones closed.
+    pub fn widen(&mut self, wider: usize) {
+        let m = self.m;
+        let mut top = vec![Entry::NONE; wider * wider];
+        let mut heaps: Vec<Option<BinaryHeap<Entry>>> = (0..wider * wider).map(|_| None).collect();
+        for j in 0..m {
+            top[j * wider..][..m].copy_from_slice(&self.top[j * m..][..m]);
+            for k in 0..m {
+                heaps[j * wider + k] = self.heaps[j * m + k].take();
+            }
+        }
+        self.top = top;
+        self.heaps = heaps;
+        self.members.resize(wider, Vec::new());
+        self.closed.resize(wider, true);
+        self.m = wider;
     }
 }

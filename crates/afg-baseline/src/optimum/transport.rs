@@ -29,10 +29,10 @@
 use std::cmp::{Ordering, Reverse};
 use std::collections::BinaryHeap;
 
-use afg_game::{Instance, Point, TaskId};
+use afg_game::{Instance, Point, ValueFunction};
 use rayon::prelude::*;
 
-use super::movers::Movers;
+use super::movers::{Movers, NOWHERE};
 
 /// Each coarser level keeps every `FACTOR`-th robot of the level above.
 const FACTOR: usize = 8;
@@ -53,14 +53,19 @@ pub(super) struct Solution {
 
 /// Solves `inst` exactly.
 pub(super) fn solve(inst: &Instance) -> Solution {
+    solved(inst).into_solution()
+}
+
+/// The solved residual state of `inst` (from its subsample's prices), to keep.
+pub(super) fn solved(inst: &Instance) -> Flow {
     let warm = coarse_prices(inst, FACTOR);
-    Level::new(inst, 1).solve(warm.as_deref())
+    Flow::solved(Level::new(inst, 1), warm.as_deref())
 }
 
 /// Solves `inst` exactly from `prices` (one per column: the tasks', then the void's
 /// where the instance allows it; any common offset), without subsample levels.
 pub(super) fn solve_from(inst: &Instance, prices: &[f64]) -> Solution {
-    Level::new(inst, 1).solve(Some(prices))
+    Flow::solved(Level::new(inst, 1), Some(prices)).into_solution()
 }
 
 /// The prices of the subsample of every `stride`-th robot, solved from the prices of
@@ -70,62 +75,97 @@ fn coarse_prices(inst: &Instance, stride: usize) -> Option<Vec<f64>> {
         return None;
     }
     let warm = coarse_prices(inst, stride * FACTOR);
-    Some(Level::new(inst, stride).solve(warm.as_deref()).prices)
+    Some(
+        Flow::solved(Level::new(inst, stride), warm.as_deref())
+            .into_solution()
+            .prices,
+    )
+}
+
+/// What a column of the problem is.
+#[derive(Clone, Copy)]
+pub(super) enum Column {
+    /// A task: its value function and its capacity (in robots of the instance).
+    Task {
+        value: ValueFunction,
+        capacity: usize,
+    },
+    /// The void task: cost 0, every member worth 0, room for all.
+    Void,
+    /// No task (one that was removed): no room.
+    Closed,
 }
 
 /// The problem on every `stride`-th robot, each standing for `stride` robots: task j's
 /// k-th member is worth `(F_j(k s) − F_j((k − 1) s)) / s` and its capacity is
 /// `⌈cap_j / s⌉` (at most the robots there are). Its columns are the tasks, then the
-/// void where the instance allows it (cost 0, every member worth 0, room for all).
-struct Level<'a> {
-    inst: &'a Instance,
+/// void where the instance allows it.
+#[derive(Clone)]
+struct Level {
     stride: usize,
+    /// The robots placed (the rows whose robot is still there): units the sink takes.
     n: usize,
-    /// Columns: M tasks, plus one for the void.
-    m: usize,
-    /// Row-major `n × m` travel costs `β d(i, j)`; 0 in the void's column.
+    columns: Vec<Column>,
+    /// Row-major travel costs `β d(i, j)`, one row of `columns.len()` per robot; 0 in
+    /// the void's column.
     costs: Vec<f64>,
-    capacity: Vec<usize>,
 }
 
-impl<'a> Level<'a> {
-    fn new(inst: &'a Instance, stride: usize) -> Self {
-        let n = inst.num_robots().div_ceil(stride);
-        let mut capacity: Vec<usize> = inst
+impl Level {
+    fn new(inst: &Instance, stride: usize) -> Self {
+        let mut columns: Vec<Column> = inst
             .task_ids()
-            .map(|j| inst.capacity(j).div_ceil(stride).min(n))
+            .map(|j| Column::Task {
+                value: inst.value_function(j),
+                capacity: inst.capacity(j),
+            })
             .collect();
         if inst.allows_void() {
-            capacity.push(n);
+            columns.push(Column::Void);
         }
-        let m = capacity.len();
         Level {
-            inst,
             stride,
-            n,
-            m,
-            costs: cost_matrix(inst, stride),
-            capacity,
+            n: inst.num_robots().div_ceil(stride),
+            costs: cost_matrix(inst, stride, columns.len()),
+            columns,
         }
     }
 
-    /// The value of task j's k-th member (k ≥ 1) at this level.
-    fn marginal(&self, j: usize, k: usize) -> f64 {
-        if j == self.inst.num_tasks() {
-            return 0.0; // the void
+    /// The number of columns.
+    fn m(&self) -> usize {
+        self.columns.len()
+    }
+
+    /// The travel costs of the robot in `row`.
+    pub fn row(&self, row: usize) -> &[f64] {
+        let m = self.m();
+        &self.costs[row * m..][..m]
+    }
+
+    /// The robots column j may hold at this level.
+    fn capacity(&self, j: usize) -> usize {
+        match self.columns[j] {
+            Column::Task { capacity, .. } => capacity.div_ceil(self.stride).min(self.n),
+            Column::Void => self.n,
+            Column::Closed => 0,
         }
-        let task = TaskId(j as u32);
+    }
+
+    /// The value of column j's k-th member (k ≥ 1) at this level.
+    fn marginal(&self, j: usize, k: usize) -> f64 {
+        let Column::Task { value, .. } = self.columns[j] else {
+            return 0.0;
+        };
         if self.stride == 1 {
-            return self.inst.marginal_value(task, k);
+            return value.marginal(k);
         }
         let s = self.stride;
-        let value = |k: usize| self.inst.coalition_value(task, k * s);
-        (value(k) - value(k - 1)) / s as f64
+        (value.value(k * s) - value.value((k - 1) * s)) / s as f64
     }
 
-    /// The number of task j's slots worth more than `price`: the count that price buys.
+    /// The number of column j's slots worth more than `price`: the count that price buys.
     fn count_at(&self, j: usize, price: f64) -> usize {
-        let (mut lo, mut hi) = (0, self.capacity[j]);
+        let (mut lo, mut hi) = (0, self.capacity(j));
         while lo < hi {
             let mid = (lo + hi).div_ceil(2);
             if self.marginal(j, mid) > price {
@@ -137,35 +177,16 @@ impl<'a> Level<'a> {
         lo
     }
 
-    /// Solves this level from `warm` prices (sink potential 0), or from zero prices
-    /// with the sink's potential set so that the counts they buy add up to N.
-    fn solve(&self, warm: Option<&[f64]>) -> Solution {
-        let prices = warm.map_or_else(|| vec![0.0; self.m], <[f64]>::to_vec);
-        let sink = self.balancing_offset(&prices);
-        let mut flow = Flow::new(self, prices, sink);
-        let mut routed = 0;
-        while let Some(target) = flow.shortest_path() {
-            flow.augment(target);
-            routed += 1;
-        }
-        let sink = flow.potential[self.m];
-        Solution {
-            prices: flow.potential[..self.m].iter().map(|p| p - sink).collect(),
-            task_of: flow.task_of,
-            routed,
-        }
-    }
-
     /// A sink potential μ at which `prices` buy N slots in all (or, where ties make that
     /// impossible, the least above), by bisection: the flow starts with the sink balanced.
     fn balancing_offset(&self, prices: &[f64]) -> f64 {
         let bought = |mu: f64| {
-            (0..self.m)
+            (0..self.m())
                 .map(|j| self.count_at(j, prices[j] - mu))
                 .sum::<usize>()
         };
         // At `lo` every price is at least its task's first marginal value: none buys.
-        let mut lo = (0..self.m)
+        let mut lo = (0..self.m())
             .map(|j| prices[j] - self.marginal(j, 1))
             .fold(f64::INFINITY, f64::min);
         let (mut hi, mut step) = (lo + 1.0, 1.0);
@@ -185,28 +206,40 @@ impl<'a> Level<'a> {
     }
 }
 
-/// The row-major cost matrix of every `stride`-th robot (with the void's column of
-/// zeros where the instance allows it), on all cores when large.
-fn cost_matrix(inst: &Instance, stride: usize) -> Vec<f64> {
+/// The row-major cost matrix of every `stride`-th robot, `width` columns (the void's,
+/// if any, stays 0), on all cores when large.
+fn cost_matrix(inst: &Instance, stride: usize, width: usize) -> Vec<f64> {
     let (n, beta) = (inst.num_robots().div_ceil(stride), inst.beta());
-    let m = inst.num_tasks() + usize::from(inst.allows_void());
     let tasks: Vec<Point> = inst.tasks().iter().map(|t| t.position).collect();
     let robots = inst.robots();
-    let mut costs = vec![0.0; n * m];
+    let mut costs = vec![0.0; n * width];
     // The same arithmetic as `Instance::cost`, with the task positions contiguous.
     let fill = |(t, row): (usize, &mut [f64])| {
         let robot = robots[t * stride];
-        // The void's column, if any, stays 0.
         for (c, &task) in row.iter_mut().zip(&tasks) {
             *c = beta * robot.distance(task);
         }
     };
-    if n * m >= PARALLEL_ENTRIES {
-        costs.par_chunks_mut(m).enumerate().for_each(fill);
+    if n * width >= PARALLEL_ENTRIES {
+        costs.par_chunks_mut(width).enumerate().for_each(fill);
     } else {
-        costs.chunks_mut(m).enumerate().for_each(fill);
+        costs.chunks_mut(width).enumerate().for_each(fill);
     }
     costs
+}
+
+/// The cheapest open column of `row` under `prices` (the lowest such index).
+fn cheapest(row: &[f64], prices: &[f64], columns: &[Column]) -> u32 {
+    let mut best = None;
+    for j in 0..row.len() {
+        if matches!(columns[j], Column::Closed) {
+            continue;
+        }
+        if best.is_none_or(|b: usize| row[j] - prices[j] < row[b] - prices[b]) {
+            best = Some(j);
+        }
+    }
+    best.expect("a problem has an open column") as u32
 }
 
 /// The index of the sink node among the potentials and imbalances.
@@ -214,13 +247,14 @@ fn sink(m: usize) -> usize {
     m
 }
 
-/// The residual state: where every robot is, the count each task sends to the sink,
-/// what each node still has to send (positive) or receive (negative), and the
-/// potentials (task prices, then the sink's).
-struct Flow<'l, 'a> {
-    level: &'l Level<'a>,
+/// The residual state of one level: where every robot is, the count each column sends
+/// to the sink, what each node still has to send (positive) or receive (negative), and
+/// the potentials (column prices, then the sink's).
+#[derive(Clone)]
+pub(super) struct Flow {
+    level: Level,
     task_of: Vec<u32>,
-    /// Units each task sends to the sink: its count, once balanced.
+    /// Units each column sends to the sink: its count, once balanced.
     bought: Vec<usize>,
     excess: Vec<i64>,
     potential: Vec<f64>,
@@ -229,6 +263,8 @@ struct Flow<'l, 'a> {
     pred: Vec<Pred>,
     done: Vec<bool>,
     queue: BinaryHeap<Reverse<Queued>>,
+    /// Units routed by the last [`Flow::route`].
+    routed: u64,
 }
 
 /// A node waiting in Dijkstra's queue at a tentative distance.
@@ -260,20 +296,22 @@ enum Pred {
     Down,
 }
 
-impl<'l, 'a> Flow<'l, 'a> {
-    /// Every robot at a minimum of `c_ij − π_j` (the lowest such task), every task's
+impl Flow {
+    /// `level` solved from `warm` prices (sink potential 0), or from zero prices with
+    /// the sink's potential set so that the counts they buy add up to N.
+    fn solved(level: Level, warm: Option<&[f64]>) -> Flow {
+        let prices = warm.map_or_else(|| vec![0.0; level.m()], <[f64]>::to_vec);
+        let sink = level.balancing_offset(&prices);
+        let mut flow = Flow::new(level, prices, sink);
+        flow.route();
+        flow
+    }
+
+    /// Every robot at a minimum of `c_ij − π_j` (the lowest such column), every column's
     /// count what `π_j − μ` buys.
-    fn new(level: &'l Level<'a>, prices: Vec<f64>, sink_potential: f64) -> Self {
-        let m = level.m;
-        let argmin = |row: &[f64]| {
-            let mut best = 0;
-            for j in 1..m {
-                if row[j] - prices[j] < row[best] - prices[best] {
-                    best = j;
-                }
-            }
-            best as u32
-        };
+    fn new(level: Level, prices: Vec<f64>, sink_potential: f64) -> Self {
+        let m = level.m();
+        let argmin = |row: &[f64]| cheapest(row, &prices, &level.columns);
         let task_of: Vec<u32> = if level.costs.len() >= PARALLEL_ENTRIES {
             level.costs.par_chunks(m).map(argmin).collect()
         } else {
@@ -294,8 +332,8 @@ impl<'l, 'a> Flow<'l, 'a> {
         let mut potential = prices;
         potential.push(sink_potential);
         Flow {
-            level,
             movers: Movers::new(m, &task_of, &level.costs),
+            level,
             task_of,
             bought,
             excess,
@@ -304,14 +342,189 @@ impl<'l, 'a> Flow<'l, 'a> {
             pred: vec![Pred::Source; m + 1],
             done: vec![false; m + 1],
             queue: BinaryHeap::new(),
+            routed: 0,
         }
+    }
+
+    /// The assignment and the prices measured from the sink's potential.
+    pub fn into_solution(self) -> Solution {
+        Solution {
+            prices: self.prices(),
+            routed: self.routed,
+            task_of: self.task_of,
+        }
+    }
+
+    /// Every column's price measured from the sink's potential.
+    pub fn prices(&self) -> Vec<f64> {
+        let m = self.level.m();
+        let sink = self.potential[sink(m)];
+        self.potential[..m].iter().map(|p| p - sink).collect()
+    }
+
+    /// The column of every row (`NOWHERE` for a robot no longer there).
+    pub fn task_of(&self) -> &[u32] {
+        &self.task_of
+    }
+
+    /// The units routed by the last [`Flow::route`].
+    pub fn routed(&self) -> u64 {
+        self.routed
+    }
+
+    /// The columns.
+    pub fn columns(&self) -> &[Column] {
+        &self.level.columns
+    }
+
+    /// Routes every imbalance along shortest paths; returns the units routed.
+    pub fn route(&mut self) -> u64 {
+        self.routed = 0;
+        while let Some(target) = self.shortest_path() {
+            self.augment(target);
+            self.routed += 1;
+        }
+        self.routed
+    }
+
+    /// Moves the robot in `row` from column `from` to column `to`, ahead of routing.
+    fn shift(&mut self, row: usize, from: usize, to: usize) {
+        self.task_of[row] = to as u32;
+        let costs = &self.level.costs;
+        self.movers.leave(row as u32, from, &self.task_of, costs);
+        self.movers.enter(row as u32, to, self.level.row(row));
+        self.excess[from] -= 1;
+        self.excess[to] += 1;
+    }
+
+    /// The robot in `row` is gone: one unit less for the sink.
+    pub fn remove_robot(&mut self, row: usize) {
+        let j = self.task_of[row] as usize;
+        self.task_of[row] = NOWHERE;
+        let costs = &self.level.costs;
+        self.movers.leave(row as u32, j, &self.task_of, costs);
+        self.excess[j] -= 1;
+        self.level.n -= 1;
+        let m = self.level.m();
+        self.excess[sink(m)] += 1;
+    }
+
+    /// A robot with travel costs `costs` (one per column) joins at its cheapest column;
+    /// returns its row.
+    pub fn add_robot(&mut self, costs: &[f64]) -> usize {
+        let m = self.level.m();
+        let row = self.task_of.len();
+        let j = cheapest(costs, &self.potential[..m], &self.level.columns) as usize;
+        self.level.costs.extend_from_slice(costs);
+        self.task_of.push(j as u32);
+        self.movers.enter(row as u32, j, costs);
+        self.excess[j] += 1;
+        self.level.n += 1;
+        self.excess[sink(m)] -= 1;
+        row
+    }
+
+    /// Column `k` is closed: its robots move to their cheapest open column, and it
+    /// buys nothing.
+    pub fn close(&mut self, k: usize) {
+        let m = self.level.m();
+        self.level.columns[k] = Column::Closed;
+        let members: Vec<usize> = (0..self.task_of.len())
+            .filter(|&r| self.task_of[r] as usize == k)
+            .collect();
+        self.movers.close(k);
+        for r in members {
+            let to = cheapest(self.level.row(r), &self.potential[..m], &self.level.columns);
+            self.shift(r, k, to as usize);
+        }
+        let b = std::mem::take(&mut self.bought[k]) as i64;
+        self.excess[k] += b;
+        self.excess[sink(m)] -= b;
+    }
+
+    /// Opens `column` with travel costs `costs` (one per row; anything for rows whose
+    /// robot is gone) in a closed column, or a new one; returns its index. Its price is
+    /// chosen where the robots that prefer it at that price about match the count the
+    /// price buys, and those robots move in; no other robot prefers it. Route next.
+    pub fn open(&mut self, column: Column, costs: &[f64]) -> usize {
+        let k = match (self.level.columns.iter()).position(|c| matches!(c, Column::Closed)) {
+            Some(k) => k,
+            None => {
+                self.widen();
+                self.level.m() - 1
+            }
+        };
+        let m = self.level.m();
+        self.level.columns[k] = column;
+        for (row, &c) in self.level.costs.chunks_mut(m).zip(costs) {
+            row[k] = c;
+        }
+        // A robot prefers k at price p when p > c_rk − (c_r,own − π_own).
+        let mut switch: Vec<(f64, u32)> = (0..self.task_of.len())
+            .filter(|&r| self.task_of[r] != NOWHERE)
+            .map(|r| {
+                let own = self.task_of[r] as usize;
+                let row = self.level.row(r);
+                (row[k] - (row[own] - self.potential[own]), r as u32)
+            })
+            .collect();
+        let mu = self.potential[sink(m)];
+        let open = (self.level.columns.iter()).filter(|c| !matches!(c, Column::Closed));
+        let guess = (self.level.n / open.count()).min(self.level.capacity(k));
+        let prefix = switch.len().min(4 * guess + 64);
+        if prefix < switch.len() {
+            switch.select_nth_unstable_by(prefix, |a, b| a.0.total_cmp(&b.0));
+        }
+        switch.truncate(prefix + 1);
+        switch.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+        // The first t (the robots below price switch[t]) at which t robots fill what
+        // the price buys; routing settles the rest.
+        let buys = |t: usize| self.level.count_at(k, switch[t].0 - mu);
+        let t = (0..switch.len().saturating_sub(1)).find(|&t| buys(t) <= t);
+        let t = t.unwrap_or(switch.len().saturating_sub(1));
+        let alone = || mu + self.level.marginal(k, guess.max(1));
+        self.potential[k] = switch.get(t).map_or_else(alone, |s| s.0);
+        self.movers.open(k, &self.task_of, &self.level.costs);
+        for &(_, r) in &switch[..t] {
+            let from = self.task_of[r as usize] as usize;
+            self.shift(r as usize, from, k);
+        }
+        let b = self.level.count_at(k, self.potential[k] - mu);
+        self.bought[k] = b;
+        self.excess[k] -= b as i64;
+        self.excess[sink(m)] += b as i64;
+        k
+    }
+
+    /// Adds a closed column last (ahead of the sink), and a few more for later.
+    fn widen(&mut self) {
+        let m = self.level.m();
+        let wider = m + (m / 4).max(1);
+        let rows = self.task_of.len();
+        let mut costs = vec![0.0; rows * wider];
+        for (new, old) in costs.chunks_mut(wider).zip(self.level.costs.chunks(m)) {
+            new[..m].copy_from_slice(old);
+        }
+        self.level.costs = costs;
+        self.level.columns.resize(wider, Column::Closed);
+        self.movers.widen(wider);
+        let added = wider - m;
+        let at = sink(m);
+        let sink_price = self.potential[at];
+        self.potential
+            .splice(at..at, std::iter::repeat_n(sink_price, added));
+        self.excess.splice(at..at, std::iter::repeat_n(0, added));
+        self.bought.resize(wider, 0);
+        self.dist.resize(wider + 1, 0.0);
+        self.pred.resize(wider + 1, Pred::Source);
+        self.done.resize(wider + 1, false);
     }
 
     /// Dijkstra with reduced costs from the node with most excess to the nearest node
     /// short of units; updates the potentials (keeping every reduced cost
     /// non-negative and the path's zero) and returns that node. `None` when balanced.
     fn shortest_path(&mut self) -> Option<usize> {
-        let m = self.level.m;
+        let m = self.level.m();
         let t = sink(m);
         // One source, the node with most excess (searching from all of them would settle
         // every one at distance 0 first).
@@ -361,7 +574,7 @@ impl<'l, 'a> Flow<'l, 'a> {
     }
 
     fn relax_from_task(&mut self, j: usize) {
-        let (m, level) = (self.level.m, self.level);
+        let m = self.level.m();
         let (here, from) = (self.dist[j], self.potential[j]);
         // A missing edge has an infinite key and never improves a distance.
         for (k, e) in self.movers.row(j).iter().enumerate() {
@@ -379,19 +592,19 @@ impl<'l, 'a> Flow<'l, 'a> {
             }
         }
         let t = sink(m);
-        if !self.done[t] && self.bought[j] < level.capacity[j] {
-            let cost = -level.marginal(j, self.bought[j] + 1);
+        if !self.done[t] && self.bought[j] < self.level.capacity(j) {
+            let cost = -self.level.marginal(j, self.bought[j] + 1);
             let reduced = cost + self.potential[j] - self.potential[t];
             self.relax(t, here, reduced, Pred::Up { from: j });
         }
     }
 
     fn relax_from_sink(&mut self) {
-        let (m, level) = (self.level.m, self.level);
+        let m = self.level.m();
         let here = self.dist[sink(m)];
         for j in 0..m {
             if !self.done[j] && self.bought[j] > 0 {
-                let cost = level.marginal(j, self.bought[j]);
+                let cost = self.level.marginal(j, self.bought[j]);
                 let reduced = cost + self.potential[sink(m)] - self.potential[j];
                 self.relax(j, here, reduced, Pred::Down);
             }
@@ -400,7 +613,7 @@ impl<'l, 'a> Flow<'l, 'a> {
 
     /// Sends one unit along the last shortest path into `target`.
     fn augment(&mut self, target: usize) {
-        let m = self.level.m;
+        let m = self.level.m();
         let mut at = target;
         loop {
             match self.pred[at] {
@@ -409,8 +622,7 @@ impl<'l, 'a> Flow<'l, 'a> {
                     self.task_of[robot as usize] = at as u32;
                     let costs = &self.level.costs;
                     self.movers.leave(robot, from, &self.task_of, costs);
-                    let row = &self.level.costs[robot as usize * m..][..m];
-                    self.movers.enter(robot, at, row);
+                    self.movers.enter(robot, at, self.level.row(robot as usize));
                     at = from;
                 }
                 Pred::Up { from } => {

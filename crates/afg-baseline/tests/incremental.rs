@@ -1,0 +1,165 @@
+//! The optimum kept through events against the optimum from scratch: after every event
+//! of random event sequences (tasks appear and are done, robots fail and join), in the
+//! paper's game and GRAPE's, with and without capacities, its prices prove its
+//! assignment optimal and its welfare is the solve from scratch's.
+
+use afg_baseline::{IncrementalOptimum, Optimum, verify_optimal};
+use afg_game::{GOLDEN_RATIO, GeneratorConfig, Instance, Point, RobotId, Task, TaskId};
+use proptest::prelude::*;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// A random game: N robots, M tasks, every second case capped (total capacity 1.0–1.5
+/// N), and in GRAPE's game with the void where `void`.
+fn game(rng: &mut ChaCha8Rng, n: usize, m: usize, capped: bool, void: bool) -> Instance {
+    let mut cfg = GeneratorConfig::paper(n, m, rng.random());
+    cfg.eps = rng.random_range(GOLDEN_RATIO..8.0);
+    cfg.beta = rng.random_range(0.0..3.0);
+    if capped {
+        cfg = cfg.with_capacity_slack(rng.random_range(1.0..1.5));
+    }
+    let inst = cfg.generate().unwrap();
+    if !void {
+        return inst;
+    }
+    // Robots farther out, so that some places are worth less than staying out.
+    let robots = inst
+        .robots()
+        .iter()
+        .map(|p| Point::new(3.0 * p.x, 3.0 * p.y))
+        .collect();
+    Instance::with_void(robots, inst.tasks().to_vec(), inst.beta()).unwrap()
+}
+
+/// A task drawn like the generator's, with a capacity of up to 1.5 N / M where `capped`.
+fn new_task(rng: &mut ChaCha8Rng, n: usize, m: usize, capped: bool) -> Task {
+    let drawn = GeneratorConfig::paper(1, 1, rng.random())
+        .generate()
+        .unwrap()
+        .tasks()[0];
+    Task {
+        eps: rng.random_range(GOLDEN_RATIO..8.0),
+        capacity: capped.then(|| rng.random_range(1..=(3 * n).div_ceil(2 * m).max(1))),
+        ..drawn
+    }
+}
+
+/// Checks the kept optimum against the solve from scratch of the same game.
+fn check(opt: &IncrementalOptimum, step: &str) {
+    let inst = opt.instance().unwrap();
+    let a = opt.assignment();
+    let proof = verify_optimal(&inst, &a, &opt.prices())
+        .unwrap_or_else(|e| panic!("{step}: not certified: {e}"));
+    let (scratch, _) = Optimum.with_prices(&inst);
+    let best = inst.welfare(&scratch);
+    assert!(
+        (proof.welfare - best).abs() <= 1e-9 * best.abs().max(1.0),
+        "{step}: {} against {best} from scratch",
+        proof.welfare
+    );
+}
+
+/// Applies `events` (codes) to the kept optimum of `inst`, checking after each; returns
+/// the final assignment's tasks and prices.
+fn run(inst: &Instance, seed: u64, events: &[u8], capped: bool) -> (Vec<Option<TaskId>>, Vec<f64>) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut opt = IncrementalOptimum::new(inst);
+    check(&opt, "the first solve");
+    for (e, &code) in events.iter().enumerate() {
+        let (n, m) = (opt.num_robots(), opt.num_tasks());
+        let step = format!("event {e} (code {code}, N = {n}, M = {m})");
+        let done = match code % 4 {
+            0 => opt.add_task(new_task(&mut rng, n, m, capped)).map(|_| ()),
+            1 => opt.remove_task(TaskId(rng.random_range(0..m) as u32)),
+            2 => {
+                let k = rng.random_range(1..=n.div_ceil(10));
+                let mut ids: Vec<u32> = (0..n as u32).collect();
+                let (gone, _) = ids.partial_shuffle(&mut rng, k);
+                let gone: Vec<RobotId> = gone.iter().map(|&r| RobotId(r)).collect();
+                opt.remove_robots(&gone)
+            }
+            _ => {
+                let k = rng.random_range(1..=n.div_ceil(10));
+                let spots: Vec<Point> = (0..k)
+                    .map(|_| Point::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)))
+                    .collect();
+                opt.add_robots(&spots)
+            }
+        };
+        // Refused events (the last task, no room left) leave the game as it was.
+        if done.is_ok() {
+            check(&opt, &step);
+        } else {
+            assert_eq!((opt.num_robots(), opt.num_tasks()), (n, m), "{step}");
+        }
+    }
+    (opt.assignment().tasks().to_vec(), opt.prices())
+}
+
+use rand::seq::SliceRandom;
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(40))]
+
+    /// Every event of a random sequence leaves the certified optimum.
+    #[test]
+    fn kept_optimum_equals_the_optimum_from_scratch_after_every_event(
+        seed in any::<u64>(),
+        n in 2usize..400,
+        m in 1usize..9,
+        capped in any::<bool>(),
+        void in any::<bool>(),
+        events in prop::collection::vec(any::<u8>(), 1..12),
+    ) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let inst = game(&mut rng, n, m, capped, void);
+        run(&inst, seed, &events, capped);
+    }
+}
+
+/// Large enough for the subsample levels of the first solve (N ≥ 2 048), then events.
+#[test]
+fn kept_optimum_after_events_on_a_multi_level_solve() {
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    for (case, void) in [(0, false), (1, true)] {
+        let inst = game(&mut rng, 5_000, 12, case == 1, void);
+        run(&inst, case, &[0, 1, 2, 3, 0, 0, 1, 2], case == 1);
+    }
+}
+
+/// The same game and events give the same assignment and prices.
+#[test]
+fn the_same_events_give_the_same_optimum() {
+    let mut rng = ChaCha8Rng::seed_from_u64(6);
+    let inst = game(&mut rng, 300, 5, true, false);
+    let events = [0, 2, 1, 3, 0, 2];
+    assert_eq!(run(&inst, 9, &events, true), run(&inst, 9, &events, true));
+}
+
+/// Bad events are refused with a clear error and change nothing.
+#[test]
+fn bad_events_are_refused() {
+    let inst = GeneratorConfig::paper(20, 2, 1)
+        .with_capacity_slack(1.0)
+        .generate()
+        .unwrap();
+    let mut opt = IncrementalOptimum::new(&inst);
+    let err = |e: afg_baseline::AllocError| e.to_string();
+    assert!(err(opt.remove_task(TaskId(2)).unwrap_err()).contains("not a task"));
+    assert!(err(opt.remove_task(TaskId(0)).unwrap_err()).contains("room for"));
+    let twice = opt.remove_robots(&[RobotId(1), RobotId(1)]).unwrap_err();
+    assert!(err(twice).contains("named twice"));
+    let all: Vec<RobotId> = inst.robot_ids().collect();
+    assert!(err(opt.remove_robots(&all).unwrap_err()).contains("needs a robot"));
+    assert!(err(opt.add_robots(&[Point::new(0.0, 0.0)]).unwrap_err()).contains("room for"));
+    let bad = Task {
+        eps: 1.0,
+        ..inst.tasks()[0]
+    };
+    assert!(opt.add_task(bad).is_err());
+    assert_eq!((opt.num_robots(), opt.num_tasks()), (20, 2));
+    let one = IncrementalOptimum::new(&GeneratorConfig::paper(5, 1, 1).generate().unwrap());
+    let mut one = one;
+    assert!(err(one.remove_task(TaskId(0)).unwrap_err()).contains("its last"));
+    check(&opt, "after the refusals");
+}
