@@ -52,7 +52,7 @@ impl<'a> Solver<'a> {
         Solver {
             inst,
             m,
-            movers: Movers::new(m, &placed, &costs),
+            movers: Movers::new(&placed, &costs, vec![false; m]),
             costs,
             assignment: partial,
             placed,

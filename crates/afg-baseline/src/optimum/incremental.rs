@@ -65,12 +65,16 @@ impl IncrementalOptimum {
     /// Solves `instance` (as [`Optimum::with_prices`](super::Optimum::with_prices)) and
     /// keeps the solver's state.
     pub fn new(instance: &Instance) -> Self {
+        let spare = instance.num_tasks() / 4 + 1;
         let mut tasks: Vec<Option<Task>> = instance.tasks().iter().copied().map(Some).collect();
-        if instance.allows_void() {
-            tasks.push(None);
-        }
+        tasks.resize(
+            tasks.len() + usize::from(instance.allows_void()) + spare,
+            None,
+        );
+        let mut flow = transport::solved(instance, spare);
+        flow.build_movers();
         IncrementalOptimum {
-            flow: transport::solved(instance),
+            flow,
             beta: instance.beta(),
             allow_void: instance.allows_void(),
             positions: instance.robots().to_vec(),
@@ -156,11 +160,15 @@ impl IncrementalOptimum {
             value: ValueFunction::of(&task),
             capacity: task.capacity.unwrap_or(usize::MAX),
         };
+        let t0 = std::time::Instant::now();
         let c = self.flow.open(column, &costs);
+        let t1 = t0.elapsed();
         self.tasks.resize(self.flow.columns().len(), None);
         self.tasks[c] = Some(task);
         self.columns.push(c as u32);
+        self.flow.rebalance();
         self.flow.route();
+        eprintln!("open {t1:?} route {:?}", t0.elapsed() - t1);
         Ok(TaskId(self.columns.len() as u32 - 1))
     }
 
@@ -186,8 +194,12 @@ impl IncrementalOptimum {
         self.check_room(others, self.num_robots())?;
         let c = self.columns.remove(t) as usize;
         self.tasks[c] = None;
+        let t0 = std::time::Instant::now();
         self.flow.close(c);
+        let t1 = t0.elapsed();
+        self.flow.rebalance();
         self.flow.route();
+        eprintln!("close {t1:?} route {:?}", t0.elapsed() - t1);
         Ok(())
     }
 
@@ -220,6 +232,7 @@ impl IncrementalOptimum {
             index += 1;
             !gone[index - 1]
         });
+        self.flow.rebalance();
         self.flow.route();
         Ok(())
     }
@@ -246,6 +259,7 @@ impl IncrementalOptimum {
             self.positions.push(p);
             self.rows.push(row as u32);
         }
+        self.flow.rebalance();
         self.flow.route();
         Ok(())
     }

@@ -65,14 +65,16 @@ impl Entry {
 
 impl Movers {
     /// The movers of `task_of` (`NOWHERE` for a robot that may not move), with
-    /// `costs` the row-major N × M cost matrix: one pass over it.
-    pub fn new(m: usize, task_of: &[u32], costs: &[f64]) -> Self {
+    /// `costs` the row-major N × M cost matrix, and no robot moving to a column where
+    /// `closed`: one pass over it.
+    pub fn new(task_of: &[u32], costs: &[f64], closed: Vec<bool>) -> Self {
+        let m = closed.len();
         let mut movers = Movers {
             m,
             top: vec![Entry::NONE; m * m],
             heaps: (0..m * m).map(|_| None).collect(),
             members: vec![Vec::new(); m],
-            closed: vec![false; m],
+            closed,
         };
         for (robot, &task) in task_of.iter().enumerate() {
             if task != NOWHERE {
@@ -140,6 +142,34 @@ impl Movers {
         }
     }
 
+    /// Builds the heap of every pair of open columns now, from `task_of` and the
+    /// row-major `costs` (one pass over them), so that no move has to build one later.
+    pub fn build_all(&mut self, task_of: &[u32], costs: &[f64]) {
+        let m = self.m;
+        let mut entries: Vec<Vec<Entry>> = vec![Vec::new(); m * m];
+        for (robot, &j) in task_of.iter().enumerate() {
+            if j == NOWHERE {
+                continue;
+            }
+            let (j, row) = (j as usize, &costs[robot * m..][..m]);
+            for k in (0..m).filter(|&k| k != j && !self.closed[k]) {
+                entries[j * m + k].push(Entry {
+                    key: row[k] - row[j],
+                    robot: robot as u32,
+                });
+            }
+        }
+        for (pair, list) in entries.into_iter().enumerate() {
+            let (j, k) = (pair / m, pair % m);
+            if j == k || self.closed[j] || self.closed[k] {
+                continue;
+            }
+            let heap = BinaryHeap::from(list);
+            self.top[pair] = heap.peek().copied().unwrap_or(Entry::NONE);
+            self.heaps[pair] = Some(heap);
+        }
+    }
+
     /// Closes column `k`: no robot may move to it or from it (its robots have left or
     /// are about to, without refreshing its pairs).
     pub fn close(&mut self, k: usize) {
@@ -154,22 +184,29 @@ impl Movers {
     }
 
     /// Opens closed column `k` (no robot in it yet): every robot of `task_of` may move
-    /// to it at the cost its row of `costs` says. One pass over the robots.
+    /// to it at the cost its row of `costs` says. One pass over the robots, which
+    /// builds the heaps of the pairs into `k`.
     pub fn open(&mut self, k: usize, task_of: &[u32], costs: &[f64]) {
+        let m = self.m;
         self.closed[k] = false;
+        let mut entries: Vec<Vec<Entry>> = vec![Vec::new(); m];
         for (robot, &j) in task_of.iter().enumerate() {
             if j == NOWHERE {
                 continue;
             }
-            let row = &costs[robot * self.m..][..self.m];
-            let entry = Entry {
+            let row = &costs[robot * m..][..m];
+            entries[j as usize].push(Entry {
                 key: row[k] - row[j as usize],
                 robot: robot as u32,
-            };
-            let pair = j as usize * self.m + k;
-            if entry > self.top[pair] {
-                self.top[pair] = entry;
+            });
+        }
+        for (j, list) in entries.into_iter().enumerate() {
+            if j == k || self.closed[j] {
+                continue;
             }
+            let heap = BinaryHeap::from(list);
+            self.top[j * m + k] = heap.peek().copied().unwrap_or(Entry::NONE);
+            self.heaps[j * m + k] = Some(heap);
         }
     }
 

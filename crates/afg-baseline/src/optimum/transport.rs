@@ -53,19 +53,23 @@ pub(super) struct Solution {
 
 /// Solves `inst` exactly.
 pub(super) fn solve(inst: &Instance) -> Solution {
-    solved(inst).into_solution()
+    solved(inst, 0).into_solution()
 }
 
-/// The solved residual state of `inst` (from its subsample's prices), to keep.
-pub(super) fn solved(inst: &Instance) -> Flow {
-    let warm = coarse_prices(inst, FACTOR);
-    Flow::solved(Level::new(inst, 1), warm.as_deref())
+/// The solved residual state of `inst` (from its subsample's prices), to keep, with
+/// `spare` closed columns to open later.
+pub(super) fn solved(inst: &Instance, spare: usize) -> Flow {
+    let mut warm = coarse_prices(inst, FACTOR);
+    if let Some(prices) = &mut warm {
+        prices.resize(prices.len() + spare, 0.0);
+    }
+    Flow::solved(Level::new(inst, 1, spare), warm.as_deref())
 }
 
 /// Solves `inst` exactly from `prices` (one per column: the tasks', then the void's
 /// where the instance allows it; any common offset), without subsample levels.
 pub(super) fn solve_from(inst: &Instance, prices: &[f64]) -> Solution {
-    Flow::solved(Level::new(inst, 1), Some(prices)).into_solution()
+    Flow::solved(Level::new(inst, 1, 0), Some(prices)).into_solution()
 }
 
 /// The prices of the subsample of every `stride`-th robot, solved from the prices of
@@ -76,7 +80,7 @@ fn coarse_prices(inst: &Instance, stride: usize) -> Option<Vec<f64>> {
     }
     let warm = coarse_prices(inst, stride * FACTOR);
     Some(
-        Flow::solved(Level::new(inst, stride), warm.as_deref())
+        Flow::solved(Level::new(inst, stride, 0), warm.as_deref())
             .into_solution()
             .prices,
     )
@@ -112,7 +116,8 @@ struct Level {
 }
 
 impl Level {
-    fn new(inst: &Instance, stride: usize) -> Self {
+    /// The level of every `stride`-th robot, with `spare` closed columns last.
+    fn new(inst: &Instance, stride: usize, spare: usize) -> Self {
         let mut columns: Vec<Column> = inst
             .task_ids()
             .map(|j| Column::Task {
@@ -123,6 +128,7 @@ impl Level {
         if inst.allows_void() {
             columns.push(Column::Void);
         }
+        columns.resize(columns.len() + spare, Column::Closed);
         Level {
             stride,
             n: inst.num_robots().div_ceil(stride),
@@ -332,7 +338,13 @@ impl Flow {
         let mut potential = prices;
         potential.push(sink_potential);
         Flow {
-            movers: Movers::new(m, &task_of, &level.costs),
+            movers: Movers::new(
+                &task_of,
+                &level.costs,
+                (level.columns.iter())
+                    .map(|c| matches!(c, Column::Closed))
+                    .collect(),
+            ),
             level,
             task_of,
             bought,
@@ -367,6 +379,11 @@ impl Flow {
         &self.task_of
     }
 
+    /// Builds every heap of movers now (see [`Movers::build_all`]).
+    pub fn build_movers(&mut self) {
+        self.movers.build_all(&self.task_of, &self.level.costs);
+    }
+
     /// The units routed by the last [`Flow::route`].
     pub fn routed(&self) -> u64 {
         self.routed
@@ -375,6 +392,23 @@ impl Flow {
     /// The columns.
     pub fn columns(&self) -> &[Column] {
         &self.level.columns
+    }
+
+    /// Moves the sink's potential to where the column prices buy every robot there is
+    /// (the same shift for every task's price, so no robot's cheapest column changes),
+    /// and sets the counts those prices buy: after an event that takes robots from
+    /// many columns or gives them to many, most of the imbalance goes without routing.
+    pub fn rebalance(&mut self) {
+        let m = self.level.m();
+        let mu = self.level.balancing_offset(&self.potential[..m]);
+        self.potential[sink(m)] = mu;
+        for j in 0..m {
+            let bought = self.level.count_at(j, self.potential[j] - mu);
+            let change = bought as i64 - self.bought[j] as i64;
+            self.bought[j] = bought;
+            self.excess[j] -= change;
+            self.excess[sink(m)] += change;
+        }
     }
 
     /// Routes every imbalance along shortest paths; returns the units routed.
