@@ -111,13 +111,13 @@ impl<'a> Solver<'a> {
                     continue;
                 }
                 // A missing edge has an infinite key and never improves a distance.
-                let e = self.movers.row(j)[k];
-                let d = self.dist[j] + e.key + self.potential[j] - self.potential[k];
+                let key = self.movers.keys(j)[k];
+                let d = self.dist[j] + key + self.potential[j] - self.potential[k];
                 if d < self.dist[k] {
                     self.dist[k] = d;
                     self.pred[k] = Pred::Shift {
                         from: j,
-                        robot: e.robot,
+                        robot: self.movers.robot(j, k),
                     };
                 }
             }

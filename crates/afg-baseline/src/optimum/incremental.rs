@@ -160,15 +160,12 @@ impl IncrementalOptimum {
             value: ValueFunction::of(&task),
             capacity: task.capacity.unwrap_or(usize::MAX),
         };
-        let t0 = std::time::Instant::now();
         let c = self.flow.open(column, &costs);
-        let t1 = t0.elapsed();
         self.tasks.resize(self.flow.columns().len(), None);
         self.tasks[c] = Some(task);
         self.columns.push(c as u32);
         self.flow.rebalance();
         self.flow.route();
-        eprintln!("open {t1:?} route {:?}", t0.elapsed() - t1);
         Ok(TaskId(self.columns.len() as u32 - 1))
     }
 
@@ -194,12 +191,9 @@ impl IncrementalOptimum {
         self.check_room(others, self.num_robots())?;
         let c = self.columns.remove(t) as usize;
         self.tasks[c] = None;
-        let t0 = std::time::Instant::now();
         self.flow.close(c);
-        let t1 = t0.elapsed();
         self.flow.rebalance();
         self.flow.route();
-        eprintln!("close {t1:?} route {:?}", t0.elapsed() - t1);
         Ok(())
     }
 

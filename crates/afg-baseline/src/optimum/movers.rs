@@ -45,9 +45,11 @@ impl Ord for Entry {
 #[derive(Clone)]
 pub(super) struct Movers {
     m: usize,
-    /// `top[j * m + k]`: the cheapest live entry of pair (j, k); [`Entry::NONE`] if j
-    /// has no movable robot.
-    top: Vec<Entry>,
+    /// `key[j * m + k]`, `robot[j * m + k]`: the cheapest live entry of pair (j, k),
+    /// apart so that a row of keys is one slice; [`Entry::NONE`]'s if j has no movable
+    /// robot.
+    key: Vec<f64>,
+    robot: Vec<u32>,
     heaps: Vec<Option<BinaryHeap<Entry>>>,
     /// Every robot that ever entered each task (some have left again).
     members: Vec<Vec<u32>>,
@@ -71,7 +73,8 @@ impl Movers {
         let m = closed.len();
         let mut movers = Movers {
             m,
-            top: vec![Entry::NONE; m * m],
+            key: vec![f64::INFINITY; m * m],
+            robot: vec![NOWHERE; m * m],
             heaps: (0..m * m).map(|_| None).collect(),
             members: vec![Vec::new(); m],
             closed,
@@ -85,15 +88,37 @@ impl Movers {
         movers
     }
 
-    /// The cheapest robot of task `j` to move to each task k (`row(j)[k]`).
-    pub fn row(&self, j: usize) -> &[Entry] {
-        &self.top[j * self.m..][..self.m]
+    /// The cost of moving the cheapest robot of task `j` to each task k (`keys(j)[k]`;
+    /// infinite where there is none).
+    pub fn keys(&self, j: usize) -> &[f64] {
+        &self.key[j * self.m..][..self.m]
+    }
+
+    /// The cheapest robot of task `j` to move to task `k` (`NOWHERE` if none).
+    pub fn robot(&self, j: usize, k: usize) -> u32 {
+        self.robot[j * self.m + k]
+    }
+
+    /// The cheapest live entry of `pair`.
+    fn top(&self, pair: usize) -> Entry {
+        Entry {
+            key: self.key[pair],
+            robot: self.robot[pair],
+        }
+    }
+
+    fn set_top(&mut self, pair: usize, entry: Entry) {
+        self.key[pair] = entry.key;
+        self.robot[pair] = entry.robot;
     }
 
     /// Records that `robot` (with cost row `costs`) has entered `task`.
     pub fn enter(&mut self, robot: u32, task: usize, costs: &[f64]) {
         self.members[task].push(robot);
-        for k in (0..self.m).filter(|&k| k != task && !self.closed[k]) {
+        for k in 0..self.m {
+            if k == task || self.closed[k] {
+                continue;
+            }
             let pair = task * self.m + k;
             let entry = Entry {
                 key: costs[k] - costs[task],
@@ -102,8 +127,8 @@ impl Movers {
             if let Some(heap) = &mut self.heaps[pair] {
                 heap.push(entry);
             }
-            if entry > self.top[pair] {
-                self.top[pair] = entry;
+            if entry > self.top(pair) {
+                self.set_top(pair, entry);
             }
         }
     }
@@ -113,7 +138,7 @@ impl Movers {
     pub fn leave(&mut self, robot: u32, j: usize, task_of: &[u32], costs: &[f64]) {
         for k in (0..self.m).filter(|&k| k != j) {
             let pair = j * self.m + k;
-            if self.top[pair].robot != robot {
+            if self.robot[pair] != robot {
                 continue;
             }
             let (m, members) = (self.m, &self.members[j]);
@@ -131,14 +156,15 @@ impl Movers {
                     .collect();
                 BinaryHeap::from(entries)
             });
-            self.top[pair] = Entry::NONE;
-            while let Some(&top) = heap.peek() {
-                if task_of[top.robot as usize] as usize == j {
-                    self.top[pair] = top;
+            let mut top = Entry::NONE;
+            while let Some(&head) = heap.peek() {
+                if task_of[head.robot as usize] as usize == j {
+                    top = head;
                     break;
                 }
                 heap.pop();
             }
+            self.set_top(pair, top);
         }
     }
 
@@ -165,7 +191,7 @@ impl Movers {
                 continue;
             }
             let heap = BinaryHeap::from(list);
-            self.top[pair] = heap.peek().copied().unwrap_or(Entry::NONE);
+            self.set_top(pair, heap.peek().copied().unwrap_or(Entry::NONE));
             self.heaps[pair] = Some(heap);
         }
     }
@@ -177,35 +203,36 @@ impl Movers {
         self.members[k].clear();
         for j in 0..self.m {
             for pair in [k * self.m + j, j * self.m + k] {
-                self.top[pair] = Entry::NONE;
+                self.set_top(pair, Entry::NONE);
                 self.heaps[pair] = None;
             }
         }
     }
 
-    /// Opens closed column `k` (no robot in it yet): every robot of `task_of` may move
-    /// to it at the cost its row of `costs` says. One pass over the robots, which
-    /// builds the heaps of the pairs into `k`.
-    pub fn open(&mut self, k: usize, task_of: &[u32], costs: &[f64]) {
+    /// Opens closed column `k` (no robot in it yet) with travel costs `column` (one per
+    /// robot), written into `costs` (row-major, M per robot): every robot of `task_of`
+    /// may move to it. One pass over the robots, which builds the heaps of the pairs
+    /// into `k`.
+    pub fn open(&mut self, k: usize, task_of: &[u32], costs: &mut [f64], column: &[f64]) {
         let m = self.m;
         self.closed[k] = false;
         let mut entries: Vec<Vec<Entry>> = vec![Vec::new(); m];
-        for (robot, &j) in task_of.iter().enumerate() {
-            if j == NOWHERE {
-                continue;
+        for (robot, (row, &c)) in costs.chunks_mut(m).zip(column).enumerate() {
+            row[k] = c;
+            let j = task_of[robot];
+            if j != NOWHERE {
+                entries[j as usize].push(Entry {
+                    key: c - row[j as usize],
+                    robot: robot as u32,
+                });
             }
-            let row = &costs[robot * m..][..m];
-            entries[j as usize].push(Entry {
-                key: row[k] - row[j as usize],
-                robot: robot as u32,
-            });
         }
         for (j, list) in entries.into_iter().enumerate() {
             if j == k || self.closed[j] {
                 continue;
             }
             let heap = BinaryHeap::from(list);
-            self.top[j * m + k] = heap.peek().copied().unwrap_or(Entry::NONE);
+            self.set_top(j * m + k, heap.peek().copied().unwrap_or(Entry::NONE));
             self.heaps[j * m + k] = Some(heap);
         }
     }
@@ -213,15 +240,18 @@ impl Movers {
     /// Makes room for `wider` columns, the new ones closed.
     pub fn widen(&mut self, wider: usize) {
         let m = self.m;
-        let mut top = vec![Entry::NONE; wider * wider];
+        let mut key = vec![f64::INFINITY; wider * wider];
+        let mut robot = vec![NOWHERE; wider * wider];
         let mut heaps: Vec<Option<BinaryHeap<Entry>>> = (0..wider * wider).map(|_| None).collect();
         for j in 0..m {
-            top[j * wider..][..m].copy_from_slice(&self.top[j * m..][..m]);
+            key[j * wider..][..m].copy_from_slice(&self.key[j * m..][..m]);
+            robot[j * wider..][..m].copy_from_slice(&self.robot[j * m..][..m]);
             for k in 0..m {
                 heaps[j * wider + k] = self.heaps[j * m + k].take();
             }
         }
-        self.top = top;
+        self.key = key;
+        self.robot = robot;
         self.heaps = heaps;
         self.members.resize(wider, Vec::new());
         self.closed.resize(wider, true);

@@ -27,7 +27,6 @@
 //! task and level. Memory O(N M) for the costs; nothing of size N × N.
 
 use std::cmp::{Ordering, Reverse};
-use std::collections::BinaryHeap;
 
 use afg_game::{Instance, Point, ValueFunction};
 use rayon::prelude::*;
@@ -184,21 +183,35 @@ impl Level {
     }
 
     /// A sink potential μ at which `prices` buy N slots in all (or, where ties make that
-    /// impossible, the least above), by bisection: the flow starts with the sink balanced.
-    fn balancing_offset(&self, prices: &[f64]) -> f64 {
+    /// impossible, the least above), by bisection from a bracket grown around `near`
+    /// (or from where no price buys a slot): the flow starts with the sink balanced.
+    fn balancing_offset(&self, prices: &[f64], near: Option<f64>) -> f64 {
         let bought = |mu: f64| {
             (0..self.m())
                 .map(|j| self.count_at(j, prices[j] - mu))
                 .sum::<usize>()
         };
-        // At `lo` every price is at least its task's first marginal value: none buys.
-        let mut lo = (0..self.m())
+        // At `none` every price is at least its task's first marginal value: none buys.
+        let none = (0..self.m())
             .map(|j| prices[j] - self.marginal(j, 1))
             .fold(f64::INFINITY, f64::min);
-        let (mut hi, mut step) = (lo + 1.0, 1.0);
+        let start = near.map_or(none, |mu| mu.max(none));
+        let mut step = near.map_or(1.0, |mu| 1e-9 * mu.abs().max(1.0));
+        let (mut lo, mut hi) = (start, start);
+        // Grow the bracket (lo, hi] until bought(lo) < N ≤ bought(hi).
         while bought(hi) < self.n {
+            lo = hi;
+            hi = start + step;
             step *= 2.0;
-            hi = lo + step;
+        }
+        if lo == hi {
+            step = 1e-9 * hi.abs().max(1.0);
+            lo = hi - step;
+            while lo > none && bought(lo) >= self.n {
+                hi = lo;
+                step *= 2.0;
+                lo = (start - step).max(none);
+            }
         }
         for _ in 0..64 {
             let mid = 0.5 * (lo + hi);
@@ -266,48 +279,24 @@ pub(super) struct Flow {
     potential: Vec<f64>,
     movers: Movers,
     dist: Vec<f64>,
-    pred: Vec<Pred>,
+    /// The node each node was reached from on the current shortest-path tree
+    /// ([`SOURCE`] for the source): a shift of the cheapest mover between two tasks, a
+    /// count up (into the sink) or down (from it).
+    via: Vec<u32>,
     done: Vec<bool>,
-    queue: BinaryHeap<Reverse<Queued>>,
     /// Units routed by the last [`Flow::route`].
     routed: u64,
 }
 
-/// A node waiting in Dijkstra's queue at a tentative distance.
-#[derive(Clone, Copy, PartialEq)]
-struct Queued(f64, usize);
-
-impl Eq for Queued {}
-impl PartialOrd for Queued {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
-}
-impl Ord for Queued {
-    fn cmp(&self, other: &Self) -> Ordering {
-        self.0.total_cmp(&other.0).then(self.1.cmp(&other.1))
-    }
-}
-
-/// How a node was reached on the current shortest-path tree.
-#[derive(Clone, Copy)]
-enum Pred {
-    /// A node with excess: where the path starts.
-    Source,
-    /// From task `from`, by moving `robot` from it to this task.
-    Shift { from: usize, robot: u32 },
-    /// The sink, from task `from`, whose count goes up by one.
-    Up { from: usize },
-    /// A task, from the sink: its count goes down by one.
-    Down,
-}
+/// Marks the source of a shortest-path tree.
+const SOURCE: u32 = u32::MAX;
 
 impl Flow {
     /// `level` solved from `warm` prices (sink potential 0), or from zero prices with
     /// the sink's potential set so that the counts they buy add up to N.
     fn solved(level: Level, warm: Option<&[f64]>) -> Flow {
         let prices = warm.map_or_else(|| vec![0.0; level.m()], <[f64]>::to_vec);
-        let sink = level.balancing_offset(&prices);
+        let sink = level.balancing_offset(&prices, None);
         let mut flow = Flow::new(level, prices, sink);
         flow.route();
         flow
@@ -351,9 +340,8 @@ impl Flow {
             excess,
             potential,
             dist: vec![0.0; m + 1],
-            pred: vec![Pred::Source; m + 1],
+            via: vec![SOURCE; m + 1],
             done: vec![false; m + 1],
-            queue: BinaryHeap::new(),
             routed: 0,
         }
     }
@@ -400,7 +388,7 @@ impl Flow {
     /// many columns or gives them to many, most of the imbalance goes without routing.
     pub fn rebalance(&mut self) {
         let m = self.level.m();
-        let mu = self.level.balancing_offset(&self.potential[..m]);
+        let mu = (self.level).balancing_offset(&self.potential[..m], Some(self.potential[sink(m)]));
         self.potential[sink(m)] = mu;
         for j in 0..m {
             let bought = self.level.count_at(j, self.potential[j] - mu);
@@ -478,8 +466,8 @@ impl Flow {
 
     /// Opens `column` with travel costs `costs` (one per row; anything for rows whose
     /// robot is gone) in a closed column, or a new one; returns its index. Its price is
-    /// chosen where the robots that prefer it at that price about match the count the
-    /// price buys, and those robots move in; no other robot prefers it. Route next.
+    /// chosen where the robots that prefer it at that price fill the count the price
+    /// buys, and those robots move in; no other robot prefers it. Route next.
     pub fn open(&mut self, column: Column, costs: &[f64]) -> usize {
         let k = match (self.level.columns.iter()).position(|c| matches!(c, Column::Closed)) {
             Some(k) => k,
@@ -490,39 +478,31 @@ impl Flow {
         };
         let m = self.level.m();
         self.level.columns[k] = column;
-        for (row, &c) in self.level.costs.chunks_mut(m).zip(costs) {
-            row[k] = c;
-        }
-        // A robot prefers k at price p when p > c_rk − (c_r,own − π_own).
-        let mut switch: Vec<(f64, u32)> = (0..self.task_of.len())
-            .filter(|&r| self.task_of[r] != NOWHERE)
-            .map(|r| {
-                let own = self.task_of[r] as usize;
-                let row = self.level.row(r);
-                (row[k] - (row[own] - self.potential[own]), r as u32)
-            })
-            .collect();
+        self.movers
+            .open(k, &self.task_of, &mut self.level.costs, costs);
+        // Robots enter k cheapest first — the least `c_rk − c_rj + π_j` among the
+        // heads of the pairs (j, k), the price at which robot r would rather be in k —
+        // while that price still buys more of k's slots than robots have entered. The
+        // price stops at the next robot's, so no robot left outside prefers k.
         let mu = self.potential[sink(m)];
-        let open = (self.level.columns.iter()).filter(|c| !matches!(c, Column::Closed));
-        let guess = (self.level.n / open.count()).min(self.level.capacity(k));
-        let prefix = switch.len().min(4 * guess + 64);
-        if prefix < switch.len() {
-            switch.select_nth_unstable_by(prefix, |a, b| a.0.total_cmp(&b.0));
-        }
-        switch.truncate(prefix + 1);
-        switch.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
-        // The first t (the robots below price switch[t]) at which t robots fill what
-        // the price buys; routing settles the rest.
-        let buys = |t: usize| self.level.count_at(k, switch[t].0 - mu);
-        let t = (0..switch.len().saturating_sub(1)).find(|&t| buys(t) <= t);
-        let t = t.unwrap_or(switch.len().saturating_sub(1));
-        let alone = || mu + self.level.marginal(k, guess.max(1));
-        self.potential[k] = switch.get(t).map_or_else(alone, |s| s.0);
-        self.movers.open(k, &self.task_of, &self.level.costs);
-        for &(_, r) in &switch[..t] {
-            let from = self.task_of[r as usize] as usize;
-            self.shift(r as usize, from, k);
-        }
+        let mut entered = 0;
+        self.potential[k] = loop {
+            let head = (0..m)
+                .filter(|&j| j != k)
+                .map(|j| (self.movers.keys(j)[k] + self.potential[j], j))
+                .min_by(|a, b| a.0.total_cmp(&b.0));
+            let Some((price, j)) = head.filter(|(price, _)| price.is_finite()) else {
+                // No robot can move: a price at which k buys nothing.
+                break mu + self.level.marginal(k, 1);
+            };
+            let full = entered >= self.level.capacity(k)
+                || self.level.marginal(k, entered + 1) <= price - mu;
+            if full {
+                break price;
+            }
+            self.shift(self.movers.robot(j, k) as usize, j, k);
+            entered += 1;
+        };
         let b = self.level.count_at(k, self.potential[k] - mu);
         self.bought[k] = b;
         self.excess[k] -= b as i64;
@@ -550,13 +530,15 @@ impl Flow {
         self.excess.splice(at..at, std::iter::repeat_n(0, added));
         self.bought.resize(wider, 0);
         self.dist.resize(wider + 1, 0.0);
-        self.pred.resize(wider + 1, Pred::Source);
+        self.via.resize(wider + 1, SOURCE);
         self.done.resize(wider + 1, false);
     }
 
     /// Dijkstra with reduced costs from the node with most excess to the nearest node
     /// short of units; updates the potentials (keeping every reduced cost
     /// non-negative and the path's zero) and returns that node. `None` when balanced.
+    /// The graph is dense (an edge between every two tasks), so the next node is found
+    /// by a scan of the M + 1 labels rather than from a heap.
     fn shortest_path(&mut self) -> Option<usize> {
         let m = self.level.m();
         let t = sink(m);
@@ -569,17 +551,17 @@ impl Flow {
         self.dist.fill(f64::INFINITY);
         self.done.fill(false);
         self.dist[source] = 0.0;
-        self.pred[source] = Pred::Source;
-        self.queue.clear();
-        self.queue.push(Reverse(Queued(0.0, source)));
+        self.via[source] = SOURCE;
         let target = loop {
-            let Reverse(Queued(d, u)) = self
-                .queue
-                .pop()
-                .expect("a node short of units is reachable");
-            if self.done[u] || d > self.dist[u] {
-                continue;
+            // The nearest unsettled node, the lowest index among equals.
+            let mut u = None;
+            let mut nearest = f64::INFINITY;
+            for (v, (&d, &done)) in self.dist.iter().zip(&self.done).enumerate() {
+                if !done && d < nearest {
+                    (u, nearest) = (Some(v), d);
+                }
             }
+            let u = u.expect("a node short of units is reachable");
             self.done[u] = true;
             if self.excess[u] < 0 {
                 break u;
@@ -597,77 +579,70 @@ impl Flow {
         Some(target)
     }
 
-    fn relax(&mut self, to: usize, through: f64, reduced: f64, pred: Pred) {
+    fn relax(&mut self, to: usize, from: usize, reduced: f64) {
         // Rounding can leave a tight edge a hair below zero.
-        let d = through + reduced.max(0.0);
+        let d = self.dist[from] + reduced.max(0.0);
         if d < self.dist[to] {
             self.dist[to] = d;
-            self.pred[to] = pred;
-            self.queue.push(Reverse(Queued(d, to)));
+            self.via[to] = from as u32;
         }
     }
 
     fn relax_from_task(&mut self, j: usize) {
         let m = self.level.m();
         let (here, from) = (self.dist[j], self.potential[j]);
-        // A missing edge has an infinite key and never improves a distance.
-        for (k, e) in self.movers.row(j).iter().enumerate() {
-            if self.done[k] {
-                continue;
-            }
-            let d = here + (e.key + from - self.potential[k]).max(0.0);
-            if d < self.dist[k] {
-                self.dist[k] = d;
-                self.pred[k] = Pred::Shift {
-                    from: j,
-                    robot: e.robot,
-                };
-                self.queue.push(Reverse(Queued(d, k)));
+        // A missing edge has an infinite key and never improves a distance; a settled
+        // node is nearer than `here` and is not improved either.
+        let keys = self.movers.keys(j);
+        let (dist, via) = (&mut self.dist[..m], &mut self.via[..m]);
+        for (k, (&key, &price)) in keys.iter().zip(&self.potential[..m]).enumerate() {
+            let d = here + (key + from - price).max(0.0);
+            if d < dist[k] {
+                dist[k] = d;
+                via[k] = j as u32;
             }
         }
         let t = sink(m);
         if !self.done[t] && self.bought[j] < self.level.capacity(j) {
             let cost = -self.level.marginal(j, self.bought[j] + 1);
-            let reduced = cost + self.potential[j] - self.potential[t];
-            self.relax(t, here, reduced, Pred::Up { from: j });
+            self.relax(t, j, cost + self.potential[j] - self.potential[t]);
         }
     }
 
     fn relax_from_sink(&mut self) {
         let m = self.level.m();
-        let here = self.dist[sink(m)];
         for j in 0..m {
             if !self.done[j] && self.bought[j] > 0 {
                 let cost = self.level.marginal(j, self.bought[j]);
-                let reduced = cost + self.potential[sink(m)] - self.potential[j];
-                self.relax(j, here, reduced, Pred::Down);
+                self.relax(
+                    j,
+                    sink(m),
+                    cost + self.potential[sink(m)] - self.potential[j],
+                );
             }
         }
     }
 
-    /// Sends one unit along the last shortest path into `target`.
+    /// Sends one unit along the last shortest path into `target`. The path's pairs of
+    /// tasks are distinct, so each shift still finds the mover the search saw.
     fn augment(&mut self, target: usize) {
         let m = self.level.m();
+        let t = sink(m);
         let mut at = target;
-        loop {
-            match self.pred[at] {
-                Pred::Source => break,
-                Pred::Shift { from, robot } => {
-                    self.task_of[robot as usize] = at as u32;
-                    let costs = &self.level.costs;
-                    self.movers.leave(robot, from, &self.task_of, costs);
-                    self.movers.enter(robot, at, self.level.row(robot as usize));
-                    at = from;
-                }
-                Pred::Up { from } => {
-                    self.bought[from] += 1;
-                    at = from;
-                }
-                Pred::Down => {
-                    self.bought[at] -= 1;
-                    at = sink(m);
-                }
+        while self.via[at] != SOURCE {
+            let from = self.via[at] as usize;
+            if at == t {
+                self.bought[from] += 1;
+            } else if from == t {
+                self.bought[at] -= 1;
+            } else {
+                let robot = self.movers.robot(from, at);
+                self.task_of[robot as usize] = at as u32;
+                let costs = &self.level.costs;
+                self.movers.leave(robot, from, &self.task_of, costs);
+                self.movers.enter(robot, at, self.level.row(robot as usize));
             }
+            at = from;
         }
         self.excess[at] -= 1;
         self.excess[target] += 1;
