@@ -400,10 +400,24 @@ impl Flow {
     }
 
     /// Routes every imbalance along shortest paths; returns the units routed.
+    /// Each unit goes along a shortest path from a node with excess to one short of
+    /// units, searched from the side with fewer such nodes (so that the search meets
+    /// one of the many on the other side early).
     pub fn route(&mut self) -> u64 {
         self.routed = 0;
-        while let Some(target) = self.shortest_path() {
-            self.augment(target);
+        loop {
+            let surplus = self.excess.iter().filter(|&&e| e > 0).count();
+            let short = self.excess.iter().filter(|&&e| e < 0).count();
+            if surplus == 0 {
+                break;
+            }
+            if surplus > short {
+                let source = self.shortest_path_into();
+                self.augment_from(source);
+            } else {
+                let target = self.shortest_path();
+                self.augment(target);
+            }
             self.routed += 1;
         }
         self.routed
@@ -536,33 +550,18 @@ impl Flow {
 
     /// Dijkstra with reduced costs from the node with most excess to the nearest node
     /// short of units; updates the potentials (keeping every reduced cost
-    /// non-negative and the path's zero) and returns that node. `None` when balanced.
-    /// The graph is dense (an edge between every two tasks), so the next node is found
-    /// by a scan of the M + 1 labels rather than from a heap.
-    fn shortest_path(&mut self) -> Option<usize> {
+    /// non-negative and the path's zero) and returns that node. Some node has excess.
+    fn shortest_path(&mut self) -> usize {
         let m = self.level.m();
         let t = sink(m);
         // One source, the node with most excess (searching from all of them would settle
         // every one at distance 0 first).
-        let source = (0..=m).max_by_key(|&u| (self.excess[u], Reverse(u)))?;
-        if self.excess[source] <= 0 {
-            return None;
-        }
-        self.dist.fill(f64::INFINITY);
-        self.done.fill(false);
-        self.dist[source] = 0.0;
-        self.via[source] = SOURCE;
+        let source = (0..=m)
+            .max_by_key(|&u| (self.excess[u], Reverse(u)))
+            .expect("a node has excess");
+        self.start_search(source);
         let target = loop {
-            // The nearest unsettled node, the lowest index among equals.
-            let mut u = None;
-            let mut nearest = f64::INFINITY;
-            for (v, (&d, &done)) in self.dist.iter().zip(&self.done).enumerate() {
-                if !done && d < nearest {
-                    (u, nearest) = (Some(v), d);
-                }
-            }
-            let u = u.expect("a node short of units is reachable");
-            self.done[u] = true;
+            let u = self.settle_nearest();
             if self.excess[u] < 0 {
                 break u;
             }
@@ -576,7 +575,60 @@ impl Flow {
         for (p, &d) in self.potential.iter_mut().zip(&self.dist) {
             *p += d.min(reach);
         }
-        Some(target)
+        target
+    }
+
+    /// Dijkstra over the reversed edges from the node most short of units to the
+    /// nearest node with excess (distances to the target, not from a source); updates
+    /// the potentials as [`Flow::shortest_path`] does, mirrored, and returns that node.
+    /// `via` then leads from it to the target. Some node is short of units.
+    fn shortest_path_into(&mut self) -> usize {
+        let m = self.level.m();
+        let t = sink(m);
+        let target = (0..=m)
+            .min_by_key(|&u| (self.excess[u], u))
+            .expect("a node is short of units");
+        self.start_search(target);
+        let source = loop {
+            let v = self.settle_nearest();
+            if self.excess[v] > 0 {
+                break v;
+            }
+            if v == t {
+                self.relax_into_sink();
+            } else {
+                self.relax_into_task(v);
+            }
+        };
+        let reach = self.dist[source];
+        for (p, &d) in self.potential.iter_mut().zip(&self.dist) {
+            *p -= d.min(reach);
+        }
+        source
+    }
+
+    /// Every label infinite and unsettled but `start`'s, at 0.
+    fn start_search(&mut self, start: usize) {
+        self.dist.fill(f64::INFINITY);
+        self.done.fill(false);
+        self.dist[start] = 0.0;
+        self.via[start] = SOURCE;
+    }
+
+    /// Settles and returns the nearest unsettled node, the lowest index among equals.
+    /// The graph is dense (an edge between every two tasks), so a scan of the M + 1
+    /// labels finds it rather than a heap.
+    fn settle_nearest(&mut self) -> usize {
+        let mut u = None;
+        let mut nearest = f64::INFINITY;
+        for (v, (&d, &done)) in self.dist.iter().zip(&self.done).enumerate() {
+            if !done && d < nearest {
+                (u, nearest) = (Some(v), d);
+            }
+        }
+        let u = u.expect("the other side of the imbalance is reachable");
+        self.done[u] = true;
+        u
     }
 
     fn relax(&mut self, to: usize, from: usize, reduced: f64) {
@@ -623,25 +675,75 @@ impl Flow {
         }
     }
 
+    /// The edges into task `v`: shifts from every task, and its count going down (from
+    /// the sink).
+    fn relax_into_task(&mut self, v: usize) {
+        let m = self.level.m();
+        let (here, to) = (self.dist[v], self.potential[v]);
+        for u in 0..m {
+            let d = here + (self.movers.keys(u)[v] + self.potential[u] - to).max(0.0);
+            if d < self.dist[u] {
+                self.dist[u] = d;
+                self.via[u] = v as u32;
+            }
+        }
+        let t = sink(m);
+        if !self.done[t] && self.bought[v] > 0 {
+            let cost = self.level.marginal(v, self.bought[v]);
+            self.relax(t, v, cost + self.potential[t] - to);
+        }
+    }
+
+    /// The edges into the sink: every task's count going up.
+    fn relax_into_sink(&mut self) {
+        let m = self.level.m();
+        for u in 0..m {
+            if !self.done[u] && self.bought[u] < self.level.capacity(u) {
+                let cost = -self.level.marginal(u, self.bought[u] + 1);
+                self.relax(
+                    u,
+                    sink(m),
+                    cost + self.potential[u] - self.potential[sink(m)],
+                );
+            }
+        }
+    }
+
+    /// Sends one unit along the last reversed search's path from `source`.
+    fn augment_from(&mut self, source: usize) {
+        let mut at = source;
+        while self.via[at] != SOURCE {
+            let to = self.via[at] as usize;
+            self.step(at, to);
+            at = to;
+        }
+        self.excess[source] -= 1;
+        self.excess[at] += 1;
+    }
+
+    /// One unit along the edge from node `from` to node `to`.
+    fn step(&mut self, from: usize, to: usize) {
+        let t = sink(self.level.m());
+        if to == t {
+            self.bought[from] += 1;
+        } else if from == t {
+            self.bought[to] -= 1;
+        } else {
+            let robot = self.movers.robot(from, to);
+            self.task_of[robot as usize] = to as u32;
+            let costs = &self.level.costs;
+            self.movers.leave(robot, from, &self.task_of, costs);
+            self.movers.enter(robot, to, self.level.row(robot as usize));
+        }
+    }
+
     /// Sends one unit along the last shortest path into `target`. The path's pairs of
     /// tasks are distinct, so each shift still finds the mover the search saw.
     fn augment(&mut self, target: usize) {
-        let m = self.level.m();
-        let t = sink(m);
         let mut at = target;
         while self.via[at] != SOURCE {
             let from = self.via[at] as usize;
-            if at == t {
-                self.bought[from] += 1;
-            } else if from == t {
-                self.bought[at] -= 1;
-            } else {
-                let robot = self.movers.robot(from, at);
-                self.task_of[robot as usize] = at as u32;
-                let costs = &self.level.costs;
-                self.movers.leave(robot, from, &self.task_of, costs);
-                self.movers.enter(robot, at, self.level.row(robot as usize));
-            }
+            self.step(from, at);
             at = from;
         }
         self.excess[at] -= 1;
