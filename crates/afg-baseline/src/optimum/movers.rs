@@ -40,8 +40,11 @@ impl Ord for Entry {
 ///
 /// An entry of heap (j, k) is live while its robot's task (in the caller's `task_of`)
 /// is j: a robot that leaves j leaves stale entries behind, dropped when they reach the
-/// top. A robot that comes back to j pushes an entry with the same key again, which is
-/// harmless. Most pairs never lose their cheapest robot, so most heaps are never built.
+/// top. A robot entering j updates the cheapest entry of every pair (j, k) at once but
+/// joins the heaps only when one is next needed (when its pair's cheapest robot
+/// leaves): most pairs never lose their cheapest robot, so most heaps are never built
+/// or refilled. A robot that comes back to j enters with the same keys again, which is
+/// harmless.
 #[derive(Clone)]
 pub(super) struct Movers {
     m: usize,
@@ -53,6 +56,8 @@ pub(super) struct Movers {
     heaps: Vec<Option<BinaryHeap<Entry>>>,
     /// Every robot that ever entered each task (some have left again).
     members: Vec<Vec<u32>>,
+    /// `absorbed[j * m + k]`: how many of `members[j]` heap (j, k) has taken.
+    absorbed: Vec<usize>,
     /// Columns no robot may move to (removed tasks).
     closed: Vec<bool>,
 }
@@ -77,6 +82,7 @@ impl Movers {
             robot: vec![NOWHERE; m * m],
             heaps: (0..m * m).map(|_| None).collect(),
             members: vec![Vec::new(); m],
+            absorbed: vec![0; m * m],
             closed,
         };
         for (robot, &task) in task_of.iter().enumerate() {
@@ -124,9 +130,6 @@ impl Movers {
                 key: costs[k] - costs[task],
                 robot,
             };
-            if let Some(heap) = &mut self.heaps[pair] {
-                heap.push(entry);
-            }
             if entry > self.top(pair) {
                 self.set_top(pair, entry);
             }
@@ -142,20 +145,24 @@ impl Movers {
                 continue;
             }
             let (m, members) = (self.m, &self.members[j]);
-            let heap = self.heaps[pair].get_or_insert_with(|| {
-                let entries: Vec<Entry> = members
-                    .iter()
-                    .filter(|&&r| task_of[r as usize] as usize == j)
-                    .map(|&robot| {
-                        let row = &costs[robot as usize * m..][..m];
-                        Entry {
-                            key: row[k] - row[j],
-                            robot,
-                        }
-                    })
-                    .collect();
-                BinaryHeap::from(entries)
-            });
+            // Those that entered since the heap last took robots (all, for a new heap).
+            let fresh = members[self.absorbed[pair]..]
+                .iter()
+                .filter(|&&r| task_of[r as usize] as usize == j)
+                .map(|&robot| {
+                    let row = &costs[robot as usize * m..][..m];
+                    Entry {
+                        key: row[k] - row[j],
+                        robot,
+                    }
+                });
+            let heap = self.heaps[pair].get_or_insert_with(BinaryHeap::new);
+            if heap.is_empty() {
+                *heap = BinaryHeap::from(fresh.collect::<Vec<_>>());
+            } else {
+                heap.extend(fresh);
+            }
+            self.absorbed[pair] = members.len();
             let mut top = Entry::NONE;
             while let Some(&head) = heap.peek() {
                 if task_of[head.robot as usize] as usize == j {
@@ -193,6 +200,7 @@ impl Movers {
             let heap = BinaryHeap::from(list);
             self.set_top(pair, heap.peek().copied().unwrap_or(Entry::NONE));
             self.heaps[pair] = Some(heap);
+            self.absorbed[pair] = self.members[j].len();
         }
     }
 
@@ -205,6 +213,7 @@ impl Movers {
             for pair in [k * self.m + j, j * self.m + k] {
                 self.set_top(pair, Entry::NONE);
                 self.heaps[pair] = None;
+                self.absorbed[pair] = 0;
             }
         }
     }
@@ -234,6 +243,7 @@ impl Movers {
             let heap = BinaryHeap::from(list);
             self.set_top(j * m + k, heap.peek().copied().unwrap_or(Entry::NONE));
             self.heaps[j * m + k] = Some(heap);
+            self.absorbed[j * m + k] = self.members[j].len();
         }
     }
 
@@ -242,16 +252,19 @@ impl Movers {
         let m = self.m;
         let mut key = vec![f64::INFINITY; wider * wider];
         let mut robot = vec![NOWHERE; wider * wider];
+        let mut absorbed = vec![0; wider * wider];
         let mut heaps: Vec<Option<BinaryHeap<Entry>>> = (0..wider * wider).map(|_| None).collect();
         for j in 0..m {
             key[j * wider..][..m].copy_from_slice(&self.key[j * m..][..m]);
             robot[j * wider..][..m].copy_from_slice(&self.robot[j * m..][..m]);
+            absorbed[j * wider..][..m].copy_from_slice(&self.absorbed[j * m..][..m]);
             for k in 0..m {
                 heaps[j * wider + k] = self.heaps[j * m + k].take();
             }
         }
         self.key = key;
         self.robot = robot;
+        self.absorbed = absorbed;
         self.heaps = heaps;
         self.members.resize(wider, Vec::new());
         self.closed.resize(wider, true);
