@@ -225,7 +225,11 @@ impl Movers {
     pub fn open(&mut self, k: usize, task_of: &[u32], costs: &mut [f64], column: &[f64]) {
         let m = self.m;
         self.closed[k] = false;
-        let mut entries: Vec<Vec<Entry>> = vec![Vec::new(); m];
+        let mut counts = vec![0; m];
+        for &j in task_of.iter().filter(|&&j| j != NOWHERE) {
+            counts[j as usize] += 1;
+        }
+        let mut entries: Vec<Vec<Entry>> = counts.into_iter().map(Vec::with_capacity).collect();
         for (robot, (row, &c)) in costs.chunks_mut(m).zip(column).enumerate() {
             row[k] = c;
             let j = task_of[robot];
