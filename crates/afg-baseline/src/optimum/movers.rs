@@ -1,8 +1,8 @@
 //! The residual edges between task nodes: for every ordered pair (j, k), the robots of
 //! task j keyed by the cost of moving them to k, cheapest first.
 
+use dary_heap::QuaternaryHeap as Heap;
 use std::cmp::Ordering;
-use std::collections::BinaryHeap;
 
 /// Marks a robot that is in no heap's task (unassigned, or fixed where it is).
 pub(super) const NOWHERE: u32 = u32::MAX;
@@ -26,7 +26,7 @@ impl PartialOrd for Entry {
     }
 }
 impl Ord for Entry {
-    /// Reversed, so that `BinaryHeap` pops the cheapest; ties by lower robot index.
+    /// Reversed, so that the (max-)heap pops the cheapest; ties by lower robot index.
     fn cmp(&self, other: &Self) -> Ordering {
         other
             .key
@@ -53,7 +53,7 @@ pub(super) struct Movers {
     /// robot.
     key: Vec<f64>,
     robot: Vec<u32>,
-    heaps: Vec<Option<BinaryHeap<Entry>>>,
+    heaps: Vec<Option<Heap<Entry>>>,
     /// Every robot that ever entered each task (some have left again).
     members: Vec<Vec<u32>>,
     /// `absorbed[j * m + k]`: how many of `members[j]` heap (j, k) has taken.
@@ -156,9 +156,9 @@ impl Movers {
                         robot,
                     }
                 });
-            let heap = self.heaps[pair].get_or_insert_with(BinaryHeap::new);
+            let heap = self.heaps[pair].get_or_insert_with(Heap::new);
             if heap.is_empty() {
-                *heap = BinaryHeap::from(fresh.collect::<Vec<_>>());
+                *heap = Heap::from(fresh.collect::<Vec<_>>());
             } else {
                 heap.extend(fresh);
             }
@@ -197,7 +197,7 @@ impl Movers {
             if j == k || self.closed[j] || self.closed[k] {
                 continue;
             }
-            let heap = BinaryHeap::from(list);
+            let heap = Heap::from(list);
             self.set_top(pair, heap.peek().copied().unwrap_or(Entry::NONE));
             self.heaps[pair] = Some(heap);
             self.absorbed[pair] = self.members[j].len();
@@ -244,7 +244,7 @@ impl Movers {
             if j == k || self.closed[j] {
                 continue;
             }
-            let heap = BinaryHeap::from(list);
+            let heap = Heap::from(list);
             self.set_top(j * m + k, heap.peek().copied().unwrap_or(Entry::NONE));
             self.heaps[j * m + k] = Some(heap);
             self.absorbed[j * m + k] = self.members[j].len();
@@ -257,7 +257,7 @@ impl Movers {
         let mut key = vec![f64::INFINITY; wider * wider];
         let mut robot = vec![NOWHERE; wider * wider];
         let mut absorbed = vec![0; wider * wider];
-        let mut heaps: Vec<Option<BinaryHeap<Entry>>> = (0..wider * wider).map(|_| None).collect();
+        let mut heaps: Vec<Option<Heap<Entry>>> = (0..wider * wider).map(|_| None).collect();
         for j in 0..m {
             key[j * wider..][..m].copy_from_slice(&self.key[j * m..][..m]);
             robot[j * wider..][..m].copy_from_slice(&self.robot[j * m..][..m]);
