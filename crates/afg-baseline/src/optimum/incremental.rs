@@ -65,7 +65,7 @@ impl IncrementalOptimum {
     /// Solves `instance` (as [`Optimum::with_prices`](super::Optimum::with_prices)) and
     /// keeps the solver's state.
     pub fn new(instance: &Instance) -> Self {
-        let spare = instance.num_tasks() / 4 + 1;
+        let spare = instance.num_tasks() / 16 + 1;
         let mut tasks: Vec<Option<Task>> = instance.tasks().iter().copied().map(Some).collect();
         tasks.resize(
             tasks.len() + usize::from(instance.allows_void()) + spare,
