@@ -13,7 +13,8 @@
 //! - [`transport`]: the whole instance from prices — every robot at its cheapest task
 //!   under warm prices (from a subsample of the robots, solved the same way), then the
 //!   few units that are out of balance routed along shortest paths over the M + 1
-//!   nodes. Behind [`Optimum::allocate`] and [`Optimum::with_prices`].
+//!   nodes. Behind [`Optimum::allocate`] and [`Optimum::with_prices`], and, with its
+//!   state kept between events, [`IncrementalOptimum`].
 //! - [`augmenting`]: robot by robot, each along a shortest augmenting path. It can keep
 //!   some robots fixed: [`Optimum::complete`] and [`Optimum::action_values`] (the exact
 //!   Q\* oracle of the sequential MDP: with γ = 1 and the welfare difference as reward,

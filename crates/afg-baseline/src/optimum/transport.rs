@@ -11,7 +11,10 @@
 //! What is left are node imbalances (a task with more robots than its count buys, or
 //! fewer), each one unit routed along a shortest path of the residual graph over the
 //! M + 1 nodes — robots shifting between tasks, counts moving up or down — Dijkstra
-//! with the prices as potentials.
+//! with the prices as potentials, searched from whichever side of the imbalance has
+//! fewer nodes. The state ([`Flow`]) can be kept and changed by events
+//! ([`IncrementalOptimum`](super::IncrementalOptimum)): columns opened and closed,
+//! robots added and removed.
 //!
 //! How many units must be routed depends on how good the starting prices are. They come
 //! from the same problem on every 8th robot (with the value functions scaled so that
@@ -22,9 +25,10 @@
 //!
 //! # Complexity
 //! O(N M) to read the costs and place every robot at its minimum, at each of the
-//! log₈(N) levels (a geometric sum: O(N M) in all), plus O(M² log M) for one
-//! Dijkstra over the M + 1 nodes per routed unit, of which warm prices leave a few per
-//! task and level. Memory O(N M) for the costs; nothing of size N × N.
+//! log₈(N) levels (a geometric sum: O(N M) in all), plus O(M²) for one Dijkstra over
+//! the M + 1 nodes (dense: a scan of the labels per node settled) per routed unit, of
+//! which warm prices leave a few per task and level. Memory O(N M) for the costs;
+//! nothing of size N × N.
 
 use std::cmp::{Ordering, Reverse};
 
