@@ -2,7 +2,7 @@
 //! Markdown tables of docs/missions.md.
 
 use afg_baseline::Method;
-use afg_baseline::SwarmMethod;
+use afg_eval::mission::MissionMethod;
 use afg_game::Preference;
 use afg_mission::Preset;
 use afg_repro::mission_study::{MissionPlan, SwarmPlan, study, swarm_study};
@@ -89,12 +89,12 @@ fn run_swarm(args: MissionStudyArgs) -> Result<()> {
         methods: args
             .swarm_methods
             .iter()
-            .map(|name| match name.as_str() {
-                "grape" => Ok(SwarmMethod::Grape {
-                    preference: Preference::Selfish,
-                }),
-                "auction" => Ok(SwarmMethod::Auction { epsilon: 1e-3 }),
-                other => bail!("unknown decentralised method '{other}': grape or auction"),
+            .map(|name| {
+                let method: Option<MissionMethod> = name.parse().ok();
+                match method.and_then(|m| m.swarm(Preference::Selfish, 1e-3)) {
+                    Some(swarm) => Ok(swarm),
+                    None => bail!("unknown decentralised method '{name}': grape or auction"),
+                }
             })
             .collect::<Result<_>>()?,
         rounds_per_time: args.rounds_per_time,

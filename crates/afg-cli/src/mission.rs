@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use afg_baseline::{Method, Network, SwarmMethod};
+use afg_baseline::{Method, Network};
 use afg_eval::figures::{mission_html, mission_svg};
 use afg_eval::mission::{MissionMethod, Planner, compare, swarm_table, table};
 use afg_game::Preference;
@@ -260,15 +260,8 @@ fn planner(method: MissionMethod, model: Option<&Path>, looping: &LoopArgs) -> R
         }
         (None, swarm) => {
             let knobs = &looping.swarm;
-            let method = if swarm == MissionMethod::Auction {
-                SwarmMethod::Auction {
-                    epsilon: knobs.epsilon,
-                }
-            } else {
-                SwarmMethod::Grape {
-                    preference: knobs.preference,
-                }
-            };
+            let method = (swarm.swarm(knobs.preference, knobs.epsilon))
+                .expect("a method that is not central is decentralised");
             let network = Network {
                 loss: knobs.loss,
                 ..knobs.radio.network()

@@ -43,6 +43,28 @@ pub enum MissionMethod {
     Auction,
 }
 
+impl MissionMethod {
+    /// The decentralised method this names — GRAPE with `preference`, or the auction
+    /// with bid increment `epsilon` — or `None` for a central allocator.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::{Method, SwarmMethod};
+    /// use afg_eval::mission::MissionMethod;
+    /// use afg_game::Preference;
+    /// let auction = MissionMethod::Auction.swarm(Preference::Selfish, 1e-3);
+    /// assert!(matches!(auction, Some(SwarmMethod::Auction { epsilon }) if epsilon == 1e-3));
+    /// assert!(MissionMethod::Central(Method::Opt).swarm(Preference::Selfish, 1e-3).is_none());
+    /// ```
+    pub fn swarm(self, preference: Preference, epsilon: f64) -> Option<SwarmMethod> {
+        match self {
+            MissionMethod::Central(_) => None,
+            MissionMethod::Grape => Some(SwarmMethod::Grape { preference }),
+            MissionMethod::Auction => Some(SwarmMethod::Auction { epsilon }),
+        }
+    }
+}
+
 impl std::str::FromStr for MissionMethod {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::str::FromStr;
 use std::sync::Arc;
 
-use afg_baseline::{Network, SwarmMethod};
+use afg_baseline::Network;
 use afg_eval::mission::{MissionMethod, Planner};
 use afg_game::Preference;
 use afg_graph::GraphKind;
@@ -331,13 +331,8 @@ pub(crate) fn run_mission(
         (name, None) => match MissionMethod::from_str(name.unwrap_or("opt")) {
             Ok(MissionMethod::Central(method)) => Planner::method(method, seed, warm),
             Ok(swarm) => {
-                let method = if swarm == MissionMethod::Auction {
-                    SwarmMethod::Auction { epsilon: 1e-3 }
-                } else {
-                    SwarmMethod::Grape {
-                        preference: Preference::Selfish,
-                    }
-                };
+                let method = (swarm.swarm(Preference::Selfish, 1e-3))
+                    .expect("a method that is not central is decentralised");
                 let mut network = Network {
                     loss,
                     ..Network::default()
