@@ -27,7 +27,10 @@ use crate::AllocError;
 ///
 /// An event costs what it changes (a cost column, the robots concerned) plus the units
 /// it leaves to route, instead of the O(N M) of a solve from scratch. Memory: the
-/// O(N M) costs and the solver's heaps, kept.
+/// O(N M) costs and the solver's heaps, kept; it grows with every robot that moves (a
+/// stale heap entry each until it surfaces) and every robot removed (its row stays), so
+/// a long-lived solver is best rebuilt now and then:
+/// `IncrementalOptimum::new(&opt.instance()?)`.
 ///
 /// # Examples
 /// ```
