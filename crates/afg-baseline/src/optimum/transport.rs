@@ -416,10 +416,10 @@ impl Flow {
                 break;
             }
             if surplus > short {
-                let source = self.shortest_path_into();
+                let source = self.search(true);
                 self.augment_from(source);
             } else {
-                let target = self.shortest_path();
+                let target = self.search(false);
                 self.augment(target);
             }
             self.routed += 1;
@@ -552,63 +552,46 @@ impl Flow {
         self.done.resize(wider + 1, false);
     }
 
-    /// Dijkstra with reduced costs from the node with most excess to the nearest node
-    /// short of units; updates the potentials (keeping every reduced cost
-    /// non-negative and the path's zero) and returns that node. Some node has excess.
-    fn shortest_path(&mut self) -> usize {
+    /// Dijkstra with reduced costs between a node with excess and the nearest node on
+    /// the other side of the imbalance: forward, from the node with most excess along
+    /// the edges to the nearest node short of units; or `backward`, from the node most
+    /// short of units against the edges (the labels are then distances to it) to the
+    /// nearest node with excess. Updates the potentials (keeping every reduced cost
+    /// non-negative and the path's zero) and returns the node where the search ended;
+    /// `via` leads from it back to the start (forward) or on to the start (backward).
+    fn search(&mut self, backward: bool) -> usize {
         let m = self.level.m();
         let t = sink(m);
-        // One source, the node with most excess (searching from all of them would settle
-        // every one at distance 0 first).
-        let source = (0..=m)
-            .max_by_key(|&u| (self.excess[u], Reverse(u)))
-            .expect("a node has excess");
-        self.start_search(source);
-        let target = loop {
+        // One start, the node with the largest imbalance (searching from all of them
+        // would settle every one at distance 0 first).
+        let start = if backward {
+            (0..=m).min_by_key(|&u| (self.excess[u], u))
+        } else {
+            (0..=m).max_by_key(|&u| (self.excess[u], Reverse(u)))
+        };
+        self.start_search(start.expect("a problem has nodes"));
+        let end = loop {
             let u = self.settle_nearest();
-            if self.excess[u] < 0 {
+            let found = if backward {
+                self.excess[u] > 0
+            } else {
+                self.excess[u] < 0
+            };
+            if found {
                 break u;
             }
-            if u == t {
-                self.relax_from_sink();
-            } else {
-                self.relax_from_task(u);
+            match (backward, u == t) {
+                (false, true) => self.relax_from_sink(),
+                (false, false) => self.relax_from_task(u),
+                (true, true) => self.relax_into_sink(),
+                (true, false) => self.relax_into_task(u),
             }
         };
-        let reach = self.dist[target];
+        let (reach, sign) = (self.dist[end], if backward { -1.0 } else { 1.0 });
         for (p, &d) in self.potential.iter_mut().zip(&self.dist) {
-            *p += d.min(reach);
+            *p += sign * d.min(reach);
         }
-        target
-    }
-
-    /// Dijkstra over the reversed edges from the node most short of units to the
-    /// nearest node with excess (distances to the target, not from a source); updates
-    /// the potentials as [`Flow::shortest_path`] does, mirrored, and returns that node.
-    /// `via` then leads from it to the target. Some node is short of units.
-    fn shortest_path_into(&mut self) -> usize {
-        let m = self.level.m();
-        let t = sink(m);
-        let target = (0..=m)
-            .min_by_key(|&u| (self.excess[u], u))
-            .expect("a node is short of units");
-        self.start_search(target);
-        let source = loop {
-            let v = self.settle_nearest();
-            if self.excess[v] > 0 {
-                break v;
-            }
-            if v == t {
-                self.relax_into_sink();
-            } else {
-                self.relax_into_task(v);
-            }
-        };
-        let reach = self.dist[source];
-        for (p, &d) in self.potential.iter_mut().zip(&self.dist) {
-            *p -= d.min(reach);
-        }
-        source
+        end
     }
 
     /// Every label infinite and unsettled but `start`'s, at 0.
@@ -713,7 +696,7 @@ impl Flow {
         }
     }
 
-    /// Sends one unit along the last reversed search's path from `source`.
+    /// Sends one unit along the last backward search's path from `source`.
     fn augment_from(&mut self, source: usize) {
         let mut at = source;
         while self.via[at] != SOURCE {
