@@ -415,13 +415,9 @@ impl Flow {
             if surplus == 0 {
                 break;
             }
-            if surplus > short {
-                let source = self.search(true);
-                self.augment_from(source);
-            } else {
-                let target = self.search(false);
-                self.augment(target);
-            }
+            let backward = surplus > short;
+            let end = self.search(backward);
+            self.augment(end, backward);
             self.routed += 1;
         }
         self.routed
@@ -429,12 +425,17 @@ impl Flow {
 
     /// Moves the robot in `row` from column `from` to column `to`, ahead of routing.
     fn shift(&mut self, row: usize, from: usize, to: usize) {
+        self.place(row, from, to);
+        self.excess[from] -= 1;
+        self.excess[to] += 1;
+    }
+
+    /// Puts the robot in `row` from column `from` into column `to`; the movers follow.
+    fn place(&mut self, row: usize, from: usize, to: usize) {
         self.task_of[row] = to as u32;
         let costs = &self.level.costs;
         self.movers.leave(row as u32, from, &self.task_of, costs);
         self.movers.enter(row as u32, to, self.level.row(row));
-        self.excess[from] -= 1;
-        self.excess[to] += 1;
     }
 
     /// The robot in `row` is gone: one unit less for the sink.
@@ -696,18 +697,6 @@ impl Flow {
         }
     }
 
-    /// Sends one unit along the last backward search's path from `source`.
-    fn augment_from(&mut self, source: usize) {
-        let mut at = source;
-        while self.via[at] != SOURCE {
-            let to = self.via[at] as usize;
-            self.step(at, to);
-            at = to;
-        }
-        self.excess[source] -= 1;
-        self.excess[at] += 1;
-    }
-
     /// One unit along the edge from node `from` to node `to`.
     fn step(&mut self, from: usize, to: usize) {
         let t = sink(self.level.m());
@@ -717,23 +706,28 @@ impl Flow {
             self.bought[to] -= 1;
         } else {
             let robot = self.movers.robot(from, to);
-            self.task_of[robot as usize] = to as u32;
-            let costs = &self.level.costs;
-            self.movers.leave(robot, from, &self.task_of, costs);
-            self.movers.enter(robot, to, self.level.row(robot as usize));
+            self.place(robot as usize, from, to);
         }
     }
 
-    /// Sends one unit along the last shortest path into `target`. The path's pairs of
-    /// tasks are distinct, so each shift still finds the mover the search saw.
-    fn augment(&mut self, target: usize) {
-        let mut at = target;
+    /// Sends one unit along the last search's path, which `via` walks from `end` to the
+    /// start: against the unit's way after a forward search (`end` is where it goes),
+    /// along it after a backward one (`end` is where it comes from). The path's pairs of
+    /// tasks are distinct, so each shift moves the mover the search saw, or one at the
+    /// same key.
+    fn augment(&mut self, end: usize, backward: bool) {
+        let mut at = end;
         while self.via[at] != SOURCE {
-            let from = self.via[at] as usize;
-            self.step(from, at);
-            at = from;
+            let next = self.via[at] as usize;
+            if backward {
+                self.step(at, next);
+            } else {
+                self.step(next, at);
+            }
+            at = next;
         }
-        self.excess[at] -= 1;
+        let (source, target) = if backward { (end, at) } else { (at, end) };
+        self.excess[source] -= 1;
         self.excess[target] += 1;
     }
 }
