@@ -404,23 +404,35 @@ impl<'a> Grape<'a> {
     }
 
     /// Every awake unsatisfied robot changes its view once, if it has a change to make.
+    /// A robot that removed robots from its view (crashed, or on a task done) stays
+    /// unsatisfied: next round it looks at its own place in the view it made, whether or
+    /// not a newer view reaches it.
     fn act(&mut self) -> bool {
         let mut changed = false;
+        let mut again = false;
         for a in self.unsatisfied.take_up(&self.radio) {
-            if let Some(view) = self.next_view(a) {
+            if let Some((view, removal)) = self.next_view(a) {
+                if removal {
+                    self.unsatisfied.add(a);
+                    again = true;
+                }
                 self.views[a as usize] = Rc::new(view);
                 self.proposals += 1;
                 changed = true;
                 self.senders.add(a);
             }
         }
+        if again {
+            self.unsatisfied.sort();
+        }
         changed
     }
 
     /// The change robot `a` makes to its view: remove the crashed robots it noticed that
-    /// its view still places, or else make its best move (to a task, or to the void
-    /// where the instance allows it).
-    fn next_view(&mut self, a: u32) -> Option<View> {
+    /// its view still places (and the robots of the tasks it knows are done), or else
+    /// make its best move (to a task, or to the void where the instance allows it); and
+    /// whether it was a removal, after which `a` must look at its own place again.
+    fn next_view(&mut self, a: u32) -> Option<(View, bool)> {
         let (robot, view) = (RobotId(a), &self.views[a as usize]);
         let mut gone: Vec<u32> = self.noticed[a as usize]
             .iter()
@@ -434,7 +446,7 @@ impl<'a> Grape<'a> {
             }
         }
         if !gone.is_empty() {
-            return Some(view.changed(robot, &gone, None, self.stamps.random()));
+            return Some((view.changed(robot, &gone, None, self.stamps.random()), true));
         }
         let current = view.tasks[a as usize];
         let place = match &self.news {
@@ -446,7 +458,10 @@ impl<'a> Grape<'a> {
                     })
             }
         }?;
-        Some(view.changed(robot, &[a], place, self.stamps.random()))
+        Some((
+            view.changed(robot, &[a], place, self.stamps.random()),
+            false,
+        ))
     }
 
     /// Awake senders broadcast: the messages that can change a neighbour are put in
