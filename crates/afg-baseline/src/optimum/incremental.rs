@@ -99,6 +99,17 @@ impl IncrementalOptimum {
 
     /// The units the last change routed along shortest paths (the solve's work beyond
     /// the robots it touched).
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::IncrementalOptimum;
+    /// use afg_game::{GeneratorConfig, RobotId};
+    /// let inst = GeneratorConfig::paper(400, 4, 2).generate()?;
+    /// let mut opt = IncrementalOptimum::new(&inst);
+    /// opt.remove_robots(&[RobotId(0)])?;
+    /// assert!(opt.routed() <= 2); // one robot gone leaves little out of balance
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn routed(&self) -> u64 {
         self.flow.routed()
     }
@@ -239,6 +250,22 @@ impl IncrementalOptimum {
     /// # Errors
     /// [`AllocError::InvalidParameter`] if a position or a travel cost is not finite,
     /// or (in the paper's game) the tasks' capacities cannot hold every robot.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::{IncrementalOptimum, Optimum};
+    /// use afg_game::{GeneratorConfig, Point};
+    /// let inst = GeneratorConfig::paper(50, 3, 4).generate()?;
+    /// let mut opt = IncrementalOptimum::new(&inst);
+    /// opt.add_robots(&[Point::new(0.5, 0.5), Point::new(0.1, 0.9)])?; // RobotIds 50 and 51
+    /// let game = opt.instance()?;
+    /// let (scratch, _) = Optimum.with_prices(&game);
+    /// assert!((game.welfare(&opt.assignment()) - game.welfare(&scratch)).abs() < 1e-9);
+    /// // A position that is not a point is refused, and nothing changes.
+    /// assert!(opt.add_robots(&[Point::new(f64::NAN, 0.0)]).is_err());
+    /// assert_eq!(opt.num_robots(), 52);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn add_robots(&mut self, positions: &[Point]) -> Result<(), AllocError> {
         let room = (self.columns.iter())
             .map(|&c| self.capacity(c))
