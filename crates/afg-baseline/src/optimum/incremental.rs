@@ -178,8 +178,7 @@ impl IncrementalOptimum {
         self.tasks.resize(self.flow.columns().len(), None);
         self.tasks[c] = Some(task);
         self.columns.push(c as u32);
-        self.flow.rebalance();
-        self.flow.route();
+        self.resolve();
         Ok(TaskId(self.columns.len() as u32 - 1))
     }
 
@@ -206,8 +205,7 @@ impl IncrementalOptimum {
         let c = self.columns.remove(t) as usize;
         self.tasks[c] = None;
         self.flow.close(c);
-        self.flow.rebalance();
-        self.flow.route();
+        self.resolve();
         Ok(())
     }
 
@@ -240,8 +238,7 @@ impl IncrementalOptimum {
             index += 1;
             !gone[index - 1]
         });
-        self.flow.rebalance();
-        self.flow.route();
+        self.resolve();
         Ok(())
     }
 
@@ -283,9 +280,15 @@ impl IncrementalOptimum {
             self.positions.push(p);
             self.rows.push(row as u32);
         }
+        self.resolve();
+        Ok(())
+    }
+
+    /// Back to the optimum after a change: the sink's potential rebalanced, then what
+    /// is still out of balance routed.
+    fn resolve(&mut self) {
         self.flow.rebalance();
         self.flow.route();
-        Ok(())
     }
 
     /// The travel costs of a robot at `p` to every column (0 to the void and to closed

@@ -197,11 +197,18 @@ impl Movers {
             if j == k || self.closed[j] || self.closed[k] {
                 continue;
             }
-            let heap = Heap::from(list);
-            self.set_top(pair, heap.peek().copied().unwrap_or(Entry::NONE));
-            self.heaps[pair] = Some(heap);
-            self.absorbed[pair] = self.members[j].len();
+            self.install(j, k, list);
         }
+    }
+
+    /// Makes `entries` (every live robot of task `j`, keyed for a move to `k`) the
+    /// heap of pair (j, k), with its cheapest entry on top.
+    fn install(&mut self, j: usize, k: usize, entries: Vec<Entry>) {
+        let pair = j * self.m + k;
+        let heap = Heap::from(entries);
+        self.set_top(pair, heap.peek().copied().unwrap_or(Entry::NONE));
+        self.heaps[pair] = Some(heap);
+        self.absorbed[pair] = self.members[j].len();
     }
 
     /// Closes column `k`: no robot may move to it or from it (its robots have left or
@@ -244,10 +251,7 @@ impl Movers {
             if j == k || self.closed[j] {
                 continue;
             }
-            let heap = Heap::from(list);
-            self.set_top(j * m + k, heap.peek().copied().unwrap_or(Entry::NONE));
-            self.heaps[j * m + k] = Some(heap);
-            self.absorbed[j * m + k] = self.members[j].len();
+            self.install(j, k, list);
         }
     }
 
