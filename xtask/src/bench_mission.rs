@@ -2,8 +2,8 @@
 //! solve from scratch, and whole missions with allocators in the loop.
 
 use afg_baseline::Method;
-use afg_eval::mission::Planner;
-use afg_mission::{MissionConfig, Preset};
+use afg_eval::mission::planner;
+use afg_mission::{MissionConfig, MissionMethod, MissionPlan, Preset};
 use afg_repro::bench::mission::{incremental, missions};
 use anyhow::Result;
 use clap::Args;
@@ -51,18 +51,18 @@ pub fn run(args: BenchMissionArgs) -> Result<()> {
     );
     let mission =
         MissionConfig::new(Preset::Poisson, args.robots, args.tasks, args.seed).generate()?;
-    let mut planners = vec![Planner::method(Method::Opt, args.seed, true)];
-    planners.extend(
-        args.methods
-            .iter()
-            .map(|&m| Planner::method(m, args.seed, false)),
-    );
+    let plan = |method, warm| MissionPlan {
+        method: MissionMethod::Central(method),
+        warm,
+        seed: args.seed,
+        ..MissionPlan::default()
+    };
+    let mut planners = vec![planner(&plan(Method::Opt, true), None)?];
+    for &method in &args.methods {
+        planners.push(planner(&plan(method, false), None)?);
+    }
     if let Some(dir) = &args.model {
-        planners.push(Planner::model(
-            dir,
-            afg_learn::run::ModelOptions::default(),
-            false,
-        )?);
+        planners.push(planner(&plan(Method::Opt, false), Some(dir))?);
     }
     println!(
         "A mission of {} robots and {} tasks arriving at rate {} (seed {}), one run each, on {} core(s):\n",

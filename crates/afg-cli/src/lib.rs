@@ -168,6 +168,31 @@ pub fn command_args<A: clap::Args + serde::Serialize>(args: &A) -> Vec<String> {
     out
 }
 
+/// Refuses an output path (`--flag`, where given) that names one of the `inputs`:
+/// writing it would destroy what the command reads.
+///
+/// # Errors
+/// One line naming the flag and the path.
+pub(crate) fn refuse_overwriting_inputs(
+    outputs: &[(&str, Option<&std::path::Path>)],
+    inputs: &[&std::path::Path],
+) -> Result<()> {
+    let inputs: Vec<_> = inputs
+        .iter()
+        .filter_map(|p| p.canonicalize().ok())
+        .collect();
+    for &(flag, path) in outputs {
+        let Some(path) = path else { continue };
+        if path.canonicalize().is_ok_and(|out| inputs.contains(&out)) {
+            anyhow::bail!(
+                "--{flag} {} is an input of this command; writing it would overwrite it: choose another path",
+                path.display()
+            );
+        }
+    }
+    Ok(())
+}
+
 /// Parses a count that must be at least 1 (clap's `value_parser`).
 ///
 /// # Errors

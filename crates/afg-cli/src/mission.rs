@@ -3,13 +3,14 @@
 
 use std::path::{Path, PathBuf};
 
-use afg_baseline::{Method, Network};
 use afg_eval::figures::{mission_html, mission_svg};
-use afg_eval::mission::{MissionMethod, Planner, compare, swarm_table, table};
-use afg_game::Preference;
+use afg_eval::mission::{compare, planner, swarm_table, table};
 use afg_game::fs::{write_atomic, write_atomic_making_dirs};
-use afg_learn::run::ModelOptions;
-use afg_mission::{Decentralised, Latency, Mission, MissionConfig, MissionRun, Preset, RunOptions};
+use afg_game::{Named, Preference};
+use afg_mission::{
+    Latency, Mission, MissionKnobs, MissionMethod, MissionPlan, MissionRun, Planner, Preset,
+    Recording, SwarmKnobs,
+};
 
 use crate::swarm::RadioArgs;
 use anyhow::{Context, Result, bail};
@@ -42,28 +43,30 @@ pub struct GenArgs {
     #[arg(long, default_value_t = 0)]
     seed: u64,
     /// Workloads are uniform in [LO, HI] (one robot does 1 unit per time unit).
-    #[arg(long, value_delimiter = ',', num_args = 1, value_names = ["LO,HI"], default_value = "1,3")]
+    #[arg(long, value_delimiter = ',', num_args = 1, value_names = ["LO,HI"], default_value = DEFAULT_WORKLOAD.as_str())]
     workload: Vec<f64>,
     /// Every robot's speed (arena units per time unit).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = MissionKnobs::default().speed)]
     speed: f64,
     /// The arena's side: positions uniform in [0, arena]², β scaled by 1/arena.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = MissionKnobs::default().arena)]
     arena: f64,
     /// The mission ends at this time at the latest.
-    #[arg(long, default_value_t = 40.0)]
+    #[arg(long, default_value_t = MissionKnobs::default().horizon)]
     horizon: f64,
     /// Waves of tasks (waves, attrition).
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = MissionKnobs::default().waves)]
     waves: usize,
     /// Time between waves.
-    #[arg(long, default_value_t = 5.0)]
+    #[arg(long, default_value_t = MissionKnobs::default().interval)]
     interval: f64,
     /// Task arrivals per time unit (poisson; default K / 20).
     #[arg(long)]
     rate: Option<f64>,
-    /// Share of the robots that fail at random times (attrition).
-    #[arg(long, default_value_t = 0.3)]
+    /// Share of the robots that fail (attrition), at times uniform over the whole
+    /// horizon: a run that ends earlier (every task done) sees only the failures before
+    /// its end, so set --horizon near the mission's span to see them all.
+    #[arg(long, default_value_t = MissionKnobs::default().fail_share)]
     fail_share: f64,
     /// Task capacities as `afg gen --capacity-slack` draws them (s ≥ 1).
     #[arg(long)]
@@ -76,7 +79,8 @@ pub struct GenArgs {
     out: PathBuf,
 }
 
-/// The allocator in the loop and the run's options, shared by `run` and `compare`.
+/// The allocator in the loop and the run's options, shared by `run` and `compare`:
+/// mapped one to one onto a [`MissionPlan`] (defaults from [`MissionPlan::default`]).
 #[derive(Args)]
 pub struct LoopArgs {
     /// Warm start: the optimum re-solved from its previous prices (opt), or survivors
@@ -101,51 +105,61 @@ pub struct LoopArgs {
     #[arg(long, value_name = "THETA")]
     hysteresis: Option<f64>,
     /// Seed of the random method, and of GRAPE's draws and the radio's (grape).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = MissionPlan::default().seed)]
     seed: u64,
     #[command(flatten)]
-    swarm: SwarmKnobs,
+    swarm: SwarmArgs,
 }
 
 /// The knobs of `grape` and `auction`, run by the robots over the radio
-/// (docs/missions.md).
+/// (docs/missions.md); refused with a central method.
 #[derive(Args)]
 #[command(next_help_heading = "Decentralised over the radio (--method grape or auction)")]
-pub struct SwarmKnobs {
+pub struct SwarmArgs {
     /// Rounds per mission time unit.
-    #[arg(long, default_value_t = 100.0)]
+    #[arg(long, default_value_t = SwarmKnobs::default().rounds_per_time)]
     rounds_per_time: f64,
     /// Long-run share of messages lost.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = SwarmKnobs::default().radio.loss)]
     loss: f64,
     /// Robots see tasks within this distance and hear of the others from their
     /// neighbours [default: every robot hears of every task at once].
     #[arg(long)]
     sensing: Option<f64>,
     /// GRAPE's preference: selfish (GRAPE's own) or balanced.
-    #[arg(long, value_parser = crate::choice::<Preference>(), default_value = "selfish")]
+    #[arg(long, value_parser = crate::choice::<Preference>(), default_value = SwarmKnobs::default().preference.name())]
     preference: Preference,
     /// The auction's least price increment ε.
-    #[arg(long, default_value_t = 1e-3)]
+    #[arg(long, default_value_t = SwarmKnobs::default().epsilon)]
     epsilon: f64,
     #[command(flatten)]
     radio: RadioArgs,
 }
 
 impl LoopArgs {
-    fn options(&self, trace: bool) -> RunOptions {
+    /// The plan of `method` with these options.
+    fn plan(&self, method: MissionMethod) -> MissionPlan {
         let latency = match (self.latency, self.latency_factor) {
             (Some(delay), _) => Latency::Fixed { delay },
             (None, Some(factor)) => Latency::Measured { factor },
             (None, None) => Latency::None,
         };
-        RunOptions {
+        let knobs = &self.swarm;
+        MissionPlan {
+            method,
+            warm: self.warm,
+            seed: self.seed,
+            swarm: SwarmKnobs {
+                preference: knobs.preference,
+                epsilon: knobs.epsilon,
+                radio: knobs.radio.knobs(knobs.loss),
+                rounds_per_time: knobs.rounds_per_time,
+                sensing: knobs.sensing,
+            },
             replan_every: self.replan,
             latency,
-            trace,
             commit: self.commit,
             hysteresis: self.hysteresis,
-            ..RunOptions::default()
         }
     }
 }
@@ -158,7 +172,7 @@ pub struct RunArgs {
     mission: PathBuf,
     /// The allocator (ignored with --model), or grape / auction: GRAPE or the auction
     /// run by the robots themselves over the radio.
-    #[arg(long, default_value_t = MissionMethod::Central(Method::Opt))]
+    #[arg(long, default_value_t = MissionPlan::default().method)]
     method: MissionMethod,
     /// A trained model's run directory instead of a built-in method.
     #[arg(long)]
@@ -215,24 +229,29 @@ pub fn run(command: MissionCommand) -> Result<()> {
     }
 }
 
+/// `LO,HI` of the default workloads, for `--workload`.
+static DEFAULT_WORKLOAD: std::sync::LazyLock<String> = std::sync::LazyLock::new(|| {
+    let (lo, hi) = MissionKnobs::default().workload;
+    format!("{lo},{hi}")
+});
+
 fn generate(args: &GenArgs) -> Result<()> {
     let &[lo, hi] = args.workload.as_slice() else {
         bail!("--workload takes two numbers, LO,HI");
     };
-    let mut config = MissionConfig::new(args.preset, args.robots, args.tasks, args.seed);
-    config.workload_min = lo;
-    config.workload_max = hi;
-    config.speed = args.speed;
-    config.arena = args.arena;
-    config.horizon = args.horizon;
-    config.waves = args.waves;
-    config.interval = args.interval;
-    if let Some(rate) = args.rate {
-        config.rate = rate;
-    }
-    config.fail_share = args.fail_share;
-    config.capacity_slack = args.capacity_slack;
-    config.allow_void = args.allow_void;
+    let knobs = MissionKnobs {
+        workload: (lo, hi),
+        speed: args.speed,
+        arena: args.arena,
+        horizon: args.horizon,
+        waves: args.waves,
+        interval: args.interval,
+        rate: args.rate,
+        fail_share: args.fail_share,
+        capacity_slack: args.capacity_slack,
+        allow_void: args.allow_void,
+    };
+    let config = knobs.config(args.preset, args.robots, args.tasks, args.seed);
     let mission = config.generate()?;
     write_atomic(&args.out, (mission.to_json() + "\n").as_bytes())?;
     println!(
@@ -252,42 +271,37 @@ fn read_mission(path: &Path) -> Result<Mission> {
     Mission::from_json(&text).with_context(|| path.display().to_string())
 }
 
-fn planner(method: MissionMethod, model: Option<&Path>, looping: &LoopArgs) -> Result<Planner> {
-    Ok(match (model, method) {
-        (Some(dir), _) => Planner::model(dir, ModelOptions::default(), looping.warm)?,
-        (None, MissionMethod::Central(method)) => {
-            Planner::method(method, looping.seed, looping.warm)
-        }
-        (None, swarm) => {
-            let knobs = &looping.swarm;
-            let method = (swarm.swarm(knobs.preference, knobs.epsilon))
-                .expect("a method that is not central is decentralised");
-            let network = Network {
-                loss: knobs.loss,
-                ..knobs.radio.network()
-            };
-            Planner::swarm(Decentralised {
-                rounds_per_time: knobs.rounds_per_time,
-                sensing: knobs.sensing,
-                seed: looping.seed,
-                ..Decentralised::new(method, network)
-            })
-        }
-    })
-}
-
 fn run_one(args: &RunArgs) -> Result<()> {
+    let inputs: Vec<&Path> = std::iter::once(args.mission.as_path())
+        .chain(args.model.as_deref())
+        .collect();
+    let outputs = [
+        ("trace", args.trace.as_deref()),
+        ("animate", args.animate.as_deref()),
+    ];
+    crate::refuse_overwriting_inputs(&outputs, &inputs)?;
     let mission = read_mission(&args.mission)?;
-    let planner = planner(args.method, args.model.as_deref(), &args.looping)?;
-    let mut options = args.looping.options(args.trace.is_some());
+    let plan = args.looping.plan(args.method);
+    let planner = planner(&plan, args.model.as_deref())?;
+    let mut recording = Recording {
+        trace: args.trace.is_some(),
+        frame_every: None,
+    };
     if args.animate.is_some() {
         // Frames enough for a smooth page, few enough to keep it a few megabytes.
         let frames = (2_000_000 / mission.robots.len().max(1)).clamp(20, 400);
-        options.frame_every = Some(mission.horizon / frames as f64);
+        recording.frame_every = Some(mission.horizon / frames as f64);
     }
-    // Mission time in hundredths, for the bar.
-    let bar = afg_eval::report::progress((100.0 * mission.horizon).ceil() as u64, "mission time");
-    let run = planner.run_with(&mission, options, |t| bar.set_position((100.0 * t) as u64))?;
+    // The bar counts mission time (in thousandths of the horizon, the run's latest end)
+    // and fills when the run ends, early or not.
+    let horizon = mission.horizon;
+    let bar = afg_eval::report::progress(1000, "mission time");
+    let run = planner.run(&mission, recording, |t| {
+        bar.set_message(format!("mission time {t:.2} of at most {horizon}"));
+        bar.set_position((1000.0 * t / horizon) as u64);
+    })?;
+    bar.set_message(format!("mission ended at {:.2}", run.metrics.end));
+    bar.set_position(1000);
     bar.finish_and_clear();
     if let Some(path) = &args.animate {
         let title = format!("{} on {}", planner.name(), args.mission.display());
@@ -299,7 +313,7 @@ fn run_one(args: &RunArgs) -> Result<()> {
     if args.json {
         println!("{}", serde_json::to_string(&run.metrics)?);
     } else {
-        print_metrics(&planner.name(), &args.mission, &run);
+        print_metrics(planner.name(), &args.mission, &run);
         if args.looping.latency_factor.is_some() {
             println!(
                 "  (measured latency: mission times depend on this machine, not reproducible run to run)"
@@ -357,6 +371,13 @@ fn print_metrics(name: &str, path: &Path, run: &MissionRun) {
 }
 
 fn run_compare(args: &CompareArgs) -> Result<()> {
+    let inputs: Vec<&Path> = args
+        .mission
+        .iter()
+        .chain(&args.model)
+        .map(PathBuf::as_path)
+        .collect();
+    crate::refuse_overwriting_inputs(&[("svg", args.svg.as_deref())], &inputs)?;
     let missions = args
         .mission
         .iter()
@@ -365,19 +386,28 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
     let mut planners: Vec<Planner> = args
         .methods
         .iter()
-        .map(|&m| planner(m, None, &args.looping))
-        .collect::<Result<_>>()?;
-    for dir in &args.model {
-        planners.push(planner(
-            MissionMethod::Central(Method::Opt),
-            Some(dir),
-            &args.looping,
-        )?);
+        .map(|&m| planner(&args.looping.plan(m), None))
+        .collect::<Result<_, _>>()?;
+    let models = args
+        .model
+        .iter()
+        .map(|dir| planner(&args.looping.plan(MissionMethod::default()), Some(dir)))
+        .collect::<Result<Vec<_>, _>>()?;
+    // Rows of the same name (two models of the same kind): theirs say which directory.
+    let names: Vec<String> = (planners.iter().chain(&models))
+        .map(|p| p.name().to_string())
+        .collect();
+    for (model, dir) in models.into_iter().zip(&args.model) {
+        let name = model.name().to_string();
+        let shared = names.iter().filter(|n| **n == name).count() > 1;
+        planners.push(if shared {
+            model.named(format!("{name} ({})", dir.display()))
+        } else {
+            model
+        });
     }
     let bar = afg_eval::report::progress((missions.len() * planners.len()) as u64, "missions");
-    let results = compare(&missions, &planners, args.looping.options(false), || {
-        bar.inc(1)
-    })?;
+    let results = compare(&missions, &planners, Recording::default(), || bar.inc(1))?;
     bar.finish_and_clear();
     if let Some(path) = &args.svg {
         let curves = results
@@ -394,10 +424,7 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
         println!(
             "{} mission(s), means over them{}\n",
             missions.len(),
-            if matches!(
-                args.looping.options(false).latency,
-                Latency::Measured { .. }
-            ) {
+            if args.looping.latency_factor.is_some() {
                 " (measured latency: not reproducible run to run)"
             } else {
                 ""

@@ -10,7 +10,7 @@ use afg_eval::swarm::{SwarmGrid, table};
 use afg_game::fs::write_atomic_making_dirs;
 use afg_game::io::read_instances;
 use afg_game::{GeneratorConfig, Named, Preference};
-use afg_graph::GraphKind;
+use afg_mission::{RadioKnobs, SwarmKnobs};
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 
@@ -24,10 +24,10 @@ pub struct SwarmArgs {
     #[arg(long, value_enum, value_delimiter = ',', default_value = "grape")]
     method: Vec<MethodName>,
     /// GRAPE's preference: selfish (the paper's GRAPE DA) or balanced.
-    #[arg(long, value_parser = crate::choice::<Preference>(), default_value = "selfish")]
+    #[arg(long, value_parser = crate::choice::<Preference>(), default_value = SwarmKnobs::default().preference.name())]
     preference: Preference,
     /// The auction's least price increment ε (its result is within 2N·ε of the optimum).
-    #[arg(long, default_value_t = 1e-3)]
+    #[arg(long, default_value_t = SwarmKnobs::default().epsilon)]
     epsilon: f64,
     /// Robot counts (comma-separated); instances drawn from the paper's distribution.
     #[arg(long, value_delimiter = ',', default_value = "1000")]
@@ -79,42 +79,39 @@ pub struct SwarmArgs {
 }
 
 /// The radio's knobs but the loss: who hears whom, bursts, delays and asynchrony
-/// (shared by `afg swarm` and `afg mission`).
+/// (shared by `afg swarm` and `afg mission`; defaults of [`RadioKnobs::default`]).
 #[derive(Args)]
 pub struct RadioArgs {
     /// Link robots within this distance (the arena is the unit square) instead of to
     /// their 10 nearest.
     #[arg(long, conflicts_with = "knn")]
     radius: Option<f64>,
-    /// Link each robot to its K nearest (kept in both directions) [default: 10].
-    #[arg(long)]
-    knn: Option<usize>,
+    /// Link each robot to its K nearest (kept in both directions).
+    #[arg(long, default_value_t = RadioKnobs::default().knn)]
+    knn: usize,
     /// Losses come in bursts of this mean length in rounds (Gilbert–Elliott) instead of
     /// independently.
     #[arg(long)]
     burst: Option<f64>,
     /// A delivered message arrives 0..=DELAY rounds late (uniform).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = RadioKnobs::default().delay)]
     delay: u32,
-    /// Asynchronous robots: each wakes in a round with this chance (1 = synchronous).
-    #[arg(long = "async", default_value_t = 1.0)]
+    /// Asynchronous robots: each wakes in a round with this chance (1 = synchronous;
+    /// `--async` is its old spelling).
+    #[arg(long, alias = "async", default_value_t = RadioKnobs::default().activation)]
     activation: f64,
 }
 
 impl RadioArgs {
-    /// The network these knobs give, with no loss, failures or partition.
-    pub fn network(&self) -> Network {
-        let graph = match (self.radius, self.knn) {
-            (Some(radius), _) => GraphKind::Radius { radius },
-            (None, Some(k)) => GraphKind::Knn { k },
-            (None, None) => GraphKind::default(),
-        };
-        Network {
-            graph,
+    /// The radio of these knobs with a share `loss` of messages lost.
+    pub fn knobs(&self, loss: f64) -> RadioKnobs {
+        RadioKnobs {
+            radius: self.radius,
+            knn: self.knn,
+            loss,
             burst: self.burst,
-            max_delay: self.delay,
+            delay: self.delay,
             activation: self.activation,
-            ..Network::default()
         }
     }
 }
@@ -194,7 +191,7 @@ fn grid(args: &SwarmArgs) -> Result<SwarmGrid> {
         instances,
         network: Network {
             partition_until: args.partition_until,
-            ..args.radio.network()
+            ..args.radio.knobs(0.0).network()
         },
         losses: args.loss.clone(),
         failing: args.fail.clone(),

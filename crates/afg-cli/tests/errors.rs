@@ -35,6 +35,9 @@ fn a_failing_command_prints_one_line_and_exits_1_even_with_backtraces_on() {
     // Each cause once, even where an error prints its source in its own message.
     assert_eq!(text.matches("No such file").count(), 1, "{text}");
 
+    // A failed `gen` (instances or a mission) creates no file.
+    let out_path = std::env::temp_dir().join(format!("afg-not-made-{}.jsonl", std::process::id()));
+    let out_arg = out_path.to_str().unwrap();
     let out = afg(&[
         "gen",
         "--robots",
@@ -42,13 +45,20 @@ fn a_failing_command_prints_one_line_and_exits_1_even_with_backtraces_on() {
         "--capacity-slack",
         "0.5",
         "--out",
-        "x.jsonl",
+        out_arg,
     ]);
     assert_eq!(out.status.code(), Some(1));
     assert_eq!(
         stderr(&out),
         "error: invalid generator parameter: capacity slack must be at least 1 (got 0.5)\n"
     );
+    assert!(!out_path.exists());
+    let mission = [
+        "mission", "gen", "--preset", "waves", "--robots", "5", "--tasks", "2",
+    ];
+    let out = afg(&[&mission[..], &["--speed=-1", "--out", out_arg]].concat());
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(!out_path.exists());
 }
 
 #[test]

@@ -156,6 +156,54 @@ mod minus_one_for_none {
     }
 }
 
+/// Where a JSON document failed on a non-number (`NaN`, `Infinity`, `-Infinity`, as
+/// Python's `json` writes them): the message naming the token, its place and its field,
+/// or `None` for any other error.
+///
+/// # Examples
+/// ```
+/// let text = r#"{"tasks":[{"workload":NaN}]}"#;
+/// let err = serde_json::from_str::<serde_json::Value>(text).unwrap_err();
+/// let message = afg_game::io::non_finite_number(text, &err).expect("a NaN");
+/// assert!(message.contains("`NaN`") && message.contains("field `workload`"), "{message}");
+/// assert!(message.contains("JSON has no NaN or Infinity"));
+/// let err = serde_json::from_str::<serde_json::Value>("{,}").unwrap_err();
+/// assert!(afg_game::io::non_finite_number("{,}", &err).is_none());
+/// ```
+pub fn non_finite_number(text: &str, err: &serde_json::Error) -> Option<String> {
+    if !err.is_syntax() {
+        return None;
+    }
+    let line_start: usize = text
+        .split_inclusive('\n')
+        .take(err.line().saturating_sub(1))
+        .map(str::len)
+        .sum();
+    let line = &text[line_start..];
+    // serde_json's column is at or just after the token's first character.
+    let from = line
+        .char_indices()
+        .nth(err.column().saturating_sub(2))
+        .map_or(line.len(), |(i, _)| i);
+    let window = &line[from..];
+    let start = ["-Infinity", "Infinity", "NaN"]
+        .iter()
+        .filter_map(|token| window.find(token).filter(|&i| i <= 2).map(|i| (i, *token)))
+        .min()?;
+    let before = &text[..line_start + from + start.0];
+    let field = before
+        .rfind(':')
+        .and_then(|colon| before[..colon].trim_end().strip_suffix('"'))
+        .and_then(|key| key.rfind('"').map(|open| &key[open + 1..]));
+    let field = field.map_or(String::new(), |f| format!(" (field `{f}`)"));
+    Some(format!(
+        "`{}` at line {} column {}{field}: JSON has no NaN or Infinity; write a finite number",
+        start.1,
+        err.line(),
+        err.column()
+    ))
+}
+
 fn json_error(line: Option<usize>) -> impl FnOnce(serde_json::Error) -> GameError {
     move |source| GameError::Json { line, source }
 }

@@ -83,27 +83,91 @@ pub struct MissionConfig {
     pub capacity_slack: Option<f64>,
 }
 
-impl MissionConfig {
-    /// The defaults: workloads 1–3, speed 1, a unit arena, horizon 40, 4 waves every
-    /// 5 time units, a Poisson rate of K / 20, 30 % of the robots failing.
-    pub fn new(preset: Preset, robots: usize, tasks: usize, seed: u64) -> Self {
-        MissionConfig {
-            preset,
-            robots,
-            tasks,
-            seed,
-            workload_min: 1.0,
-            workload_max: 3.0,
+/// The knobs of a drawn mission besides its preset, size and seed, as every front end
+/// spells them (`afg mission gen`, `afg.Mission.generate`), with the one set of
+/// defaults: workloads 1–3, speed 1, a unit arena, horizon 40, 4 waves every 5 time
+/// units, a Poisson rate of K / 20, 30 % of the robots failing (the instances' twin is
+/// [`afg_game::GeneratorKnobs`]).
+///
+/// # Examples
+/// ```
+/// use afg_mission::{MissionConfig, MissionKnobs, Preset};
+/// let knobs = MissionKnobs { horizon: 60.0, ..MissionKnobs::default() };
+/// let config = knobs.config(Preset::Poisson, 40, 10, 1);
+/// assert_eq!((config.horizon, config.rate), (60.0, 0.5));
+/// assert_eq!(MissionKnobs::default().config(Preset::Waves, 5, 2, 0), MissionConfig::new(Preset::Waves, 5, 2, 0));
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MissionKnobs {
+    /// Workloads are uniform in `[lo, hi]` (one robot does 1 unit per time unit).
+    pub workload: (f64, f64),
+    /// Every robot's speed (arena units per time unit).
+    pub speed: f64,
+    /// The arena's side: positions uniform in `[0, arena]²`.
+    pub arena: f64,
+    /// The mission ends at this time at the latest.
+    pub horizon: f64,
+    /// Waves of tasks (waves, attrition).
+    pub waves: usize,
+    /// Time between waves.
+    pub interval: f64,
+    /// Task arrivals per time unit (poisson; `None`: K / 20).
+    pub rate: Option<f64>,
+    /// Share of the robots that fail (attrition), at times uniform over the whole
+    /// horizon: a run that ends earlier (every task done) sees only the failures before
+    /// its end.
+    pub fail_share: f64,
+    /// Task capacities as the instance generator's `capacity_slack` draws them (≥ 1).
+    pub capacity_slack: Option<f64>,
+    /// Robots may idle (the void task) when no task is worth their trip.
+    pub allow_void: bool,
+}
+
+impl Default for MissionKnobs {
+    fn default() -> Self {
+        MissionKnobs {
+            workload: (1.0, 3.0),
             speed: 1.0,
             arena: 1.0,
             horizon: 40.0,
             waves: 4,
             interval: 5.0,
-            rate: tasks as f64 / 20.0,
+            rate: None,
             fail_share: 0.3,
-            allow_void: false,
             capacity_slack: None,
+            allow_void: false,
         }
+    }
+}
+
+impl MissionKnobs {
+    /// The configuration of a mission of `preset` with `robots`, `tasks` and `seed`
+    /// under these knobs (checked when drawn, [`MissionConfig::generate`]).
+    pub fn config(&self, preset: Preset, robots: usize, tasks: usize, seed: u64) -> MissionConfig {
+        MissionConfig {
+            preset,
+            robots,
+            tasks,
+            seed,
+            workload_min: self.workload.0,
+            workload_max: self.workload.1,
+            speed: self.speed,
+            arena: self.arena,
+            horizon: self.horizon,
+            waves: self.waves,
+            interval: self.interval,
+            rate: self.rate.unwrap_or(tasks as f64 / 20.0),
+            fail_share: self.fail_share,
+            allow_void: self.allow_void,
+            capacity_slack: self.capacity_slack,
+        }
+    }
+}
+
+impl MissionConfig {
+    /// The defaults of [`MissionKnobs::default`].
+    pub fn new(preset: Preset, robots: usize, tasks: usize, seed: u64) -> Self {
+        MissionKnobs::default().config(preset, robots, tasks, seed)
     }
 
     /// Draws the mission.

@@ -6,6 +6,9 @@
 //!   (`afg-mission`, versioned, unknown fields refused) and its checks.
 //! - [`MissionConfig`]: missions drawn from presets ([`Preset`]: static, waves,
 //!   Poisson arrivals, attrition) with every knob.
+//! - [`MissionPlan`]: the one front door — who decides and how (a built-in method,
+//!   GRAPE or the auction over the radio with their [`SwarmKnobs`], or an allocator
+//!   passed in), checked once into a [`Planner`] that runs missions.
 //! - [`simulate`]: the event-driven run with a replanning rule ([`Replan`]: from
 //!   scratch, warm-started, or the exact optimum re-solved from its previous prices),
 //!   an optional decision latency ([`Latency`]) and replanning interval, returning the
@@ -26,7 +29,7 @@
 //! use afg_mission::{MissionConfig, Preset, Replan, RunOptions, simulate};
 //! let mission = MissionConfig::new(Preset::Waves, 40, 8, 2).generate()?;
 //! let greedy = simulate(&mission, Replan::Scratch(&Greedy), RunOptions::default())?;
-//! let opt = simulate(&mission, Replan::IncrementalOpt, RunOptions::default())?;
+//! let opt = simulate(&mission, Replan::WarmOpt, RunOptions::default())?;
 //! assert_eq!(greedy.metrics.tasks, 8);
 //! assert!(opt.metrics.decisions >= 4); // at least one per wave
 //! # Ok::<(), afg_mission::MissionError>(())
@@ -34,10 +37,12 @@
 
 mod generate;
 mod mission;
+mod plan;
 mod sim;
 
-pub use generate::{MissionConfig, Preset};
+pub use generate::{MissionConfig, MissionKnobs, Preset};
 pub use mission::{Failure, MISSION_FORMAT, MISSION_VERSION, Mission, RobotSpec, TaskSpec};
+pub use plan::{MissionMethod, MissionPlan, Planner, RadioKnobs, Recording, SwarmKnobs};
 pub use sim::{
     Decentralised, EnvStep, Frame, Latency, Metrics, MissionEnv, MissionRun, Perception,
     ROBOT_FEATURES, Replan, RunOptions, SwarmMetrics, TASK_FEATURES, TimelinePoint, TraceEvent,

@@ -144,7 +144,13 @@ impl Mission {
     /// [`MissionError::Format`] for another format or version; the errors of
     /// [`Mission::check`].
     pub fn from_json(text: &str) -> Result<Self, MissionError> {
-        let mission: Mission = serde_json::from_str(text.trim_start_matches('\u{feff}'))?;
+        let text = text.trim_start_matches('\u{feff}');
+        let mission: Mission = serde_json::from_str(text).map_err(|e| {
+            match afg_game::io::non_finite_number(text, &e) {
+                Some(message) => MissionError::Invalid(message),
+                None => MissionError::Json(e),
+            }
+        })?;
         if mission.format != MISSION_FORMAT || mission.version != MISSION_VERSION {
             return Err(MissionError::Format {
                 found: format!("{} version {}", mission.format, mission.version),

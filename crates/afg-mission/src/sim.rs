@@ -27,7 +27,7 @@ pub enum Replan<'a> {
     /// The exact optimum, re-solved at every decision from the previous decision's task
     /// prices (a new task starts at [`Optimum::start_price`](afg_baseline::Optimum::start_price)):
     /// the same optimum, found from a warm start.
-    IncrementalOpt,
+    WarmOpt,
     /// No central decision: the robots run a decentralised method round by round and
     /// each heads where its own view says.
     Decentralised(&'a Decentralised),
@@ -412,7 +412,7 @@ pub fn simulate_with(
     Ok(sim.finish())
 }
 
-fn check_options(options: &RunOptions) -> Result<(), MissionError> {
+pub(crate) fn check_options(options: &RunOptions) -> Result<(), MissionError> {
     let positive = |x: f64| x.is_finite() && x > 0.0;
     if options.replan_every.is_some_and(|r| !positive(r)) {
         return Err(MissionError::Invalid(
@@ -463,7 +463,7 @@ struct Sim<'m, 'a> {
     /// Legs begun per robot.
     legs: Vec<u64>,
     /// Whether a decision was made (warm starts start after it) and the task prices
-    /// of the last (the incremental optimum).
+    /// of the last (the warm optimum).
     decided: bool,
     prices: HashMap<usize, f64>,
     distance: f64,
@@ -819,6 +819,12 @@ impl<'m, 'a> Sim<'m, 'a> {
             return;
         }
         self.next_frame = Some(due + every);
+        let frame = self.frame();
+        self.frames.push(frame);
+    }
+
+    /// The whole state now.
+    fn frame(&self) -> Frame {
         let positions = (0..self.robots.len())
             .map(|i| {
                 let p = self.position(i);
@@ -846,12 +852,12 @@ impl<'m, 'a> Sim<'m, 'a> {
                 }
             })
             .collect();
-        self.frames.push(Frame {
+        Frame {
             time: self.now,
             positions,
             tasks,
             left,
-        });
+        }
     }
 
     /// Moves time to `to`: work is done at the present coalitions' rates (robots'

@@ -280,7 +280,7 @@ proptest! {
         let replan = match rule {
             0 => Replan::Scratch(allocator.as_ref()),
             1 => Replan::Warm { first: allocator.as_ref(), preference: afg_game::Preference::Balanced },
-            2 => Replan::IncrementalOpt,
+            2 => Replan::WarmOpt,
             3 => Replan::Scratch(&Optimum),
             _ if seed % 2 == 0 => Replan::Decentralised(&grape),
             _ => Replan::Decentralised(&auction),
@@ -310,7 +310,7 @@ fn the_incremental_optimum_is_the_optimum_at_every_decision() {
     for seed in 0..6 {
         let preset = [Preset::Waves, Preset::Poisson, Preset::Attrition][seed as usize % 3];
         let mission = MissionConfig::new(preset, 40, 10, seed).generate().unwrap();
-        let run = simulate(&mission, Replan::IncrementalOpt, traced()).unwrap();
+        let run = simulate(&mission, Replan::WarmOpt, traced()).unwrap();
         let (mut open, mut alive) = (vec![false; 10], vec![true; 40]);
         let mut checked = 0;
         for e in &run.trace {
@@ -365,12 +365,12 @@ fn latency_delays_decisions() {
     let mission = MissionConfig::new(Preset::Waves, 30, 8, 3)
         .generate()
         .unwrap();
-    let instant = simulate(&mission, Replan::IncrementalOpt, traced()).unwrap();
+    let instant = simulate(&mission, Replan::WarmOpt, traced()).unwrap();
     let slow = RunOptions {
         latency: Latency::Fixed { delay: 0.5 },
         ..traced()
     };
-    let late = simulate(&mission, Replan::IncrementalOpt, slow).unwrap();
+    let late = simulate(&mission, Replan::WarmOpt, slow).unwrap();
     for e in &late.trace {
         if let TraceEvent::Decision { time, asked, .. } = e {
             assert!((time - asked - 0.5).abs() < 1e-12);
@@ -415,7 +415,7 @@ fn bad_missions_are_refused_in_one_line() {
     assert!(
         simulate(
             &mission,
-            Replan::IncrementalOpt,
+            Replan::WarmOpt,
             RunOptions {
                 replan_every: Some(0.0),
                 ..RunOptions::default()

@@ -9,11 +9,10 @@ use afg_graph::{StateParts, Units};
 use afg_learn::env::{Env, Shaping};
 use numpy::ndarray::{Array1, Array2};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods};
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use rayon::prelude::*;
 
-use crate::{PyInstance, value_error};
+use crate::{PyInstance, bad_input};
 
 /// One episode: the instance, and the MDP's state between calls (the assignment so far
 /// and its features, the robots that have acted), the reward shaping, and whether the
@@ -226,7 +225,7 @@ impl EnvCore {
             crate::named::<Shaping>(shaping)?,
             void_action,
         )
-        .map_err(PyValueError::new_err)?;
+        .map_err(crate::bad_input)?;
         Ok(EnvCore { episode })
     }
 
@@ -235,15 +234,14 @@ impl EnvCore {
         self.episode = self
             .episode
             .renew(instance.inner.clone())
-            .map_err(PyValueError::new_err)?;
+            .map_err(crate::bad_input)?;
         Ok(())
     }
 
     /// The acting robot takes task `action`: `(reward, terminated)`.
     fn step(&mut self, py: Python<'_>, action: i64) -> PyResult<(f64, bool)> {
         let episode = &mut self.episode;
-        py.detach(|| episode.step(action))
-            .map_err(PyValueError::new_err)
+        py.detach(|| episode.step(action)).map_err(crate::bad_input)
     }
 
     /// `(robot_features (N, M), task_features (N, M), actor, action_mask (actions,))`.
@@ -366,7 +364,7 @@ impl VecEnvCore {
         allow_void: bool,
     ) -> PyResult<Self> {
         if num_envs == 0 {
-            return Err(PyValueError::new_err("num_envs must be at least 1"));
+            return Err(crate::bad_input("num_envs must be at least 1"));
         }
         let draw = Draw {
             robots,
@@ -376,14 +374,14 @@ impl VecEnvCore {
             beta,
             allow_void,
         };
-        let first = Arc::new(draw.instance(0).map_err(crate::game_error)?);
+        let first = Arc::new(draw.instance(0).map_err(crate::crate_error)?);
         let episode = Episode::new(
             first,
             crate::named::<Units>(units)?,
             crate::named::<Shaping>(shaping)?,
             allow_void,
         )
-        .map_err(PyValueError::new_err)?;
+        .map_err(crate::bad_input)?;
         Ok(VecEnvCore {
             episodes: vec![episode; num_envs],
             draw,
@@ -395,7 +393,7 @@ impl VecEnvCore {
     /// `seeds[k]`.
     fn reset(&mut self, py: Python<'_>, indices: Vec<usize>, seeds: Vec<u64>) -> PyResult<()> {
         if indices.len() != seeds.len() || indices.iter().any(|&i| i >= self.episodes.len()) {
-            return Err(PyValueError::new_err(
+            return Err(crate::bad_input(
                 "one seed per index, each index below num_envs",
             ));
         }
@@ -407,11 +405,11 @@ impl VecEnvCore {
                     .map(|&s| draw.instance(s))
                     .collect::<Result<Vec<_>, _>>()
             })
-            .map_err(crate::game_error)?;
+            .map_err(crate::crate_error)?;
         for (i, inst) in indices.into_iter().zip(fresh) {
             self.episodes[i] = self.episodes[i]
                 .renew(Arc::new(inst))
-                .map_err(PyValueError::new_err)?;
+                .map_err(crate::bad_input)?;
         }
         Ok(())
     }
@@ -428,7 +426,7 @@ impl VecEnvCore {
     ) -> PyResult<(StepArrays<'py>, VecObservationArrays<'py>)> {
         let k = self.episodes.len();
         if actions.len() != k || skip.len() != k {
-            return Err(PyValueError::new_err(format!(
+            return Err(crate::bad_input(format!(
                 "expected {k} actions and {k} skip flags, got {} and {}",
                 actions.len(),
                 skip.len()
@@ -518,7 +516,7 @@ impl VecEnvCore {
                     })
                     .collect::<Result<Vec<_>, String>>()
             })
-            .map_err(PyValueError::new_err)?
+            .map_err(crate::bad_input)?
         };
         Ok((results, (nu, mu, actors, masks)))
     }
@@ -533,7 +531,7 @@ impl VecEnvCore {
     fn episode(&self, index: usize) -> PyResult<&Episode> {
         self.episodes
             .get(index)
-            .ok_or_else(|| value_error(format!("no environment {index}")))
+            .ok_or_else(|| bad_input(format!("no environment {index}")))
     }
 }
 

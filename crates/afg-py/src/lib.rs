@@ -8,31 +8,67 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use afg_game::{
-    Assignment, GameError, GeneratorKnobs, Instance, Named, Point, Preference, Task, TaskId,
-};
+use afg_game::{Assignment, GeneratorKnobs, Instance, Named, Point, Preference, Task, TaskId};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
-use pyo3::exceptions::{PyFileNotFoundError, PyValueError};
 use pyo3::prelude::*;
+use pyo3::types::PyType;
 
 mod env;
 mod mission;
 mod mission_env;
 mod solve;
 
-/// A Rust error as a `ValueError` carrying the same message.
-pub(crate) fn value_error(e: impl std::fmt::Display) -> PyErr {
-    PyValueError::new_err(e.to_string())
+/// One of afg's own exceptions (`afg/_errors.py`: `AfgError` and its subclasses),
+/// carrying `message`.
+fn afg_error(class: &str, message: String) -> PyErr {
+    Python::attach(|py| {
+        let class = py
+            .import("afg._errors")
+            .and_then(|module| module.getattr(class))
+            .and_then(|class| Ok(class.cast_into::<PyType>()?));
+        match class {
+            Ok(class) => PyErr::from_type(class, message),
+            Err(e) => e,
+        }
+    })
 }
 
-/// A game error: `FileNotFoundError` for a missing file, `ValueError` otherwise.
-pub(crate) fn game_error(e: GameError) -> PyErr {
-    match &e {
-        GameError::Io { source, .. } if source.kind() == std::io::ErrorKind::NotFound => {
-            PyFileNotFoundError::new_err(e.to_string())
+/// Bad input as `afg.InvalidInputError` (also a `ValueError`) with the same message.
+pub(crate) fn bad_input(e: impl std::fmt::Display) -> PyErr {
+    afg_error("InvalidInputError", e.to_string())
+}
+
+/// A missing file as `afg.MissingFileError` (also a `FileNotFoundError`).
+pub(crate) fn missing_file(e: impl std::fmt::Display) -> PyErr {
+    afg_error("MissingFileError", e.to_string())
+}
+
+/// A request refused in the object's state as `afg.RefusedError` (also a
+/// `RuntimeError`).
+pub(crate) fn refused(e: impl std::fmt::Display) -> PyErr {
+    afg_error("RefusedError", e.to_string())
+}
+
+/// Whether `e` is, at its root, a file that is not there.
+fn not_found(e: &(dyn std::error::Error + 'static)) -> bool {
+    let mut cause = Some(e);
+    while let Some(e) = cause {
+        if let Some(io) = e.downcast_ref::<std::io::Error>() {
+            return io.kind() == std::io::ErrorKind::NotFound;
         }
-        _ => value_error(e),
+        cause = e.source();
+    }
+    false
+}
+
+/// An error of the crates: `afg.MissingFileError` where a file is missing,
+/// `afg.InvalidInputError` otherwise.
+pub(crate) fn crate_error(e: impl std::error::Error + 'static) -> PyErr {
+    if not_found(&e) {
+        missing_file(e)
+    } else {
+        bad_input(e)
     }
 }
 
@@ -65,7 +101,7 @@ pub(crate) fn reduce_to<'py, T: pyo3::PyTypeInfo>(
 /// The value a user named (`"balanced"`, `"bounded"`, …), or a `ValueError` listing the
 /// names there are.
 pub(crate) fn named<T: Named>(name: &str) -> PyResult<T> {
-    T::from_name(name).map_err(value_error)
+    T::from_name(name).map_err(bad_input)
 }
 
 /// One game: N robots, M tasks, the distance penalty beta (validated on construction).
@@ -84,7 +120,7 @@ impl PyInstance {
 
     /// `tasks` (robot i's task, -1 for none) as an assignment of this instance.
     pub(crate) fn assignment(&self, tasks: &IntVector<'_>) -> PyResult<Assignment> {
-        Assignment::from_tasks(&self.inner, task_ids(tasks)?).map_err(game_error)
+        Assignment::from_tasks(&self.inner, task_ids(tasks)?).map_err(crate_error)
     }
 }
 
@@ -97,7 +133,7 @@ pub(crate) fn task_ids(tasks: &IntVector<'_>) -> PyResult<Vec<Option<TaskId>>> {
         .map(|(i, t)| match t {
             -1 => Ok(None),
             t => u32::try_from(t).map(|t| Some(TaskId(t))).map_err(|_| {
-                PyValueError::new_err(format!(
+                bad_input(format!(
                     "robot {i} has task {t}: a task is 0..M-1, or -1 for none"
                 ))
             }),
@@ -117,7 +153,7 @@ pub(crate) fn task_indices(assignment: &Assignment) -> Vec<i64> {
 fn points(array: &PyReadonlyArray2<'_, f64>, what: &str) -> PyResult<Vec<Point>> {
     let a = array.as_array();
     if a.ncols() != 2 {
-        return Err(PyValueError::new_err(format!(
+        return Err(bad_input(format!(
             "{what} must have shape (K, 2), got {:?}",
             a.shape()
         )));
@@ -159,7 +195,7 @@ impl PyInstance {
             .map(|c| c.to_vec())
             .unwrap_or_else(|| vec![-1; m]);
         if rewards.len() != m || eps.len() != m || capacities.len() != m {
-            return Err(PyValueError::new_err(format!(
+            return Err(bad_input(format!(
                 "{m} task positions but {} rewards, {} eps and {} capacities",
                 rewards.len(),
                 eps.len(),
@@ -170,9 +206,9 @@ impl PyInstance {
             .map(|j| {
                 let capacity = match capacities[j] {
                     -1 => Ok(None),
-                    c => usize::try_from(c).map(Some).map_err(|_| {
-                        PyValueError::new_err(format!("task {j} has capacity {c}; -1 for none"))
-                    }),
+                    c => usize::try_from(c)
+                        .map(Some)
+                        .map_err(|_| bad_input(format!("task {j} has capacity {c}; -1 for none"))),
                 }?;
                 Ok(Task {
                     position: positions[j],
@@ -188,7 +224,7 @@ impl PyInstance {
         } else {
             Instance::new(robots, tasks, beta)
         }
-        .map_err(game_error)?;
+        .map_err(crate_error)?;
         Ok(Self::new_from(inst))
     }
 
@@ -197,7 +233,7 @@ impl PyInstance {
     fn from_json(path: PathBuf) -> PyResult<Self> {
         Instance::read(&path)
             .map(Self::new_from)
-            .map_err(game_error)
+            .map_err(crate_error)
     }
 
     /// Parses an instance document from a string.
@@ -205,7 +241,7 @@ impl PyInstance {
     fn parse(text: &str) -> PyResult<Self> {
         Instance::from_json(text)
             .map(Self::new_from)
-            .map_err(game_error)
+            .map_err(crate_error)
     }
 
     /// An instance from the dict of an "afg-instance" document (as `json.load` gives).
@@ -231,7 +267,7 @@ impl PyInstance {
 
     /// Writes the instance to `path` (atomically).
     fn write(&self, path: PathBuf) -> PyResult<()> {
-        self.inner.write(&path).map_err(game_error)
+        self.inner.write(&path).map_err(crate_error)
     }
 
     /// Number of robots N.
@@ -341,7 +377,7 @@ impl PyInstance {
 /// Reads a JSON Lines dataset (or one instance document): a list of instances.
 #[pyfunction]
 fn read_jsonl(path: PathBuf) -> PyResult<Vec<PyInstance>> {
-    let instances = afg_game::io::read_instances(&path).map_err(game_error)?;
+    let instances = afg_game::io::read_instances(&path).map_err(crate_error)?;
     Ok(instances.into_iter().map(PyInstance::new_from).collect())
 }
 
@@ -350,7 +386,7 @@ fn read_jsonl(path: PathBuf) -> PyResult<Vec<PyInstance>> {
 fn write_jsonl(path: PathBuf, instances: Vec<PyRef<'_, PyInstance>>) -> PyResult<()> {
     let insts: Vec<Instance> = instances.iter().map(|i| (*i.inner).clone()).collect();
     afg_game::fs::write_atomic(&path, afg_game::io::dataset_to_jsonl(&insts).as_bytes())
-        .map_err(game_error)
+        .map_err(crate_error)
 }
 
 /// Draws an instance from the paper's distribution (uniform positions, rewards in
@@ -381,7 +417,7 @@ pub(crate) fn generate(
         .config(robots, tasks, seed)
         .and_then(|cfg| cfg.generate())
         .map(PyInstance::new_from)
-        .map_err(game_error)
+        .map_err(crate_error)
 }
 
 /// The compiled core of the `afg` package.

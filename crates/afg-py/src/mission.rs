@@ -6,22 +6,17 @@ use std::path::PathBuf;
 use std::str::FromStr;
 use std::sync::Arc;
 
-use afg_baseline::Network;
-use afg_eval::mission::{MissionMethod, Planner};
-use afg_game::Preference;
-use afg_graph::GraphKind;
-use afg_learn::run::ModelOptions;
+use afg_eval::mission::planner;
 use afg_mission::{
-    Decentralised, Latency, Metrics, Mission, MissionConfig, MissionRun, Preset, RunOptions,
-    TraceEvent,
+    Latency, Metrics, Mission, MissionKnobs, MissionMethod, MissionPlan, MissionRun, Preset,
+    RadioKnobs, Recording, SwarmKnobs, TraceEvent,
 };
 use numpy::ndarray::{Array1, Array2};
 use numpy::{IntoPyArray, PyArray1, PyArray2};
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::value_error;
+use crate::bad_input;
 
 /// A mission: robots (positions, speeds), tasks that appear with a workload, failures,
 /// β and a horizon (validated on construction).
@@ -36,13 +31,13 @@ impl PyMission {
     #[staticmethod]
     fn from_json(path: PathBuf) -> PyResult<Self> {
         let text = std::fs::read_to_string(&path).map_err(|source| {
-            crate::game_error(afg_game::GameError::Io {
+            crate::crate_error(afg_game::GameError::Io {
                 path: path.display().to_string(),
                 source,
             })
         })?;
         let mission = Mission::from_json(&text)
-            .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))?;
+            .map_err(|e| crate::bad_input(format!("{}: {e}", path.display())))?;
         Ok(PyMission {
             inner: Arc::new(mission),
         })
@@ -52,14 +47,15 @@ impl PyMission {
     #[staticmethod]
     fn parse(text: &str) -> PyResult<Self> {
         Ok(PyMission {
-            inner: Arc::new(Mission::from_json(text).map_err(value_error)?),
+            inner: Arc::new(Mission::from_json(text).map_err(bad_input)?),
         })
     }
 
     /// Draws a mission: `preset` is "static", "waves", "poisson" or "attrition"; every
-    /// knob as `afg mission gen` has it.
+    /// knob as `afg mission gen` has it, under the same name; a knob left at None
+    /// takes its default (`afg.mission_defaults()["generate"]`).
     #[staticmethod]
-    #[pyo3(signature = (preset, robots, tasks, seed=0, workload=(1.0, 3.0), speed=1.0, arena=1.0, horizon=40.0, waves=4, interval=5.0, rate=None, fail_share=0.3, capacity_slack=None, allow_void=false))]
+    #[pyo3(signature = (preset, robots, tasks, seed=0, workload=None, speed=None, arena=None, horizon=None, waves=None, interval=None, rate=None, fail_share=None, capacity_slack=None, allow_void=false))]
     // Python's keyword arguments, one per knob.
     #[allow(clippy::too_many_arguments)]
     fn generate(
@@ -67,32 +63,33 @@ impl PyMission {
         robots: usize,
         tasks: usize,
         seed: u64,
-        workload: (f64, f64),
-        speed: f64,
-        arena: f64,
-        horizon: f64,
-        waves: usize,
-        interval: f64,
+        workload: Option<(f64, f64)>,
+        speed: Option<f64>,
+        arena: Option<f64>,
+        horizon: Option<f64>,
+        waves: Option<usize>,
+        interval: Option<f64>,
         rate: Option<f64>,
-        fail_share: f64,
+        fail_share: Option<f64>,
         capacity_slack: Option<f64>,
         allow_void: bool,
     ) -> PyResult<Self> {
-        let mut config = MissionConfig::new(crate::named::<Preset>(preset)?, robots, tasks, seed);
-        (config.workload_min, config.workload_max) = workload;
-        config.speed = speed;
-        config.arena = arena;
-        config.horizon = horizon;
-        config.waves = waves;
-        config.interval = interval;
-        if let Some(rate) = rate {
-            config.rate = rate;
-        }
-        config.fail_share = fail_share;
-        config.capacity_slack = capacity_slack;
-        config.allow_void = allow_void;
+        let d = MissionKnobs::default();
+        let knobs = MissionKnobs {
+            workload: workload.unwrap_or(d.workload),
+            speed: speed.unwrap_or(d.speed),
+            arena: arena.unwrap_or(d.arena),
+            horizon: horizon.unwrap_or(d.horizon),
+            waves: waves.unwrap_or(d.waves),
+            interval: interval.unwrap_or(d.interval),
+            rate,
+            fail_share: fail_share.unwrap_or(d.fail_share),
+            capacity_slack,
+            allow_void,
+        };
+        let config = knobs.config(crate::named::<Preset>(preset)?, robots, tasks, seed);
         Ok(PyMission {
-            inner: Arc::new(config.generate().map_err(value_error)?),
+            inner: Arc::new(config.generate().map_err(bad_input)?),
         })
     }
 
@@ -104,7 +101,7 @@ impl PyMission {
     /// Writes the mission file (atomically).
     fn write(&self, path: PathBuf) -> PyResult<()> {
         afg_game::fs::write_atomic(&path, (self.inner.to_json() + "\n").as_bytes())
-            .map_err(crate::game_error)
+            .map_err(crate::crate_error)
     }
 
     #[getter]
@@ -243,14 +240,14 @@ impl PyMissionResult {
 
     /// Pickles through the run's own JSON document (nothing is run again).
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
-        let document = serde_json::to_string(self).map_err(value_error)?;
+        let document = serde_json::to_string(self).map_err(bad_input)?;
         crate::reduce_to::<PyMissionResult>(py, "_from_state", document)
     }
 
     /// The result of a pickled document (`__reduce__`).
     #[staticmethod]
     fn _from_state(text: &str) -> PyResult<Self> {
-        serde_json::from_str(text).map_err(value_error)
+        serde_json::from_str(text).map_err(bad_input)
     }
 
     fn __repr__(&self) -> String {
@@ -263,7 +260,7 @@ impl PyMissionResult {
 }
 
 fn metrics_dict<'py>(py: Python<'py>, m: &Metrics) -> PyResult<Bound<'py, PyDict>> {
-    let value = serde_json::to_value(m).map_err(value_error)?;
+    let value = serde_json::to_value(m).map_err(bad_input)?;
     object_dict(py, &value)
 }
 
@@ -282,22 +279,26 @@ fn object_dict<'py>(py: Python<'py>, value: &serde_json::Value) -> PyResult<Boun
     Ok(d)
 }
 
-/// Runs `mission` with one allocator in the loop: a built-in method (default "opt")
-/// or a trained model's run directory; `warm=True` warm-starts every decision after
-/// the first (the optimum from its previous prices); `replan=T` also decides every T;
+/// Runs `mission` with one allocator in the loop, with every knob of `afg mission run`
+/// under the same name (docs/missions.md): a built-in method (default "opt") or a
+/// trained model's run directory; `warm=True` warm-starts every decision after the
+/// first (the optimum from its previous prices); `replan=T` also decides every T;
 /// `latency=D` makes each decision take D time units, `latency_factor=F` the
 /// allocator's measured compute time times F; `commit=True` keeps robots at work until
 /// their task is done, `hysteresis=THETA` lets a travelling robot switch only for a
 /// gain above THETA; `trace=True` keeps every decision.
 ///
 /// `method="grape"` (or `"auction"`) has the robots run GRAPE (or the auction)
-/// themselves over the radio:
-/// `rounds_per_time` rounds per time unit, links between robots within `radius` (else
-/// to their 10 nearest) re-evaluated as they move, a share `loss` of messages lost,
-/// and tasks seen within `sensing` (else heard of at once); its metrics gain a
-/// "swarm" dict (rounds, messages, bytes, response times).
+/// themselves over the radio: `rounds_per_time` rounds per time unit, GRAPE's
+/// `preference`, the auction's `epsilon`, links between robots within `radius` (else
+/// to their `knn` nearest) re-evaluated as they move, a share `loss` of messages lost
+/// (in bursts of mean length `burst`), each arriving up to `delay` rounds late, robots
+/// awake in a round with chance `activation`, and tasks seen within `sensing` (else
+/// heard of at once); its metrics gain a "swarm" dict (rounds, messages, bytes,
+/// response times). A swarm knob left at None takes its default
+/// (`afg.mission_defaults()`); one set with a central method is refused.
 #[pyfunction]
-#[pyo3(signature = (mission, method=None, model=None, warm=false, replan=None, latency=None, latency_factor=None, commit=false, hysteresis=None, seed=0, trace=false, rounds_per_time=100.0, radius=None, loss=0.0, sensing=None))]
+#[pyo3(signature = (mission, method=None, model=None, warm=false, replan=None, latency=None, latency_factor=None, commit=false, hysteresis=None, seed=0, trace=false, rounds_per_time=None, loss=None, sensing=None, preference=None, epsilon=None, radius=None, knn=None, burst=None, delay=None, activation=None))]
 // Python's keyword arguments, one per option.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run_mission(
@@ -313,46 +314,26 @@ pub(crate) fn run_mission(
     hysteresis: Option<f64>,
     seed: u64,
     trace: bool,
-    rounds_per_time: f64,
-    radius: Option<f64>,
-    loss: f64,
+    rounds_per_time: Option<f64>,
+    loss: Option<f64>,
     sensing: Option<f64>,
+    preference: Option<&str>,
+    epsilon: Option<f64>,
+    radius: Option<f64>,
+    knn: Option<usize>,
+    burst: Option<f64>,
+    delay: Option<u32>,
+    activation: Option<f64>,
 ) -> PyResult<PyMissionResult> {
-    let planner = match (method, model) {
-        (_, Some(dir)) if method.is_some() => {
-            return Err(PyValueError::new_err(format!(
-                "pass method= or model=, not both (model={})",
-                dir.display()
-            )));
-        }
-        (_, Some(dir)) => {
-            Planner::model(&dir, ModelOptions::default(), warm).map_err(value_error)?
-        }
-        (name, None) => match MissionMethod::from_str(name.unwrap_or("opt")) {
-            Ok(MissionMethod::Central(method)) => Planner::method(method, seed, warm),
-            Ok(swarm) => {
-                let method = (swarm.swarm(Preference::Selfish, 1e-3))
-                    .expect("a method that is not central is decentralised");
-                let mut network = Network {
-                    loss,
-                    ..Network::default()
-                };
-                if let Some(radius) = radius {
-                    network.graph = GraphKind::Radius { radius };
-                }
-                Planner::swarm(Decentralised {
-                    rounds_per_time,
-                    sensing,
-                    seed,
-                    ..Decentralised::new(method, network)
-                })
-            }
-            Err(message) => return Err(PyValueError::new_err(message)),
-        },
-    };
+    if let (Some(_), Some(dir)) = (method, &model) {
+        return Err(crate::bad_input(format!(
+            "pass method= or model=, not both (model={})",
+            dir.display()
+        )));
+    }
     let latency = match (latency, latency_factor) {
         (Some(_), Some(_)) => {
-            return Err(PyValueError::new_err(
+            return Err(crate::bad_input(
                 "pass latency= or latency_factor=, not both",
             ));
         }
@@ -360,22 +341,77 @@ pub(crate) fn run_mission(
         (None, Some(factor)) => Latency::Measured { factor },
         (None, None) => Latency::None,
     };
-    let options = RunOptions {
+    let defaults = SwarmKnobs::default();
+    let radio = RadioKnobs {
+        radius,
+        knn: knn.unwrap_or(defaults.radio.knn),
+        loss: loss.unwrap_or(defaults.radio.loss),
+        burst,
+        delay: delay.unwrap_or(defaults.radio.delay),
+        activation: activation.unwrap_or(defaults.radio.activation),
+    };
+    let plan = MissionPlan {
+        method: MissionMethod::from_str(method.unwrap_or("opt")).map_err(crate::bad_input)?,
+        warm,
+        seed,
+        swarm: SwarmKnobs {
+            preference: preference.map_or(Ok(defaults.preference), crate::named)?,
+            epsilon: epsilon.unwrap_or(defaults.epsilon),
+            radio,
+            rounds_per_time: rounds_per_time.unwrap_or(defaults.rounds_per_time),
+            sensing,
+        },
         replan_every: replan,
         latency,
-        trace,
         commit,
         hysteresis,
-        ..RunOptions::default()
     };
+    let planner = planner(&plan, model.as_deref()).map_err(crate::crate_error)?;
     let inner = Arc::clone(&mission.inner);
+    let recording = Recording {
+        trace,
+        frame_every: None,
+    };
     let run = py
-        .detach(|| planner.run(&inner, options))
-        .map_err(value_error)?;
+        .detach(|| planner.run(&inner, recording, |_| {}))
+        .map_err(crate::bad_input)?;
     Ok(PyMissionResult {
         run,
         robots: mission.inner.robots.len(),
     })
+}
+
+/// The defaults of the knobs left at None: `{"run": {...}, "generate": {...}}`, those
+/// of `run_mission`'s swarm knobs and of `Mission.generate`.
+#[pyfunction]
+pub(crate) fn mission_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let knobs = SwarmKnobs::default();
+    let run = PyDict::new(py);
+    run.set_item("rounds_per_time", knobs.rounds_per_time)?;
+    run.set_item("loss", knobs.radio.loss)?;
+    run.set_item("sensing", knobs.sensing)?;
+    run.set_item("preference", afg_game::Named::name(knobs.preference))?;
+    run.set_item("epsilon", knobs.epsilon)?;
+    run.set_item("radius", knobs.radio.radius)?;
+    run.set_item("knn", knobs.radio.knn)?;
+    run.set_item("burst", knobs.radio.burst)?;
+    run.set_item("delay", knobs.radio.delay)?;
+    run.set_item("activation", knobs.radio.activation)?;
+    let drawn = MissionKnobs::default();
+    let generate = PyDict::new(py);
+    generate.set_item("workload", drawn.workload)?;
+    generate.set_item("speed", drawn.speed)?;
+    generate.set_item("arena", drawn.arena)?;
+    generate.set_item("horizon", drawn.horizon)?;
+    generate.set_item("waves", drawn.waves)?;
+    generate.set_item("interval", drawn.interval)?;
+    generate.set_item("rate", drawn.rate)?;
+    generate.set_item("fail_share", drawn.fail_share)?;
+    generate.set_item("capacity_slack", drawn.capacity_slack)?;
+    let d = PyDict::new(py);
+    d.set_item("run", run)?;
+    d.set_item("generate", generate)?;
+    Ok(d)
 }
 
 /// Adds the mission classes and `run_mission`.
@@ -383,5 +419,6 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyMission>()?;
     m.add_class::<PyMissionResult>()?;
     m.add_function(wrap_pyfunction!(run_mission, m)?)?;
+    m.add_function(wrap_pyfunction!(mission_defaults, m)?)?;
     Ok(())
 }

@@ -6,7 +6,6 @@ use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray2, PyReadonlyArray1};
 use std::sync::mpsc::{self, Sender};
 
-use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 
 use crate::mission::PyMission;
@@ -42,7 +41,7 @@ impl PyMissionEnv {
         let job: Job = Box::new(move |env| {
             let _ = tx.send(f(env));
         });
-        let lost = || PyRuntimeError::new_err("the mission environment's thread has stopped");
+        let lost = || crate::refused("the mission environment's thread has stopped");
         self.jobs.send(job).map_err(|_| lost())?;
         py.detach(move || rx.recv()).map_err(|_| lost())
     }
@@ -81,11 +80,11 @@ impl PyMissionEnv {
                     }
                 }
             })
-            .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+            .map_err(|e| crate::refused(e.to_string()))?;
         let made = py.detach(move || made.recv());
         let (num_robots, num_tasks, observation_len) = made
-            .map_err(|_| PyRuntimeError::new_err("the mission environment's thread has stopped"))?
-            .map_err(PyValueError::new_err)?;
+            .map_err(|_| crate::refused("the mission environment's thread has stopped"))?
+            .map_err(crate::bad_input)?;
         Ok(PyMissionEnv {
             jobs,
             num_robots,
@@ -157,7 +156,7 @@ impl PyMissionEnv {
     ) -> PyResult<(f64, Vec<usize>, bool, bool)> {
         let actions = actions.as_slice()?;
         if actions.len() != self.num_robots {
-            return Err(PyValueError::new_err(format!(
+            return Err(crate::bad_input(format!(
                 "actions has {} entries for {} robots",
                 actions.len(),
                 self.num_robots
@@ -169,7 +168,7 @@ impl PyMissionEnv {
             .collect();
         let step = self
             .call(py, move |env| env.step(&chosen).map_err(|e| e.to_string()))?
-            .map_err(PyValueError::new_err)?;
+            .map_err(crate::bad_input)?;
         Ok((step.reward, step.failed, step.terminated, step.truncated))
     }
 }

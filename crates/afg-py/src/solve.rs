@@ -13,11 +13,10 @@ use afg_game::{RobotId, TaskId};
 use afg_learn::run::{ModelOptions, load_model as load_dir};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2};
-use pyo3::exceptions::{PyFileNotFoundError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::{IntVector, PyInstance, task_ids, task_indices, value_error};
+use crate::{IntVector, PyInstance, bad_input, task_ids, task_indices};
 
 /// An allocation of one instance, scored against the exact optimum.
 #[pyclass(name = "Result", module = "afg", frozen)]
@@ -44,14 +43,14 @@ fn alloc_stats(s: &AllocStats) -> Vec<(String, f64)> {
 impl SolveResult {
     /// Pickles through the result's own JSON document (nothing is recomputed).
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
-        let document = serde_json::to_string(self).map_err(value_error)?;
+        let document = serde_json::to_string(self).map_err(bad_input)?;
         crate::reduce_to::<SolveResult>(py, "_from_state", document)
     }
 
     /// The result of a pickled document (`__reduce__`).
     #[staticmethod]
     fn _from_state(text: &str) -> PyResult<Self> {
-        serde_json::from_str(text).map_err(value_error)
+        serde_json::from_str(text).map_err(bad_input)
     }
 
     /// Robot i's task, shape (N,), int64 (-1 for none).
@@ -191,7 +190,7 @@ fn load_model(
     one_shot: bool,
 ) -> PyResult<PyModel> {
     if !path.is_dir() {
-        return Err(PyFileNotFoundError::new_err(format!(
+        return Err(crate::missing_file(format!(
             "{}: no such model directory",
             path.display()
         )));
@@ -203,7 +202,7 @@ fn load_model(
         exact_burn: false,
     };
     Ok(PyModel {
-        allocator: load_dir(&path, options).map_err(value_error)?,
+        allocator: load_dir(&path, options).map_err(bad_input)?,
         path: path.display().to_string(),
         options: (block, repair, one_shot),
     })
@@ -218,7 +217,7 @@ fn run(py: Python<'_>, instance: &PyInstance, allocator: &dyn Allocator) -> PyRe
             let card = Scorecard::with_score(&inst, &assignment, row.score);
             Ok::<_, afg_eval::EvalError>((row, assignment, card))
         })
-        .map_err(value_error)?;
+        .map_err(bad_input)?;
     let mut stats = alloc_stats(&row.stats);
     // The crates' whole part of the call (the method, the optimum it is scored
     // against, and its stability and NS rates), for measuring what the binding adds.
@@ -231,7 +230,7 @@ fn run(py: Python<'_>, instance: &PyInstance, allocator: &dyn Allocator) -> PyRe
 }
 
 fn method(name: &str) -> PyResult<Method> {
-    Method::from_str(name).map_err(PyValueError::new_err)
+    Method::from_str(name).map_err(crate::bad_input)
 }
 
 /// Solves one instance by a built-in method (`opt`, `da`, `da-decentralised`,
@@ -259,7 +258,7 @@ fn solve(
                 )
             }
         },
-        _ => Err(PyValueError::new_err(
+        _ => Err(crate::bad_input(
             "pass exactly one of method=NAME or model=PATH_OR_MODEL",
         )),
     }
@@ -273,7 +272,7 @@ fn score(py: Python<'_>, instance: &PyInstance, tasks: IntVector<'_>) -> PyResul
     let inst = instance.inner.clone();
     let card = py
         .detach(|| scorecard(&inst, &assignment))
-        .map_err(value_error)?;
+        .map_err(bad_input)?;
     Ok(SolveResult {
         tasks: task_indices(&assignment),
         card,
@@ -304,7 +303,7 @@ fn reallocate(
 ) -> PyResult<SolveResult> {
     let m = self::method(method)?;
     let preference = afg_eval::realloc::dynamics_after(m).ok_or_else(|| {
-        PyValueError::new_err(format!(
+        crate::bad_input(format!(
             "reallocation runs best-response dynamics: method \"da-balanced\" or \"da\", not {method:?}"
         ))
     })?;
@@ -317,9 +316,9 @@ fn reallocate(
     let inst = instance.inner.clone();
     let r = py
         .detach(|| afg_eval::realloc::reallocate(&inst, &previous, preference))
-        .map_err(value_error)?;
+        .map_err(bad_input)?;
     let score = afg_eval::Score::of("the reallocation", &inst, &r.assignment, r.opt_welfare)
-        .map_err(value_error)?;
+        .map_err(bad_input)?;
     Ok(SolveResult {
         tasks: task_indices(&r.assignment),
         card: Scorecard::with_score(&inst, &r.assignment, score),
@@ -365,13 +364,13 @@ pub(crate) fn q_star_of(
 ) -> PyResult<Vec<f64>> {
     let acted = acted.unwrap_or_else(|| tasks.iter().take_while(|&&t| t != -1).count());
     if acted > tasks.len() {
-        return Err(PyValueError::new_err(format!(
+        return Err(crate::bad_input(format!(
             "acted = {acted}, but there are {} tasks",
             tasks.len()
         )));
     }
     if tasks[acted..].iter().any(|&t| t != -1) {
-        return Err(PyValueError::new_err(
+        return Err(crate::bad_input(
             "robots act in index order: no robot after those that acted may have a task",
         ));
     }
@@ -382,11 +381,11 @@ pub(crate) fn q_star_of(
             t => u32::try_from(t).map(|j| Some(TaskId(j))),
         })
         .collect::<Result<Vec<_>, _>>()
-        .map_err(|_| PyValueError::new_err("a task is -1 or an index 0..M"))?;
+        .map_err(|_| crate::bad_input("a task is -1 or an index 0..M"))?;
     let inst = instance.inner.clone();
     let values = py
         .detach(|| afg_learn::policy::q_star_next(&inst, &prefix))
-        .map_err(value_error)?;
+        .map_err(bad_input)?;
     Ok(values
         .into_iter()
         .map(|v| v.unwrap_or(f64::NEG_INFINITY))

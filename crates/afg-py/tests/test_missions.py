@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import inspect
+import re
+import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -107,3 +110,90 @@ def test_every_object_pickles_and_crosses_processes() -> None:
     with multiprocessing.get_context("spawn").Pool(2) as pool:
         far = pool.map(_welfare_of_greedy, instances)
     assert far == [_welfare_of_greedy(i) for i in instances]
+
+
+def _cli_help(*command: str) -> str:
+    """`afg <command> --help`, from the workspace's build (built by cargo if missing)."""
+    binary = ROOT / "target" / "release" / "afg"
+    if binary.exists():
+        args = [str(binary), *command, "--help"]
+    else:
+        args = ["cargo", "run", "--release", "--quiet", "--package", "afg-cli", "--", *command, "--help"]
+    return subprocess.run(args, cwd=ROOT, check=True, capture_output=True, text=True).stdout
+
+
+def _flags(*command: str) -> dict:
+    """Every `--flag` of `afg <command> --help` with its default as shown (or None)."""
+    flags: dict = {}
+    flag = None
+    for line in _cli_help(*command).splitlines():
+        named = re.match(r"^\s+(?:-\w, )?--([a-z-]+)", line)
+        if named:
+            flag = named.group(1)
+            flags[flag] = None
+        shown = re.search(r"\[default: ([^\]]+)\]", line)
+        if shown and flag is not None and flags[flag] is None:
+            flags[flag] = shown.group(1)
+    flags.pop("help")
+    return flags
+
+
+def _same_knobs(flags: dict, function, defaults: dict, cli_only: set) -> None:
+    """`function` takes every flag (but `cli_only`) under its Python name, and those
+    left at None default to what the command line shows."""
+    names = {f.replace("-", "_") for f in flags} - cli_only
+    params = inspect.signature(function).parameters
+    assert names == set(params) - {"self"}, (names ^ set(params))
+    for name, value in defaults.items():
+        assert params[name].default is None, name
+        shown = flags[name.replace("_", "-")]
+        if value is None:
+            # No default value, or one the help describes in words.
+            assert shown is None or re.fullmatch(r"[a-z ]+", shown), (name, shown)
+        elif isinstance(value, tuple):
+            assert shown == ",".join(f"{v:g}" for v in value), (name, shown, value)
+        else:
+            assert shown == str(value) or float(shown) == float(value), (name, shown, value)
+
+
+def test_run_mission_takes_every_knob_of_the_command_line_with_its_default() -> None:
+    flags = _flags("mission", "run")
+    assert {"mission", "method", "loss", "activation", "knn", "trace"} <= set(flags), flags
+    # What only a command line has: its output file and format. `trace` is a path
+    # there and a switch in Python.
+    _same_knobs(flags, afg.run_mission, afg.mission_defaults()["run"], {"json", "animate"})
+
+
+def test_mission_generate_takes_every_knob_of_the_command_line_with_its_default() -> None:
+    flags = _flags("mission", "gen")
+    assert {"preset", "robots", "workload", "fail-share"} <= set(flags), flags
+    _same_knobs(flags, afg.Mission.generate, afg.mission_defaults()["generate"], {"out"})
+
+
+def test_a_radio_knob_with_a_central_method_is_refused() -> None:
+    mission = afg.Mission.generate("waves", robots=10, tasks=3, seed=1)
+    for knob in (dict(loss=0.3), dict(radius=0.2), dict(preference="balanced"), dict(knn=4)):
+        with pytest.raises(afg.InvalidInputError, match="for grape and auction"):
+            afg.run_mission(mission, method="greedy", **knob)
+    # The same knobs with GRAPE run, and change its run.
+    plain = afg.run_mission(mission, method="grape", seed=1).metrics
+    lossy = afg.run_mission(mission, method="grape", seed=1, loss=0.5, knn=2).metrics
+    assert plain["swarm"]["messages"] != lossy["swarm"]["messages"]
+
+
+def test_errors_are_afg_errors_and_the_builtin_kinds(tmp_path: Path) -> None:
+    assert issubclass(afg.InvalidInputError, ValueError) and issubclass(afg.InvalidInputError, afg.AfgError)
+    assert issubclass(afg.MissingFileError, FileNotFoundError) and issubclass(afg.MissingFileError, afg.AfgError)
+    assert issubclass(afg.RefusedError, RuntimeError) and issubclass(afg.RefusedError, afg.AfgError)
+    with pytest.raises(afg.MissingFileError):
+        afg.Mission.from_json(tmp_path / "none.json")
+    with pytest.raises(afg.MissingFileError):
+        afg.read_jsonl(tmp_path / "none.jsonl")
+    with pytest.raises(afg.MissingFileError):
+        afg.load_model(tmp_path / "no-run")
+    with pytest.raises(afg.InvalidInputError, match="unknown preset"):
+        afg.Mission.generate("storm", robots=5, tasks=2)
+    with pytest.raises(afg.InvalidInputError):
+        afg.generate(robots=0, tasks=2)
+    with pytest.raises(afg.InvalidInputError):
+        afg.solve(afg.generate(robots=5, tasks=2), method="oracle")

@@ -2,15 +2,17 @@
 //! of each preset, from scratch and warm-started, without and with decision latency;
 //! one Markdown table per preset and latency.
 
-use afg_baseline::{Method, Network, SwarmMethod};
+use afg_baseline::Method;
 use afg_eval::EvalError;
-use afg_eval::mission::{CompareRow, Planner, compare, swarm_table, table};
-use afg_graph::GraphKind;
-use afg_mission::{Decentralised, Latency, Mission, MissionConfig, Preset, RunOptions};
+use afg_eval::mission::{CompareRow, compare, swarm_table, table};
+use afg_mission::{
+    Latency, Mission, MissionConfig, MissionMethod, MissionPlan, Planner, Preset, RadioKnobs,
+    SwarmKnobs,
+};
 
 /// The study's missions and allocators.
 #[derive(Clone, Debug, PartialEq)]
-pub struct MissionPlan {
+pub struct CentralStudy {
     /// Robots N.
     pub robots: usize,
     /// Tasks K over each mission.
@@ -34,8 +36,8 @@ pub struct MissionPlan {
 /// ```
 /// use afg_baseline::Method;
 /// use afg_mission::Preset;
-/// use afg_repro::mission_study::{MissionPlan, study};
-/// let plan = MissionPlan {
+/// use afg_repro::mission_study::{CentralStudy, study};
+/// let plan = CentralStudy {
 ///     robots: 20, tasks: 6, count: 1, presets: vec![Preset::Waves],
 ///     methods: vec![Method::Greedy], latency: None,
 /// };
@@ -43,20 +45,12 @@ pub struct MissionPlan {
 /// assert!(text.contains("| greedy |") && text.contains("| greedy (warm) |"));
 /// # Ok::<(), afg_eval::EvalError>(())
 /// ```
-pub fn study(plan: &MissionPlan, mut on_run: impl FnMut()) -> Result<String, EvalError> {
+pub fn study(plan: &CentralStudy, mut on_run: impl FnMut()) -> Result<String, EvalError> {
     if plan.count == 0 {
         return Err(EvalError::BadOptions(
             "the study needs at least one mission",
         ));
     }
-    let planners: Vec<Planner> = [false, true]
-        .into_iter()
-        .flat_map(|warm| {
-            plan.methods
-                .iter()
-                .map(move |&m| Planner::method(m, 0, warm))
-        })
-        .collect();
     let latencies: Vec<Latency> = std::iter::once(Latency::None)
         .chain(plan.latency.map(|delay| Latency::Fixed { delay }))
         .collect();
@@ -64,11 +58,19 @@ pub fn study(plan: &MissionPlan, mut on_run: impl FnMut()) -> Result<String, Eva
     for &preset in &plan.presets {
         let missions = missions(preset, plan.robots, plan.tasks, plan.count)?;
         for &latency in &latencies {
-            let options = RunOptions {
-                latency,
-                ..RunOptions::default()
-            };
-            let rows = rows(&missions, &planners, options, &mut on_run)?;
+            let planners = [false, true]
+                .into_iter()
+                .flat_map(|warm| {
+                    plan.methods.iter().map(move |&m| MissionPlan {
+                        method: MissionMethod::Central(m),
+                        warm,
+                        latency,
+                        ..MissionPlan::default()
+                    })
+                })
+                .map(|p| p.planner())
+                .collect::<Result<Vec<Planner>, _>>()?;
+            let rows = rows(&missions, &planners, &mut on_run)?;
             let delay = match latency {
                 Latency::Fixed { delay } => format!(", each decision {delay} time units late"),
                 _ => String::new(),
@@ -102,10 +104,9 @@ fn missions(
 fn rows(
     missions: &[Mission],
     planners: &[Planner],
-    options: RunOptions,
     on_run: impl FnMut(),
 ) -> Result<Vec<CompareRow>, EvalError> {
-    Ok(compare(missions, planners, options, on_run)?
+    Ok(compare(missions, planners, Default::default(), on_run)?
         .into_iter()
         .map(|(row, _)| row)
         .collect())
@@ -127,7 +128,7 @@ pub fn connectivity_radius(robots: usize) -> f64 {
 /// The decentralised study: GRAPE and the auction run by the robots over the radio,
 /// beside the central optimum and GRAPE's centralised twin (both warm-started).
 #[derive(Clone, Debug, PartialEq)]
-pub struct SwarmPlan {
+pub struct SwarmStudy {
     /// Robots N.
     pub robots: usize,
     /// Tasks K over each mission.
@@ -140,8 +141,9 @@ pub struct SwarmPlan {
     pub radius_factors: Vec<f64>,
     /// Shares of messages lost.
     pub losses: Vec<f64>,
-    /// The decentralised methods.
-    pub methods: Vec<SwarmMethod>,
+    /// The decentralised methods ([`MissionMethod::Grape`], [`MissionMethod::Auction`]),
+    /// with the default [`SwarmKnobs`] but the radius, loss and rounds per time unit.
+    pub methods: Vec<MissionMethod>,
     /// Their rounds per time unit.
     pub rounds_per_time: f64,
 }
@@ -153,51 +155,55 @@ pub struct SwarmPlan {
 ///
 /// # Examples
 /// ```
-/// use afg_baseline::SwarmMethod;
-/// use afg_game::Preference;
-/// use afg_mission::Preset;
-/// use afg_repro::mission_study::{SwarmPlan, swarm_study};
-/// let plan = SwarmPlan {
+/// use afg_mission::{MissionMethod, Preset};
+/// use afg_repro::mission_study::{SwarmStudy, swarm_study};
+/// let plan = SwarmStudy {
 ///     robots: 20, tasks: 4, count: 1, presets: vec![Preset::Waves],
 ///     radius_factors: vec![2.0], losses: vec![0.0, 0.3], rounds_per_time: 50.0,
-///     methods: vec![SwarmMethod::Grape { preference: Preference::Selfish }],
+///     methods: vec![MissionMethod::Grape],
 /// };
 /// let text = swarm_study(&plan, || {})?;
-/// assert!(text.contains("| opt (incremental) |") && text.contains("loss 30 %)"));
+/// assert!(text.contains("| opt (warm) |") && text.contains("loss 30 %)"));
 /// # Ok::<(), afg_eval::EvalError>(())
 /// ```
-pub fn swarm_study(plan: &SwarmPlan, mut on_run: impl FnMut()) -> Result<String, EvalError> {
+pub fn swarm_study(plan: &SwarmStudy, mut on_run: impl FnMut()) -> Result<String, EvalError> {
     if plan.count == 0 {
         return Err(EvalError::BadOptions(
             "the study needs at least one mission",
         ));
     }
-    let mut planners = vec![
-        Planner::method(Method::Opt, 0, true),
-        Planner::method(Method::Da, 0, true),
-    ];
+    let warm = |method| MissionPlan {
+        method: MissionMethod::Central(method),
+        warm: true,
+        ..MissionPlan::default()
+    };
+    let mut planners = vec![warm(Method::Opt).planner()?, warm(Method::Da).planner()?];
     let threshold = connectivity_radius(plan.robots);
     for &method in &plan.methods {
         for (&factor, &loss) in
             (plan.radius_factors.iter()).flat_map(|f| plan.losses.iter().map(move |l| (f, l)))
         {
-            let network = Network {
-                graph: GraphKind::Radius {
-                    radius: factor * threshold,
+            let swarm = SwarmKnobs {
+                radio: RadioKnobs {
+                    radius: Some(factor * threshold),
+                    loss,
+                    ..RadioKnobs::default()
                 },
-                loss,
-                ..Network::default()
-            };
-            planners.push(Planner::swarm(Decentralised {
                 rounds_per_time: plan.rounds_per_time,
-                ..Decentralised::new(method, network)
-            }));
+                ..SwarmKnobs::default()
+            };
+            let plan = MissionPlan {
+                method,
+                swarm,
+                ..MissionPlan::default()
+            };
+            planners.push(plan.planner()?);
         }
     }
     let mut out = String::new();
     for &preset in &plan.presets {
         let missions = missions(preset, plan.robots, plan.tasks, plan.count)?;
-        let rows = rows(&missions, &planners, RunOptions::default(), &mut on_run)?;
+        let rows = rows(&missions, &planners, &mut on_run)?;
         out.push_str(&format!(
             "**{}**, N = {}, K = {}, {} mission(s); over the radio at {} rounds per time unit, radius in multiples of the connectivity radius {threshold:.3}\n\n{}\n{}\n",
             afg_game::Named::name(preset),

@@ -161,7 +161,7 @@ impl Sim<'_, '_> {
             Replan::Decentralised(_) => Err(MissionError::Invalid(
                 "a decentralised method makes no central decision".into(),
             )),
-            Replan::IncrementalOpt => {
+            Replan::WarmOpt => {
                 let (a, prices) = if self.decided {
                     let start: Vec<f64> = open
                         .iter()

@@ -4,7 +4,13 @@ use super::{Metrics, MissionRun, Sim, SwarmState};
 
 impl Sim<'_, '_> {
     /// The run's metrics, timeline and trace.
-    pub(super) fn finish(self) -> MissionRun {
+    pub(super) fn finish(mut self) -> MissionRun {
+        // The last frame is the final state (the animation ends on it).
+        let stale = self.frames.last().is_some_and(|f| f.time < self.now);
+        if self.options.frame_every.is_some() && stale {
+            let last = self.frame();
+            self.frames.push(last);
+        }
         let mut latencies: Vec<f64> = self
             .tasks
             .iter()

@@ -44,14 +44,15 @@ pub struct Decentralised {
 }
 
 impl Decentralised {
-    /// `method` over `network`, 100 rounds per time unit, every task heard of at
-    /// once, seed 0.
+    /// `method` over `network`, at the rounds per time unit and sensing of
+    /// [`SwarmKnobs::default`](crate::SwarmKnobs), seed 0.
     pub fn new(method: SwarmMethod, network: Network) -> Self {
+        let knobs = crate::SwarmKnobs::default();
         Decentralised {
             method,
             network,
-            rounds_per_time: 100.0,
-            sensing: None,
+            rounds_per_time: knobs.rounds_per_time,
+            sensing: knobs.sensing,
             seed: 0,
         }
     }

@@ -16,6 +16,7 @@ missions over time (``afg.Mission``, ``afg.run_mission``, ``afg.MissionEnv``), (
 
 from __future__ import annotations
 
+from ._errors import AfgError, InvalidInputError, MissingFileError, RefusedError
 from ._afg import (
     EnvCore,
     Instance,
@@ -31,6 +32,7 @@ from ._afg import (
     q_star,
     read_jsonl,
     reallocate,
+    mission_defaults,
     run_mission,
     score,
     solve,
@@ -38,6 +40,10 @@ from ._afg import (
 )
 
 __all__ = [
+    "AfgError",
+    "InvalidInputError",
+    "MissingFileError",
+    "RefusedError",
     "EnvCore",
     "Instance",
     "Mission",
@@ -52,6 +58,7 @@ __all__ = [
     "q_star",
     "read_jsonl",
     "reallocate",
+    "mission_defaults",
     "run_mission",
     "score",
     "solve",

@@ -1,4 +1,9 @@
-"""Type stubs of the compiled core (afg._afg); the package re-exports every name."""
+"""Type stubs of the compiled core (afg._afg); the package re-exports every name.
+
+Every error raised here is an ``afg.AfgError`` (``afg/_errors.py``): bad input as
+``afg.InvalidInputError`` (also a ``ValueError``), a missing file as
+``afg.MissingFileError`` (also a ``FileNotFoundError``), a request refused in the
+object's state as ``afg.RefusedError`` (also a ``RuntimeError``)."""
 
 from os import PathLike
 from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
@@ -186,17 +191,23 @@ class Mission:
         robots: int,
         tasks: int,
         seed: int = 0,
-        workload: Tuple[float, float] = (1.0, 3.0),
-        speed: float = 1.0,
-        arena: float = 1.0,
-        horizon: float = 40.0,
-        waves: int = 4,
-        interval: float = 5.0,
+        workload: Optional[Tuple[float, float]] = None,
+        speed: Optional[float] = None,
+        arena: Optional[float] = None,
+        horizon: Optional[float] = None,
+        waves: Optional[int] = None,
+        interval: Optional[float] = None,
         rate: Optional[float] = None,
-        fail_share: float = 0.3,
+        fail_share: Optional[float] = None,
         capacity_slack: Optional[float] = None,
         allow_void: bool = False,
-    ) -> "Mission": ...
+    ) -> "Mission":
+        """Draws a mission with every knob of ``afg mission gen``; a knob left at None
+        takes its default (``mission_defaults()["generate"]``).
+
+        Raises:
+            InvalidInputError: an unknown preset or a knob out of range.
+        """
     def to_json(self) -> str: ...
     def write(self, path: _Path) -> None: ...
     @property
@@ -258,8 +269,27 @@ def run_mission(
     hysteresis: Optional[float] = None,
     seed: int = 0,
     trace: bool = False,
-    rounds_per_time: float = 100.0,
-    radius: Optional[float] = None,
-    loss: float = 0.0,
+    rounds_per_time: Optional[float] = None,
+    loss: Optional[float] = None,
     sensing: Optional[float] = None,
-) -> MissionResult: ...
+    preference: Optional[str] = None,
+    epsilon: Optional[float] = None,
+    radius: Optional[float] = None,
+    knn: Optional[int] = None,
+    burst: Optional[float] = None,
+    delay: Optional[int] = None,
+    activation: Optional[float] = None,
+) -> MissionResult:
+    """One allocator in the loop of ``mission``, with every knob of ``afg mission run``.
+
+    A swarm knob left at None takes its default (``mission_defaults()``).
+
+    Raises:
+        InvalidInputError: a knob out of range, an unknown method, a radio knob with a
+            central method, or a central option with ``grape`` or ``auction``.
+        MissingFileError: ``model`` names no run directory.
+    """
+
+def mission_defaults() -> Dict[str, Dict[str, Any]]:
+    """The defaults of the knobs left at None, by keyword: ``{"run": ...}`` for
+    ``run_mission``'s swarm knobs, ``{"generate": ...}`` for ``Mission.generate``."""

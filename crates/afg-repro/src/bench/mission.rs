@@ -8,10 +8,9 @@ use std::time::{Duration, Instant};
 
 use afg_baseline::{AllocError, IncrementalOptimum, Optimum, verify_optimal};
 use afg_eval::EvalError;
-use afg_eval::mission::Planner;
 use afg_eval::report::duration;
 use afg_game::{GeneratorConfig, Instance, Point, RobotId, Task, TaskId};
-use afg_mission::{Mission, RunOptions};
+use afg_mission::{Mission, Planner};
 
 use super::median_of;
 
@@ -163,7 +162,7 @@ pub fn missions(mission: &Mission, planners: &[Planner]) -> Result<String, EvalE
     );
     for planner in planners {
         let start = Instant::now();
-        let run = planner.run(mission, RunOptions::default())?;
+        let run = planner.run(mission, Default::default(), |_| {})?;
         let wall = start.elapsed();
         let m = &run.metrics;
         let floor = distance_floor(mission, m.pairs);

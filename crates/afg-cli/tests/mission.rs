@@ -1,0 +1,184 @@
+//! `afg mission` as a new user meets it: knobs that do not apply are refused, output
+//! paths never overwrite inputs, rows of the same kind of model are told apart, and a
+//! NaN in a mission file is named.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn afg(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_afg"))
+        .args(args)
+        .output()
+        .expect("afg runs")
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// A fresh directory holding a small waves mission, `m.json`.
+fn mission_dir(name: &str) -> (PathBuf, PathBuf) {
+    let dir = std::env::temp_dir().join(format!("afg-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mission = dir.join("m.json");
+    let args = [
+        "mission", "gen", "--preset", "waves", "--robots", "12", "--tasks", "4",
+    ];
+    let made = afg(&[&args[..], &["--out", mission.to_str().unwrap()]].concat());
+    assert_eq!(made.status.code(), Some(0), "{}", stderr(&made));
+    (dir, mission)
+}
+
+/// Exit 1 with one line on stderr holding `needle`.
+fn refused(out: &Output, needle: &str) {
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(out));
+    let err = stderr(out);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains(needle), "{err}");
+}
+
+#[test]
+fn a_radio_knob_with_a_central_method_is_refused_and_runs_with_grape() {
+    let (dir, mission) = mission_dir("radio-knob");
+    let path = mission.to_str().unwrap();
+    for knob in [
+        &["--radius", "0.3"][..],
+        &["--loss", "0.2"],
+        &["--knn", "3"],
+        &["--activation", "0.5"],
+    ] {
+        let out = afg(&[
+            &["mission", "run", "--mission", path, "--method", "greedy"][..],
+            knob,
+        ]
+        .concat());
+        refused(&out, "for grape and auction");
+    }
+    let out = afg(&[
+        "mission",
+        "run",
+        "--mission",
+        path,
+        "--method",
+        "grape",
+        "--loss",
+        "0.2",
+        "--json",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn an_output_path_that_is_an_input_is_refused_and_the_input_kept() {
+    let (dir, mission) = mission_dir("overwrite");
+    let path = mission.to_str().unwrap();
+    let before = std::fs::read(&mission).unwrap();
+    for flag in ["--animate", "--trace"] {
+        let out = afg(&["mission", "run", "--mission", path, flag, path]);
+        refused(&out, &format!("{} {path} is an input", &flag[2..]));
+        assert_eq!(std::fs::read(&mission).unwrap(), before);
+    }
+    // The same file by another spelling of its path.
+    let other = dir.join(".").join("m.json");
+    let out = afg(&[
+        "mission",
+        "compare",
+        "--mission",
+        path,
+        "--svg",
+        other.to_str().unwrap(),
+    ]);
+    refused(&out, "is an input");
+    assert_eq!(std::fs::read(&mission).unwrap(), before);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn two_models_of_the_same_kind_get_rows_of_their_own() {
+    let (dir, mission) = mission_dir("two-models");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let a = root.join("models/ours/price_n60");
+    let b = root.join("models/ablations/price_expert_n60");
+    let out = afg(&[
+        "mission",
+        "compare",
+        "--mission",
+        mission.to_str().unwrap(),
+        "--methods",
+        "greedy",
+        "--model",
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let rows: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let names: Vec<&str> = (rows.as_array().unwrap().iter())
+        .map(|r| r["method"].as_str().unwrap())
+        .collect();
+    assert_eq!(names.len(), 3, "{names:?}");
+    assert_eq!(names[0], "greedy");
+    assert_ne!(names[1], names[2], "{names:?}");
+    assert!(
+        names[1].contains("price_n60") && names[2].contains("price_expert_n60"),
+        "{names:?}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_nan_in_a_mission_file_is_named_with_its_field() {
+    let (dir, mission) = mission_dir("nan");
+    let text = std::fs::read_to_string(&mission).unwrap();
+    let at = text.find("\"workload\":").unwrap() + "\"workload\":".len();
+    let end = at + text[at..].find([',', '}']).unwrap();
+    std::fs::write(&mission, format!("{}NaN{}", &text[..at], &text[end..])).unwrap();
+    let out = afg(&["mission", "run", "--mission", mission.to_str().unwrap()]);
+    refused(&out, "`NaN`");
+    let err = stderr(&out);
+    assert!(
+        err.contains("field `workload`") && err.contains("JSON has no NaN or Infinity"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn the_animation_ends_on_the_final_state_and_shows_coalition_sizes() {
+    let (dir, mission) = mission_dir("animate");
+    let page = dir.join("a.html");
+    let out = afg(&[
+        "mission",
+        "run",
+        "--mission",
+        mission.to_str().unwrap(),
+        "--json",
+        "--animate",
+        page.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let metrics: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let html = std::fs::read_to_string(&page).unwrap();
+    let data = html
+        .split("const D = ")
+        .nth(1)
+        .unwrap()
+        .split(";\n")
+        .next()
+        .unwrap();
+    let data: serde_json::Value = serde_json::from_str(&data.replace("<\\/", "</")).unwrap();
+    let last = data["frames"].as_array().unwrap().last().unwrap();
+    assert_eq!(last["time"].as_f64(), metrics["end"].as_f64());
+    // Every task done in the final frame: no work left anywhere.
+    assert_eq!(metrics["tasks_done"], 4);
+    assert!(
+        last["left"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|l| l.as_f64() == Some(0.0))
+    );
+    assert!(html.contains("sizes[j]") && html.contains("\"replay\""));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

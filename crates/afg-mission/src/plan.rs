@@ -1,0 +1,491 @@
+//! The one front door of a mission run: a [`MissionPlan`] says everything about who
+//! decides and how, and [`Planner::run`] runs it. The command line (`afg mission
+//! run|compare`), Python (`afg.run_mission`) and the maintainer's studies only map
+//! their flags or keyword arguments onto a plan.
+
+use std::fmt::Write as _;
+
+use afg_baseline::{Allocator, Method, Network, SwarmMethod};
+use afg_game::Preference;
+use afg_graph::GraphKind;
+
+use crate::sim::check_options;
+use crate::{Decentralised, Latency, Mission, MissionError, MissionRun, Replan, RunOptions};
+
+/// A method in a mission, as the front ends name it: a built-in allocator deciding
+/// centrally, or `grape` / `auction`: GRAPE or the auction run by the robots
+/// themselves over the radio.
+///
+/// # Examples
+/// ```
+/// use afg_baseline::Method;
+/// use afg_mission::MissionMethod;
+/// assert_eq!("grape".parse::<MissionMethod>()?, MissionMethod::Grape);
+/// assert_eq!("auction".parse::<MissionMethod>()?, MissionMethod::Auction);
+/// assert_eq!("greedy".parse::<MissionMethod>()?, MissionMethod::Central(Method::Greedy));
+/// assert!("gpare".parse::<MissionMethod>().unwrap_err().contains("grape"));
+/// # Ok::<(), String>(())
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MissionMethod {
+    /// A built-in allocator deciding for every robot at each decision.
+    Central(Method),
+    /// GRAPE run by the robots over the radio, each on its own view.
+    Grape,
+    /// The consensus-based auction run by the robots over the radio.
+    Auction,
+}
+
+impl Default for MissionMethod {
+    /// The exact optimum, deciding centrally.
+    fn default() -> Self {
+        MissionMethod::Central(Method::Opt)
+    }
+}
+
+impl std::str::FromStr for MissionMethod {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "grape" => Ok(MissionMethod::Grape),
+            "auction" => Ok(MissionMethod::Auction),
+            _ => s.parse().map(MissionMethod::Central).map_err(|e: String| {
+                format!("{e}, or grape or auction (decentralised, over the radio)")
+            }),
+        }
+    }
+}
+
+impl std::fmt::Display for MissionMethod {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            MissionMethod::Central(method) => method.fmt(f),
+            MissionMethod::Grape => f.write_str("grape"),
+            MissionMethod::Auction => f.write_str("auction"),
+        }
+    }
+}
+
+/// The radio's knobs as the front ends spell them (`--radius`, `--knn`, `--loss`,
+/// `--burst`, `--delay`, `--activation`); [`RadioKnobs::network`] is the [`Network`] they
+/// give. The defaults are [`Network::default`]'s: each robot linked to its 10 nearest,
+/// no loss, no delay, synchronous rounds.
+///
+/// # Examples
+/// ```
+/// use afg_graph::GraphKind;
+/// use afg_mission::RadioKnobs;
+/// let radio = RadioKnobs { radius: Some(0.2), loss: 0.3, ..RadioKnobs::default() };
+/// let network = radio.network();
+/// assert_eq!(network.graph, GraphKind::Radius { radius: 0.2 });
+/// assert_eq!(network.loss, 0.3);
+/// assert_eq!(RadioKnobs::default().network().graph, GraphKind::Knn { k: 10 });
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RadioKnobs {
+    /// Link robots within this distance instead of to their nearest.
+    pub radius: Option<f64>,
+    /// Link each robot to its K nearest (kept in both directions), unless `radius`.
+    pub knn: usize,
+    /// The long-run share of messages lost, in [0, 1).
+    pub loss: f64,
+    /// Losses come in bursts of this mean length in rounds (Gilbert–Elliott) instead
+    /// of independently.
+    pub burst: Option<f64>,
+    /// A delivered message arrives 0..=`delay` rounds late (uniform).
+    pub delay: u32,
+    /// Asynchronous robots: each wakes in a round with this chance (1 = synchronous).
+    pub activation: f64,
+}
+
+impl Default for RadioKnobs {
+    fn default() -> Self {
+        let network = Network::default();
+        let GraphKind::Knn { k } = GraphKind::default() else {
+            unreachable!("robots link to their nearest by default")
+        };
+        RadioKnobs {
+            radius: None,
+            knn: k,
+            loss: network.loss,
+            burst: network.burst,
+            delay: network.max_delay,
+            activation: network.activation,
+        }
+    }
+}
+
+impl RadioKnobs {
+    /// The network of these knobs (a radius wins over `knn`), with no failures or
+    /// partition of its own.
+    pub fn network(&self) -> Network {
+        let graph = match self.radius {
+            Some(radius) => GraphKind::Radius { radius },
+            None => GraphKind::Knn { k: self.knn },
+        };
+        Network {
+            graph,
+            loss: self.loss,
+            burst: self.burst,
+            max_delay: self.delay,
+            activation: self.activation,
+            ..Network::default()
+        }
+    }
+
+    /// The knobs set away from their defaults, by their command-line names.
+    fn changed(&self) -> Vec<&'static str> {
+        let default = RadioKnobs::default();
+        [
+            (self.radius != default.radius, "radius"),
+            (self.knn != default.knn, "knn"),
+            (self.loss != default.loss, "loss"),
+            (self.burst != default.burst, "burst"),
+            (self.delay != default.delay, "delay"),
+            (self.activation != default.activation, "activation"),
+        ]
+        .into_iter()
+        .filter_map(|(changed, name)| changed.then_some(name))
+        .collect()
+    }
+}
+
+/// The knobs of a decentralised method run by the robots over the radio, with the one
+/// set of defaults every front end shows: GRAPE selfish (its own rule), the auction's
+/// ε = 10⁻³, the radio of [`RadioKnobs::default`], 100 rounds per time unit, every task
+/// heard of at once.
+///
+/// # Examples
+/// ```
+/// use afg_game::Preference;
+/// use afg_mission::SwarmKnobs;
+/// let knobs = SwarmKnobs::default();
+/// assert_eq!((knobs.preference, knobs.epsilon, knobs.rounds_per_time), (Preference::Selfish, 1e-3, 100.0));
+/// assert!(knobs.sensing.is_none() && knobs.radio.loss == 0.0);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SwarmKnobs {
+    /// GRAPE's preference: selfish (GRAPE's own) or balanced.
+    pub preference: Preference,
+    /// The auction's least price increment ε.
+    pub epsilon: f64,
+    /// The radio: who hears whom (re-evaluated every round as robots move), losses,
+    /// bursts, delays, asynchrony.
+    pub radio: RadioKnobs,
+    /// Rounds per mission time unit.
+    pub rounds_per_time: f64,
+    /// Robots see tasks within this distance and hear of the others from their
+    /// neighbours (`None`: every robot hears of every task at once).
+    pub sensing: Option<f64>,
+}
+
+impl Default for SwarmKnobs {
+    fn default() -> Self {
+        SwarmKnobs {
+            preference: Preference::Selfish,
+            epsilon: 1e-3,
+            radio: RadioKnobs::default(),
+            rounds_per_time: 100.0,
+            sensing: None,
+        }
+    }
+}
+
+impl SwarmKnobs {
+    /// The knobs set away from their defaults, by their command-line names.
+    fn changed(&self) -> Vec<&'static str> {
+        let default = SwarmKnobs::default();
+        let mut changed: Vec<&'static str> = [
+            (self.preference != default.preference, "preference"),
+            (self.epsilon != default.epsilon, "epsilon"),
+            (
+                self.rounds_per_time != default.rounds_per_time,
+                "rounds-per-time",
+            ),
+            (self.sensing != default.sensing, "sensing"),
+        ]
+        .into_iter()
+        .filter_map(|(changed, name)| changed.then_some(name))
+        .collect();
+        changed.extend(self.radio.changed());
+        changed
+    }
+}
+
+/// Everything about who decides in a mission and how: the method, warm or not, the
+/// seed, the swarm's knobs and the central decisions' options. [`MissionPlan::planner`]
+/// checks it once and gives the [`Planner`] that runs it.
+///
+/// # Examples
+/// ```
+/// use afg_mission::{Latency, MissionConfig, MissionMethod, MissionPlan, Preset};
+/// let mission = MissionConfig::new(Preset::Waves, 30, 6, 1).generate()?;
+/// let plan = MissionPlan { warm: true, latency: Latency::Fixed { delay: 0.5 }, ..MissionPlan::default() };
+/// let planner = plan.planner()?;
+/// assert_eq!(planner.name(), "opt (warm)");
+/// let run = planner.run(&mission, Default::default(), |_| {})?;
+/// assert_eq!(run.metrics.decisions, run.metrics.decisions.max(1));
+/// // A radio knob is for the robots' own methods: refused with a central one.
+/// let mut radio = MissionPlan::default();
+/// radio.swarm.radio.loss = 0.3;
+/// let refused = radio.planner().err().expect("a radio knob with a central method");
+/// assert!(refused.to_string().contains("loss is for grape"));
+/// // With GRAPE, it runs.
+/// radio.method = MissionMethod::Grape;
+/// assert!(radio.planner()?.name().starts_with("grape (swarm"));
+/// # Ok::<(), afg_mission::MissionError>(())
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MissionPlan {
+    /// Who decides (ignored by [`MissionPlan::planner_with`], whose allocator decides).
+    pub method: MissionMethod,
+    /// Warm start: the optimum re-solved from its previous prices (opt), or survivors
+    /// keeping their task and best-response dynamics settling the rest (others).
+    pub warm: bool,
+    /// Seeds the random method, and GRAPE's, the auction's and the radio's draws.
+    pub seed: u64,
+    /// The knobs of `grape` and `auction`.
+    pub swarm: SwarmKnobs,
+    /// Also decide every this many time units, not only at events (central only).
+    pub replan_every: Option<f64>,
+    /// How long a central decision takes.
+    pub latency: Latency,
+    /// Commitment: robots at work stay until their task is done (central only).
+    pub commit: bool,
+    /// Hysteresis: a travelling robot switches task only for a gain above this
+    /// (central only).
+    pub hysteresis: Option<f64>,
+}
+
+impl Default for MissionPlan {
+    /// The exact optimum from scratch at every event, seed 0, no latency.
+    fn default() -> Self {
+        MissionPlan {
+            method: MissionMethod::default(),
+            warm: false,
+            seed: 0,
+            swarm: SwarmKnobs::default(),
+            replan_every: None,
+            latency: Latency::None,
+            commit: false,
+            hysteresis: None,
+        }
+    }
+}
+
+/// What a run keeps besides its metrics and timeline.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Recording {
+    /// Keep every event and decision ([`MissionRun::trace`]).
+    pub trace: bool,
+    /// Snapshot the whole state every this many time units ([`MissionRun::frames`]).
+    pub frame_every: Option<f64>,
+}
+
+impl MissionPlan {
+    /// The planner of a built-in method (or GRAPE or the auction over the radio).
+    ///
+    /// # Errors
+    /// [`MissionError::Invalid`] for a knob out of range, a radio knob with a central
+    /// method, or a central option (replanning, latency, commitment, hysteresis) with
+    /// a decentralised one.
+    pub fn planner(&self) -> Result<Planner, MissionError> {
+        let decider = match self.method {
+            MissionMethod::Central(method) => {
+                let allocator = method.allocator(self.seed);
+                return self.central(allocator, Some(method));
+            }
+            MissionMethod::Grape => SwarmMethod::Grape {
+                preference: self.swarm.preference,
+            },
+            MissionMethod::Auction => SwarmMethod::Auction {
+                epsilon: self.swarm.epsilon,
+            },
+        };
+        self.check()?;
+        if let Some(option) = self.central_options().first() {
+            return Err(MissionError::Invalid(format!(
+                "{option} is for central decisions; a decentralised method runs at its rounds per time unit"
+            )));
+        }
+        let knobs = &self.swarm;
+        Ok(Planner {
+            name: swarm_name(decider, knobs),
+            decider: Decider::Swarm(Decentralised {
+                method: decider,
+                network: knobs.radio.network(),
+                rounds_per_time: knobs.rounds_per_time,
+                sensing: knobs.sensing,
+                seed: self.seed,
+            }),
+            options: self.options(),
+        })
+    }
+
+    /// The planner of an allocator passed in (a trained model, say), deciding
+    /// centrally under this plan; the plan's method is not used.
+    ///
+    /// # Errors
+    /// As [`MissionPlan::planner`] for a central method.
+    pub fn planner_with(&self, allocator: Box<dyn Allocator>) -> Result<Planner, MissionError> {
+        self.central(allocator, None)
+    }
+
+    fn central(
+        &self,
+        allocator: Box<dyn Allocator>,
+        method: Option<Method>,
+    ) -> Result<Planner, MissionError> {
+        self.check()?;
+        let changed = self.swarm.changed();
+        if !changed.is_empty() {
+            return Err(MissionError::Invalid(format!(
+                "{} {} for grape and auction (the robots over the radio), not for a central method",
+                changed.join(", "),
+                if changed.len() == 1 { "is" } else { "are" }
+            )));
+        }
+        let name = method.map_or_else(|| allocator.name(), |m| m.to_string());
+        Ok(Planner {
+            name: if self.warm {
+                format!("{name} (warm)")
+            } else {
+                name
+            },
+            decider: Decider::Central {
+                allocator,
+                method,
+                warm: self.warm,
+            },
+            options: self.options(),
+        })
+    }
+
+    /// The central options in range, as [`simulate`](crate::simulate) checks them (it
+    /// checks the swarm's when the robots start).
+    fn check(&self) -> Result<(), MissionError> {
+        check_options(&self.options())
+    }
+
+    /// The central options set, by their command-line names.
+    fn central_options(&self) -> Vec<&'static str> {
+        [
+            (self.replan_every.is_some(), "replan"),
+            (self.latency != Latency::None, "latency"),
+            (self.commit, "commit"),
+            (self.hysteresis.is_some(), "hysteresis"),
+        ]
+        .into_iter()
+        .filter_map(|(set, name)| set.then_some(name))
+        .collect()
+    }
+
+    fn options(&self) -> RunOptions {
+        RunOptions {
+            replan_every: self.replan_every,
+            latency: self.latency,
+            commit: self.commit,
+            hysteresis: self.hysteresis,
+            ..RunOptions::default()
+        }
+    }
+}
+
+/// A decentralised method's name in tables, with its radio: `grape (swarm, r 0.120,
+/// loss 30 %)`.
+fn swarm_name(method: SwarmMethod, knobs: &SwarmKnobs) -> String {
+    let mut name = match method {
+        SwarmMethod::Grape { .. } => "grape (swarm".to_string(),
+        SwarmMethod::Auction { .. } => "auction (swarm".to_string(),
+    };
+    let _ = match knobs.radio.network().graph {
+        GraphKind::Radius { radius } => write!(name, ", r {radius:.3}"),
+        GraphKind::Knn { k } => write!(name, ", {k}-NN"),
+        GraphKind::Complete => write!(name, ", all linked"),
+    };
+    if knobs.radio.loss > 0.0 {
+        let _ = write!(name, ", loss {:.0} %", 100.0 * knobs.radio.loss);
+    }
+    if let Some(range) = knobs.sensing {
+        let _ = write!(name, ", sensing {range}");
+    }
+    name.push(')');
+    name
+}
+
+/// A checked [`MissionPlan`], ready to run missions: its allocator built, its name
+/// for tables.
+pub struct Planner {
+    name: String,
+    decider: Decider,
+    options: RunOptions,
+}
+
+/// Who decides: an allocator for everyone, or each robot over the radio.
+enum Decider {
+    Central {
+        allocator: Box<dyn Allocator>,
+        method: Option<Method>,
+        warm: bool,
+    },
+    Swarm(Decentralised),
+}
+
+impl Planner {
+    /// The planner's name in tables: the method's (or the model's), with "(warm)" for
+    /// warm starts and "(swarm, …)" with the radio for a decentralised method.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The planner under another name (two models of the same kind, say).
+    pub fn named(self, name: String) -> Self {
+        Planner { name, ..self }
+    }
+
+    /// The replanning rule: from scratch; or, warm-started, the optimum re-solved from
+    /// its previous prices, and for every other method its answer at the first
+    /// decision and then survivors kept and best-response dynamics (GRAPE's selfish
+    /// ones for `da`, balanced for the rest); a decentralised method runs as itself.
+    fn replan(&self) -> Replan<'_> {
+        let (first, warm, method) = match &self.decider {
+            Decider::Swarm(config) => return Replan::Decentralised(config),
+            Decider::Central {
+                allocator,
+                method,
+                warm,
+            } => (allocator.as_ref(), *warm, *method),
+        };
+        match (warm, method) {
+            (false, _) => Replan::Scratch(first),
+            (true, Some(Method::Opt)) => Replan::WarmOpt,
+            (true, Some(Method::Da | Method::DaDecentralised)) => Replan::Warm {
+                first,
+                preference: Preference::Selfish,
+            },
+            (true, _) => Replan::Warm {
+                first,
+                preference: Preference::Balanced,
+            },
+        }
+    }
+
+    /// Runs `mission` under this plan, keeping what `recording` asks for and telling
+    /// `on_time` the mission time after every event (a progress bar).
+    ///
+    /// # Errors
+    /// The simulator's errors.
+    pub fn run(
+        &self,
+        mission: &Mission,
+        recording: Recording,
+        on_time: impl FnMut(f64),
+    ) -> Result<MissionRun, MissionError> {
+        let options = RunOptions {
+            trace: recording.trace,
+            frame_every: recording.frame_every,
+            ..self.options
+        };
+        crate::simulate_with(mission, self.replan(), options, on_time)
+    }
+}
