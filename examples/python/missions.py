@@ -20,7 +20,7 @@ def main() -> None:
     mission = afg.Mission.generate("attrition", robots=robots, tasks=tasks, seed=1)
     print(mission)
     runs = {
-        "opt (incremental)": afg.run_mission(mission, method="opt", warm=True),
+        "opt (warm)": afg.run_mission(mission, method="opt", warm=True),
         "da (GRAPE)": afg.run_mission(mission, method="da"),
         "greedy": afg.run_mission(mission, method="greedy"),
         "nearest": afg.run_mission(mission, method="nearest"),

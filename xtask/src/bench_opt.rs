@@ -6,16 +6,17 @@ use std::process::Command;
 use std::str::FromStr;
 use std::time::Duration;
 
+use crate::bench::{clocked, median_of};
 use afg_baseline::{Allocator, Greedy, Nearest, Optimum, verify_optimal};
 use afg_eval::report::duration;
 use afg_game::fs::write_atomic;
 use afg_game::io::{dataset_to_jsonl, read_dataset};
 use afg_game::{Assignment, GeneratorConfig, Instance, TaskId};
-use afg_repro::bench::{clocked, median_of};
 use anyhow::{Context, Result, bail, ensure};
 use clap::Args;
 use serde::Serialize;
 
+/// The options of `cargo xtask bench-opt`.
 #[derive(Args)]
 pub struct BenchOptArgs {
     /// Sizes as N x M.
@@ -111,6 +112,7 @@ struct OrTools {
     cost_scale: f64,
 }
 
+/// Runs `cargo xtask bench-opt`: the exact optimum against OR-Tools, every solution certified.
 pub fn run(args: BenchOptArgs) -> Result<()> {
     let scratch = tempfile_dir(args.dir.as_deref())?;
     if let Some(python) = &args.python {
@@ -158,7 +160,7 @@ fn check_python(python: &Path) -> Result<()> {
 }
 
 fn measure(case: Case, args: &BenchOptArgs, dir: &Path) -> Result<Row> {
-    afg_repro::bench::reset_peak_rss();
+    crate::bench::reset_peak_rss();
     let opt_peak_rss_mib = peak_rss_of_optimum(case, args.seed)?;
     let file = dir.join(format!(
         "n{}_m{}_seed{}.jsonl",
@@ -213,7 +215,7 @@ fn measure(case: Case, args: &BenchOptArgs, dir: &Path) -> Result<Row> {
 fn peak_rss_of_optimum(case: Case, seed: u64) -> Result<Option<f64>> {
     let inst = GeneratorConfig::paper(case.robots, case.tasks, seed).generate()?;
     std::hint::black_box(Optimum.with_prices(&inst));
-    Ok(afg_repro::bench::peak_rss_mib())
+    Ok(crate::bench::peak_rss_mib())
 }
 
 fn empty(inst: &Instance) -> Assignment {
@@ -370,6 +372,12 @@ mod tests {
         assert_eq!(err, "`1000`: write a size as NxM, e.g. 1000x5");
         let err = "0x5".parse::<Case>().unwrap_err();
         assert_eq!(err, "`0x5`: must be at least 1");
-        assert!(crate::parse("bench-opt --cases 10x").is_err());
+        #[derive(clap::Parser)]
+        struct Cli {
+            #[command(flatten)]
+            args: super::BenchOptArgs,
+        }
+        let parsed = <Cli as clap::Parser>::try_parse_from(["bench-opt", "--cases", "10x"]);
+        assert!(parsed.is_err());
     }
 }

@@ -16,6 +16,7 @@ use clap::Args;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+/// The options of `cargo xtask crash-test`.
 #[derive(Args)]
 pub struct CrashArgs {
     /// Kills per trainer (each at a random moment of a run, then a resume).
@@ -108,6 +109,7 @@ struct Outcome {
     equal: bool,
 }
 
+/// Runs `cargo xtask crash-test`.
 pub fn run(args: CrashArgs) -> Result<()> {
     let exe = std::env::current_exe().context("the xtask binary")?;
     clear_scratch(&args.dir)?;

@@ -7,6 +7,7 @@ use afg_game::io::dataset_to_jsonl;
 use anyhow::{Result, bail};
 use clap::Args;
 
+/// The options of `cargo xtask gen-datasets`.
 #[derive(Args)]
 pub struct GenArgs {
     /// Verify that the committed files are byte-for-byte what the generator makes; write nothing.
@@ -19,6 +20,7 @@ pub fn load(n: usize) -> Result<Vec<Instance>> {
     Ok(dataset::load(&crate::repo_root(), n)?)
 }
 
+/// Runs `cargo xtask gen-datasets`: writes the datasets, or checks them with `--check`.
 pub fn run(args: GenArgs) -> Result<()> {
     let mut stale = Vec::new();
     for n in dataset::SIZES {

@@ -2,34 +2,17 @@
 //! studies — and `train`, the same code as `afg train` (the user's commands are in
 //! `afg-cli`).
 
-mod bench;
-mod bench_mission;
-mod bench_opt;
-mod crash;
-mod datasets;
-mod grape_fig7;
-mod manifest;
-mod mission_study;
-mod realloc_study;
-mod regret;
-mod scale;
-mod tables;
-mod train_all;
-
 use anyhow::Result;
 use clap::{Parser, Subcommand};
+use xtask::{
+    bench, bench_opt, crash, datasets, grape_fig7, manifest, mission_study, realloc_study, regret,
+    scale, tables, train_all,
+};
 
 /// See the `mimalloc` feature in Cargo.toml.
 #[cfg(feature = "mimalloc")]
 #[global_allocator]
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
-
-/// The global allocator this build uses, for benchmark headers.
-pub const ALLOCATOR_NAME: &str = if cfg!(feature = "mimalloc") {
-    "mimalloc"
-} else {
-    "system"
-};
 
 /// afg maintainer tasks (the user's commands: `afg --help`). Run `cargo xtask <command> --help` for each command's options.
 #[derive(Parser)]
@@ -56,7 +39,7 @@ enum Command {
     /// The exact optimum against OR-Tools on the same files, each solution certified.
     BenchOpt(bench_opt::BenchOptArgs),
     /// The optimum re-solved after one event against from scratch; whole missions with allocators in the loop.
-    BenchMission(bench_mission::BenchMissionArgs),
+    BenchMission(bench::mission::BenchMissionArgs),
     /// The learned policy (fast path, blocks, repair) against OPT, DA and greedy up to N = 100 000.
     BenchScale(scale::ScaleArgs),
     /// Robots leave an optimally allocated instance: warm-start reallocation against OPT from scratch.
@@ -96,7 +79,7 @@ impl Command {
             Command::BenchBaselines(args) => bench::run(args),
             Command::BenchModels(args) => bench::run_models(args),
             Command::BenchOpt(args) => bench_opt::run(args),
-            Command::BenchMission(args) => bench_mission::run(args),
+            Command::BenchMission(args) => bench::mission::run(args),
             Command::BenchScale(args) => scale::run(args),
             Command::ReallocStudy(args) => realloc_study::run(args),
             Command::GrapeFig7(args) => grape_fig7::run(args),
@@ -107,19 +90,4 @@ impl Command {
             Command::Afg { command } => command.run(),
         }
     }
-}
-
-/// Parses `cargo xtask LINE` (arguments separated by single spaces).
-#[cfg(test)]
-fn parse(line: &str) -> Result<Command> {
-    let argv = ["cargo xtask"].into_iter().chain(line.split(' '));
-    Ok(Cli::try_parse_from(argv)?.command)
-}
-
-/// The repository root (xtask lives one level below it).
-pub fn repo_root() -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .expect("xtask has a parent")
-        .to_path_buf()
 }

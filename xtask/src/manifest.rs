@@ -18,6 +18,7 @@ pub fn write_manifest(dir: &Path) -> Result<()> {
     Ok(())
 }
 
+/// The options of `cargo xtask manifest`.
 #[derive(Args)]
 pub struct ManifestArgs {
     /// Finished run directories.

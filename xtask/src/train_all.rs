@@ -1,13 +1,14 @@
 //! `cargo xtask train-all`: every paper-form model of the tables, with the default
 //! budgets.
 
+use crate::ModelSpec;
 use afg_cli::settings::TrainSettings;
-use afg_repro::ModelSpec;
 use anyhow::Result;
 use clap::Args;
 
 use afg_cli::train::{TrainArgs, run};
 
+/// The options of `cargo xtask train-all`.
 #[derive(Args)]
 pub struct TrainAllArgs {
     /// Scales to train.

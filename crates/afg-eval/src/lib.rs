@@ -8,7 +8,7 @@
 //! bars and the one-line error with its exit code ([`report`]).
 //!
 //! Every command that prints "% of OPT" computes it here. The paper's tables, its
-//! numbers and the benchmarks live in the maintainer's `afg-repro`.
+//! numbers and the benchmarks live in the maintainer's `xtask`.
 
 pub mod dataset;
 mod error;

@@ -22,7 +22,7 @@ pub enum Head {
 ///
 /// # Examples
 /// ```
-/// use afg_repro::{Head, ModelSpec};
+/// use xtask::{Head, ModelSpec};
 /// use afg_learn::{nets::Net, train::Algo};
 /// let m = ModelSpec::new(Net::AfgNet, Algo::Ddqn, 60);
 /// assert_eq!(m.dir_name(), "afgnet_ddqn_n60");
@@ -338,7 +338,7 @@ impl PriceTraining {
 /// # Examples
 /// ```
 /// use std::path::Path;
-/// use afg_repro::{PriceSpec, PriceTraining};
+/// use xtask::{PriceSpec, PriceTraining};
 /// use afg_learn::price::PriceMode;
 /// let s = PriceSpec::new(60, PriceMode::OneShot);
 /// assert_eq!(s.dir(Path::new("/repo")), Path::new("/repo/models/ours/price_n60"));

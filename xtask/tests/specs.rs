@@ -4,10 +4,10 @@ use std::collections::HashSet;
 use std::path::Path;
 
 use afg_eval::dataset;
-use afg_repro::{ModelSpec, paper};
+use xtask::{ModelSpec, paper};
 
 fn root() -> &'static Path {
-    Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
+    Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
 }
 
 #[test]
@@ -51,7 +51,7 @@ fn the_paper_tables_cover_the_dataset_sizes() {
 fn the_committed_price_model_beats_da_and_greedy_at_every_scale() {
     use afg_baseline::Method;
     use afg_eval::{evaluate, optima};
-    use afg_repro::PriceSpec;
+    use xtask::PriceSpec;
     let [sequential, one_shot] = PriceSpec::committed();
     let (sequential, one_shot) = (
         sequential.load(root()).unwrap(),

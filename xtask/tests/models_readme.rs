@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use afg_learn::run::RunDir;
 
 fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
 /// Whether `word` is one of the README's words for a change from the default training.

@@ -4,6 +4,8 @@
 //! greedy rollout (Burn path against the fast path).
 //!
 //! The machine is shared and noisy: compare ratios measured in one run.
+//!
+//! `cargo xtask bench-baselines`: a Markdown table of allocator times and welfare.
 
 pub mod mission;
 pub mod plain;
@@ -35,8 +37,8 @@ use plain::PaddedGraph;
 ///
 /// # Examples
 /// ```
-/// afg_repro::bench::reset_peak_rss();
-/// let peak = afg_repro::bench::peak_rss_mib();
+/// xtask::bench::reset_peak_rss();
+/// let peak = xtask::bench::peak_rss_mib();
 /// assert!(peak.is_none_or(|mib| mib > 0.0));
 /// ```
 pub fn peak_rss_mib() -> Option<f64> {
@@ -64,7 +66,7 @@ pub fn reset_peak_rss() {
 /// ```
 /// use std::time::Duration;
 /// let mut k = 0;
-/// let (median, last) = afg_repro::bench::median_of(f64::INFINITY, 3, || {
+/// let (median, last) = xtask::bench::median_of(f64::INFINITY, 3, || {
 ///     k += 1;
 ///     Ok::<_, ()>((Duration::from_millis(k), k))
 /// })?;
@@ -346,7 +348,7 @@ pub fn networks_markdown(
     }
     md += "\nAFGNet's training step against the plain model of the first Burn notes of this project \
            (neighbours padded to the largest degree, gather + reshape + sum; same parameters, \
-           same Q values: tested in crates/afg-repro/src/bench/plain.rs), in the same run:\n\n\
+           same Q values: tested in xtask/src/bench/plain.rs), in the same run:\n\n\
            | N | train step, plain (padded gather) | train step, ours (dense) | speed-up |\n|---|---|---|---|\n";
     for (n, plain, ours) in plain_timings(sizes, batch, repeats)? {
         let (p, o, x) = (duration(plain), duration(ours), ratio(plain, ours));
@@ -397,4 +399,58 @@ mod tests {
             "{md}"
         );
     }
+}
+
+// The command.
+use anyhow::Result;
+use clap::Args;
+
+/// The options of `cargo xtask bench-baselines`.
+#[derive(Args)]
+pub struct BenchArgs {
+    /// Robot counts to sweep.
+    #[arg(long, value_delimiter = ',', default_values_t = [100, 1_000, 10_000, 100_000])]
+    sizes: Vec<usize>,
+    /// Number of tasks M.
+    #[arg(long, default_value_t = afg_eval::dataset::TASKS)]
+    tasks: usize,
+    /// Largest N for the decentralised DA (its synchronous rounds take time about quadratic in N).
+    #[arg(long, default_value_t = 1_000)]
+    max_decentralised: usize,
+    /// Time budget per measurement: repeat until it is spent (at least once, at most 20 runs).
+    #[arg(long, default_value_t = 1.0)]
+    seconds: f64,
+}
+
+/// Runs `cargo xtask bench-baselines`: prints the allocators' timing table.
+pub fn run(args: BenchArgs) -> Result<()> {
+    let (tasks, max_decentralised) = (args.tasks, args.max_decentralised);
+    let md = allocators_markdown(&args.sizes, tasks, max_decentralised, args.seconds)?;
+    print!("{md}");
+    Ok(())
+}
+
+/// The options of `cargo xtask bench-models`.
+#[derive(Args)]
+pub struct ModelBenchArgs {
+    /// Robot counts for the batched forward pass and training step.
+    #[arg(long, value_delimiter = ',', default_values_t = [20, 60, 100])]
+    sizes: Vec<usize>,
+    /// States per batch.
+    #[arg(long, default_value_t = 256)]
+    batch: usize,
+    /// Robot count of the greedy rollout.
+    #[arg(long, default_value_t = 1_000)]
+    rollout: usize,
+    /// Repetitions per measurement (the median is reported).
+    #[arg(long, default_value_t = 5)]
+    repeats: usize,
+}
+
+/// Runs `cargo xtask bench-models`: prints the networks' timing table.
+pub fn run_models(args: ModelBenchArgs) -> Result<()> {
+    let (sizes, batch, rollout) = (&args.sizes, args.batch, args.rollout);
+    let md = networks_markdown(sizes, batch, rollout, args.repeats, crate::ALLOCATOR_NAME)?;
+    print!("{md}");
+    Ok(())
 }

@@ -25,7 +25,7 @@ impl Table1Row {
     ///
     /// # Examples
     /// ```
-    /// use afg_repro::{ModelSpec, paper};
+    /// use xtask::{ModelSpec, paper};
     /// let row = paper::table1(60).unwrap();
     /// assert_eq!(row.welfare_of(&ModelSpec::afgnet_ddqn(60)), Some(59.51));
     /// ```

@@ -35,7 +35,7 @@ impl Run {
 /// # Examples
 /// ```
 /// use afg_baseline::Method;
-/// use afg_repro::{ModelSpec, tables::{RowId, Run}};
+/// use xtask::{ModelSpec, tables::{RowId, Run}};
 /// assert_eq!(RowId::Method(Method::Opt).label(), "OPT");
 /// let ddqn = ModelSpec::afgnet_ddqn(60);
 /// let own = RowId::Model { spec: ddqn, robots: 60, run: Run::AS_TRAINED };
@@ -156,7 +156,7 @@ pub(super) fn committed_model_row(
 /// # Examples
 /// ```
 /// use afg_eval::optima;
-/// use afg_repro::tables::classical_rows;
+/// use xtask::tables::classical_rows;
 /// use afg_game::GeneratorConfig;
 /// let insts: Vec<_> = (0..3).map(|s| GeneratorConfig::paper(20, 5, s).generate()).collect::<Result<_, _>>()?;
 /// let rows = classical_rows(&insts, &optima(&insts)?, 2)?;
@@ -252,7 +252,7 @@ mod tests {
 
     #[test]
     fn the_price_headed_rows_name_their_mode_and_scale() {
-        let root = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."));
+        let root = &crate::repo_root();
         let labels = |n: usize| -> Vec<String> {
             let insts = afg_eval::dataset::load(root, n).unwrap();
             let insts = &insts[..1];

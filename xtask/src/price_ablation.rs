@@ -89,7 +89,7 @@ pub fn price_ablation(root: &Path, instances: usize) -> Result<Vec<PriceAblation
 ///
 /// # Examples
 /// ```
-/// use afg_repro::price_ablation::{PriceAblationRow, price_ablation_markdown};
+/// use xtask::price_ablation::{PriceAblationRow, price_ablation_markdown};
 /// let row = PriceAblationRow {
 ///     method: "structure alone".into(),
 ///     command: None,

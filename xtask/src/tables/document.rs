@@ -21,7 +21,7 @@ pub const END: &str = "<!-- reproduce-tables:end -->";
 ///
 /// # Examples
 /// ```
-/// use afg_repro::tables::{BEGIN, END, block, with_block};
+/// use xtask::tables::{BEGIN, END, block, with_block};
 /// let readme = format!("intro\n{BEGIN}\nold\n{END}\nrest\n");
 /// assert_eq!(block(&readme).as_deref(), Some("old\n"));
 /// let new = with_block(&readme, "| new |\n").unwrap();

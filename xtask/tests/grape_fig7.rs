@@ -6,11 +6,11 @@ use std::path::{Path, PathBuf};
 
 use afg_eval::EvalError;
 use afg_game::Preference;
-use afg_repro::grape_fig7::{DATASET, read_runs, source, table};
-use afg_repro::markdown::table_differences;
+use xtask::grape_fig7::{DATASET, read_runs, source, table};
+use xtask::markdown::table_differences;
 
 fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
 #[test]
