@@ -453,64 +453,6 @@ fn html_text(text: &str) -> String {
         .replace('>', "&gt;")
 }
 
-/// The page of [`mission_html`]; `__DATA__` and `__TITLE__` are filled in.
-const MISSION_PAGE: &str = r##"<!DOCTYPE html>
-<html><head><meta charset="utf-8"><title>__TITLE__</title>
-<style>body{font-family:sans-serif;margin:16px}canvas{border:1px solid #ccc}</style></head>
-<body><h3>__TITLE__</h3>
-<canvas id="map" width="720" height="720"></canvas><br>
-<button id="play">pause</button> <input id="time" type="range" min="0" value="0" style="width:560px"> <span id="label"></span>
-<p>Robots coloured by task (grey: no task, red cross: failed); squares: tasks, sized by the work left (outline: done), each with the size of its coalition (robots assigned to it).</p>
-<script>
-const D = __DATA__;
-const c = document.getElementById("map"), g = c.getContext("2d");
-const slider = document.getElementById("time"), label = document.getElementById("label");
-const play = document.getElementById("play");
-slider.max = D.frames.length - 1;
-const [lo, hi] = D.bounds, span = Math.max(hi[0] - lo[0], hi[1] - lo[1], 1e-9);
-const X = x => 20 + 680 * (x - lo[0]) / span, Y = y => 700 - 680 * (y - lo[1]) / span;
-const hue = j => `hsl(${(j * 137.508) % 360},70%,45%)`;
-function draw(k) {
-  const f = D.frames[k];
-  g.clearRect(0, 0, c.width, c.height);
-  D.tasks.forEach((t, j) => {
-    const left = f.left[j];
-    if (left < 0) return;
-    const s = 4 + 14 * Math.sqrt(left);
-    g.strokeStyle = hue(j); g.lineWidth = 2;
-    if (left > 0) { g.fillStyle = hue(j); g.globalAlpha = 0.35; g.fillRect(X(t[0]) - s, Y(t[1]) - s, 2 * s, 2 * s); g.globalAlpha = 1; }
-    g.strokeRect(X(t[0]) - s, Y(t[1]) - s, 2 * s, 2 * s);
-  });
-  const sizes = D.tasks.map(() => 0);
-  f.tasks.forEach(j => { if (j >= 0) sizes[j] += 1; });
-  g.font = "12px sans-serif";
-  D.tasks.forEach((t, j) => {
-    if (f.left[j] < 0 || sizes[j] === 0) return;
-    const s = 4 + 14 * Math.sqrt(Math.max(f.left[j], 0));
-    g.fillStyle = "#000"; g.fillText(sizes[j], X(t[0]) + s + 3, Y(t[1]) - s);
-  });
-  f.positions.forEach((p, i) => {
-    const j = f.tasks[i], x = X(p[0]), y = Y(p[1]);
-    if (j === -2) { g.strokeStyle = "red"; g.lineWidth = 1.5; g.beginPath(); g.moveTo(x - 3, y - 3); g.lineTo(x + 3, y + 3); g.moveTo(x + 3, y - 3); g.lineTo(x - 3, y + 3); g.stroke(); return; }
-    g.fillStyle = j < 0 ? "#999" : hue(j);
-    g.beginPath(); g.arc(x, y, 2.5, 0, 2 * Math.PI); g.fill();
-  });
-  const done = f.left.filter(l => l === 0).length;
-  label.textContent = `t = ${f.time.toFixed(2)}, tasks done ${done} / ${D.tasks.length}`;
-}
-let k = 0, running = true;
-const last = D.frames.length - 1;
-slider.oninput = () => { k = +slider.value; draw(k); };
-play.onclick = () => {
-  if (k === last) k = 0;
-  running = !running; play.textContent = running ? "pause" : "play";
-};
-// Plays once and holds the final state; "replay" starts again.
-setInterval(() => {
-  if (!running) return;
-  k = Math.min(k + 1, last); slider.value = k; draw(k);
-  if (k === last) { running = false; play.textContent = "replay"; }
-}, 60);
-draw(0);
-</script></body></html>
-"##;
+/// The page of [`mission_html`] (`mission_page.html`); `__DATA__` and `__TITLE__` are
+/// filled in.
+const MISSION_PAGE: &str = include_str!("mission_page.html");

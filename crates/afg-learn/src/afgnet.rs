@@ -11,7 +11,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use crate::layers::{Activation, QHead, linear_of_concat, seeded_linear, zero_linear};
-use crate::price::{PRICE_INPUTS, PriceNet};
+use crate::price::net::{PRICE_INPUTS, PriceNet};
 use crate::tensors::GraphTensors;
 
 /// Shape and seed of an [`AfgNet`].

@@ -20,7 +20,8 @@ use afg_baseline::Method;
 use serde::{Deserialize, Serialize};
 
 use crate::LearnError;
-use crate::train::{TrainConfig, Validation};
+use crate::train::config::TrainConfig;
+use crate::train::validation::Validation;
 
 /// One line of `log.jsonl`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -286,7 +287,7 @@ impl RunDir {
 
     /// The checkpoint directory.
     pub fn checkpoint(&self) -> PathBuf {
-        crate::train::checkpoint_dir(&self.path)
+        checkpoint_dir(&self.path)
     }
 
     pub(crate) fn file(&self, name: &str) -> PathBuf {
@@ -466,4 +467,19 @@ impl RunDir {
         afg_game::fs::write_atomic(&self.file("log.jsonl"), kept.as_bytes())?;
         Ok(elapsed)
     }
+}
+
+/// Where [`Trainer::save_checkpoint`](crate::train::Trainer::save_checkpoint) puts the checkpoint of a run directory.
+pub fn checkpoint_dir(dir: &Path) -> PathBuf {
+    dir.join("checkpoint")
+}
+
+/// Where [`Trainer::save_checkpoint`](crate::train::Trainer::save_checkpoint) keeps the previous checkpoint.
+pub(crate) fn previous_checkpoint_dir(dir: &Path) -> PathBuf {
+    dir.join("checkpoint.old")
+}
+
+/// The checkpoint directories a run in `dir` may hold: the current and the previous.
+pub(crate) fn checkpoint_dirs(dir: &Path) -> [PathBuf; 2] {
+    [checkpoint_dir(dir), previous_checkpoint_dir(dir)]
 }

@@ -2,250 +2,11 @@
 //! event, any allocator in the loop.
 
 use std::borrow::Cow;
-use std::cmp::Ordering;
 use std::collections::{BinaryHeap, HashMap};
 
-use afg_baseline::Allocator;
-use afg_game::{Instance, Point, Preference, Task};
-use serde::{Deserialize, Serialize};
+use afg_game::{Instance, Point, Task};
 
 use crate::{Mission, MissionError};
-
-/// How each decision is made.
-#[derive(Clone, Copy)]
-pub enum Replan<'a> {
-    /// The allocator, from scratch, at every decision.
-    Scratch(&'a dyn Allocator),
-    /// The allocator at the first decision; after it, survivors keep their task (if it
-    /// is still open) and best-response dynamics under `preference` settle the rest.
-    Warm {
-        /// The first decision's allocator.
-        first: &'a dyn Allocator,
-        /// The dynamics' preference.
-        preference: Preference,
-    },
-    /// The exact optimum, re-solved at every decision from the previous decision's task
-    /// prices (a new task starts at [`Optimum::start_price`](afg_baseline::Optimum::start_price)):
-    /// the same optimum, found from a warm start.
-    WarmOpt,
-    /// No central decision: the robots run a decentralised method round by round and
-    /// each heads where its own view says.
-    Decentralised(&'a Decentralised),
-}
-
-/// How long a decision takes in mission time: robots act on it only once it is made.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-#[serde(rename_all = "kebab-case", tag = "kind")]
-pub enum Latency {
-    /// Decisions take no mission time.
-    None,
-    /// Each decision takes this many time units.
-    Fixed {
-        /// Time units per decision.
-        delay: f64,
-    },
-    /// Each decision takes the allocator's measured compute time times `factor`
-    /// (mission time units per second of compute): not reproducible run to run.
-    Measured {
-        /// Mission time units per second.
-        factor: f64,
-    },
-}
-
-/// The options of a run besides the allocator.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RunOptions {
-    /// Also decide every this many time units, not only at events.
-    pub replan_every: Option<f64>,
-    /// How long decisions take.
-    pub latency: Latency,
-    /// Keep every event and decision ([`MissionRun::trace`]).
-    pub trace: bool,
-    /// Snapshot the whole state every this many time units ([`MissionRun::frames`]:
-    /// the animation's frames).
-    pub frame_every: Option<f64>,
-    /// Commitment: robots at work stay until their task is done.
-    pub commit: bool,
-    /// Hysteresis: a travelling robot switches task only for a gain (in balanced
-    /// score, the decision's game) above this.
-    pub hysteresis: Option<f64>,
-}
-
-impl Default for RunOptions {
-    fn default() -> Self {
-        RunOptions {
-            frame_every: None,
-            commit: false,
-            hysteresis: None,
-            replan_every: None,
-            latency: Latency::None,
-            trace: false,
-        }
-    }
-}
-
-/// One event of a run, for `--trace` (JSON Lines).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case", tag = "event")]
-pub enum TraceEvent {
-    /// A task appeared.
-    TaskAppears {
-        /// Mission time.
-        time: f64,
-        /// The task.
-        task: usize,
-    },
-    /// A task's workload was done.
-    TaskDone {
-        /// Mission time.
-        time: f64,
-        /// The task.
-        task: usize,
-    },
-    /// A robot failed.
-    RobotFails {
-        /// Mission time.
-        time: f64,
-        /// The robot.
-        robot: usize,
-    },
-    /// A robot came back.
-    RobotReturns {
-        /// Mission time.
-        time: f64,
-        /// The robot.
-        robot: usize,
-    },
-    /// A robot reached its task.
-    Arrival {
-        /// Mission time.
-        time: f64,
-        /// The robot.
-        robot: usize,
-        /// Its task.
-        task: usize,
-    },
-    /// A decision took effect.
-    Decision {
-        /// When it took effect.
-        time: f64,
-        /// When it was asked for.
-        asked: f64,
-        /// Every robot's task from then on (−1: none).
-        tasks: Vec<i64>,
-        /// Every robot's position then.
-        positions: Vec<[f64; 2]>,
-        /// The allocator's compute time (seconds).
-        compute_s: f64,
-    },
-}
-
-/// Where the mission stood after an event.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct TimelinePoint {
-    /// Mission time.
-    pub time: f64,
-    /// Tasks appeared and not yet done.
-    pub open: usize,
-    /// Tasks done.
-    pub done: usize,
-    /// Reward of the tasks done (`Σ r_j W_j`).
-    pub reward: f64,
-}
-
-/// The metrics of a run (docs/missions.md defines each).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Metrics {
-    /// Tasks whose workload was done by the horizon.
-    pub tasks_done: usize,
-    /// Tasks in the mission.
-    pub tasks: usize,
-    /// `Σ r_j W_j` over the tasks done: the score to rank methods by.
-    pub reward_done: f64,
-    /// `Σ r_j W_j` over all tasks: the most a run can score.
-    pub reward_total: f64,
-    /// Mean time from a task's appearance to its completion, over the tasks done.
-    pub latency_mean: Option<f64>,
-    /// Its 95th percentile (nearest rank).
-    pub latency_p95: Option<f64>,
-    /// Its maximum.
-    pub latency_max: Option<f64>,
-    /// When the last task was done, if every task was.
-    pub makespan: Option<f64>,
-    /// When the run stopped: the makespan, or the horizon.
-    pub end: f64,
-    /// Distance travelled by all robots.
-    pub distance: f64,
-    /// Robots switching from one task to another.
-    pub reassignments: u64,
-    /// Decisions taken.
-    pub decisions: u64,
-    /// Robot–task pairs of the decisions' games (Σ robots × open tasks): what any exact
-    /// method must read at least once.
-    pub pairs: u64,
-    /// The allocator's compute time per decision, mean (seconds).
-    pub compute_mean_s: f64,
-    /// Its maximum.
-    pub compute_max_s: f64,
-    /// In total.
-    pub compute_total_s: f64,
-    /// Work done on every task (done or not) by the end.
-    pub work_done: f64,
-    /// `Σ r_j` times the work done on each task (done or not): the reward done plus
-    /// the value of the work on tasks left unfinished.
-    pub work_value: f64,
-    /// A decentralised method's rounds, traffic and response times (for it, each
-    /// round counts as a decision).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub swarm: Option<SwarmMetrics>,
-}
-
-/// A finished run: its metrics, its timeline, and (if asked) every event.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct MissionRun {
-    /// The metrics.
-    pub metrics: Metrics,
-    /// Open and done tasks and reward after every event.
-    pub timeline: Vec<TimelinePoint>,
-    /// Every event and decision, if [`RunOptions::trace`].
-    pub trace: Vec<TraceEvent>,
-    /// Snapshots every [`RunOptions::frame_every`] time units.
-    pub frames: Vec<Frame>,
-}
-
-/// The whole state at one moment (for animations).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Frame {
-    /// Mission time.
-    pub time: f64,
-    /// Every robot's position.
-    pub positions: Vec<[f32; 2]>,
-    /// Every robot's task (−1: none; −2: failed).
-    pub tasks: Vec<i32>,
-    /// Every task's work left as a share of its workload (−1: not yet appeared; 0: done).
-    pub left: Vec<f32>,
-}
-
-impl MissionRun {
-    /// The trace as JSON Lines, one event a line (`afg mission run --trace`).
-    ///
-    /// # Examples
-    /// ```
-    /// use afg_baseline::Greedy;
-    /// use afg_mission::{MissionConfig, Preset, Replan, RunOptions, simulate};
-    /// let mission = MissionConfig::new(Preset::Static, 5, 2, 1).generate()?;
-    /// let options = RunOptions { trace: true, ..RunOptions::default() };
-    /// let run = simulate(&mission, Replan::Scratch(&Greedy), options)?;
-    /// assert_eq!(run.trace_jsonl().lines().count(), run.trace.len());
-    /// # Ok::<(), afg_mission::MissionError>(())
-    /// ```
-    pub fn trace_jsonl(&self) -> String {
-        self.trace
-            .iter()
-            .map(|e| serde_json::to_string(e).expect("an event serialises") + "\n")
-            .collect()
-    }
-}
 
 /// The work rate of `n` robots at a task of base `eps`: `log_eps(n + eps − 1)` (one
 /// robot: 1), so the coalition value `F_j(n)` is the task's reward rate.
@@ -315,36 +76,6 @@ struct Pending {
     compute_s: f64,
 }
 
-/// A robot's arrival at the end of its current leg, earliest first in a heap.
-#[derive(Clone, Copy, Debug)]
-struct Due {
-    time: f64,
-    robot: u32,
-    leg: u64,
-}
-
-impl PartialEq for Due {
-    fn eq(&self, other: &Self) -> bool {
-        self.cmp(other) == Ordering::Equal
-    }
-}
-impl Eq for Due {}
-impl PartialOrd for Due {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
-}
-impl Ord for Due {
-    /// Reversed, so that `BinaryHeap` pops the earliest; ties by robot index.
-    fn cmp(&self, other: &Self) -> Ordering {
-        other
-            .time
-            .total_cmp(&self.time)
-            .then(other.robot.cmp(&self.robot))
-            .then(other.leg.cmp(&self.leg))
-    }
-}
-
 /// Relative tolerance under which an arrival or completion counts as reached.
 const REACHED: f64 = 1e-9;
 
@@ -412,36 +143,6 @@ pub fn simulate_with(
     Ok(sim.finish())
 }
 
-pub(crate) fn check_options(options: &RunOptions) -> Result<(), MissionError> {
-    let positive = |x: f64| x.is_finite() && x > 0.0;
-    if options.replan_every.is_some_and(|r| !positive(r)) {
-        return Err(MissionError::Invalid(
-            "the replanning interval must be finite and positive".into(),
-        ));
-    }
-    if options.hysteresis.is_some_and(|h| h.is_nan() || h < 0.0) {
-        return Err(MissionError::Invalid(
-            "the hysteresis threshold must be ≥ 0".into(),
-        ));
-    }
-    if options.frame_every.is_some_and(|r| !positive(r)) {
-        return Err(MissionError::Invalid(
-            "the time between frames must be finite and positive".into(),
-        ));
-    }
-    let latency_ok = match options.latency {
-        Latency::None => true,
-        Latency::Fixed { delay } => delay.is_finite() && delay >= 0.0,
-        Latency::Measured { factor } => factor.is_finite() && factor >= 0.0,
-    };
-    if !latency_ok {
-        return Err(MissionError::Invalid(
-            "the decision latency must be finite and ≥ 0".into(),
-        ));
-    }
-    Ok(())
-}
-
 /// The simulator's state.
 struct Sim<'m, 'a> {
     mission: Cow<'m, Mission>,
@@ -459,7 +160,7 @@ struct Sim<'m, 'a> {
     /// An event happened while a decision was pending: decide again when it lands.
     wanted: bool,
     /// Arrivals to come: one per leg, stale once the robot's leg count moved on.
-    due: BinaryHeap<Due>,
+    due: BinaryHeap<Arrival>,
     /// Legs begun per robot.
     legs: Vec<u64>,
     /// Whether a decision was made (warm starts start after it) and the task prices
@@ -680,107 +381,6 @@ impl<'m, 'a> Sim<'m, 'a> {
         any
     }
 
-    /// Robots reaching their task now (from the queue of legs, the stale ones dropped).
-    fn arrivals(&mut self) {
-        while let Some(&due) = self.due.peek() {
-            if due.time > self.now {
-                break;
-            }
-            self.due.pop();
-            let i = due.robot as usize;
-            let r = self.robots[i];
-            if due.leg != self.legs[i] || !r.alive || r.there {
-                continue;
-            }
-            if let Some(j) = r.task {
-                let target = self.mission.tasks[j].position;
-                self.distance += r.from.distance(target);
-                self.robots[i].from = target;
-                self.robots[i].since = self.now;
-                self.robots[i].there = true;
-                self.tasks[j].present += 1;
-                self.log(TraceEvent::Arrival {
-                    time: self.now,
-                    robot: i,
-                    task: j,
-                });
-            }
-        }
-    }
-
-    /// When robot `i`, on its leg to task `j`, gets there.
-    fn arrival_time(&self, i: usize, j: usize) -> f64 {
-        let r = &self.robots[i];
-        let d = r.from.distance(self.mission.tasks[j].position);
-        let t = r.since + d / self.mission.robots[i].speed;
-        // Within rounding of now counts as now.
-        if t - self.now <= REACHED * t.abs().max(1.0) {
-            self.now
-        } else {
-            t
-        }
-    }
-
-    /// Where robot `i` is now.
-    fn position(&self, i: usize) -> Point {
-        let r = &self.robots[i];
-        match r.task.filter(|_| r.alive && !r.there) {
-            None => r.from,
-            Some(j) => {
-                let to = self.mission.tasks[j].position;
-                let d = r.from.distance(to);
-                let covered = (self.now - r.since) * self.mission.robots[i].speed;
-                if d <= 0.0 || covered >= d {
-                    return to;
-                }
-                let f = covered / d;
-                Point::new(
-                    r.from.x + f * (to.x - r.from.x),
-                    r.from.y + f * (to.y - r.from.y),
-                )
-            }
-        }
-    }
-
-    /// Robot `i` stops where it is: it leaves its task (and its coalition, if there).
-    fn stop(&mut self, i: usize) {
-        self.legs[i] += 1;
-        let here = self.position(i);
-        let r = self.robots[i];
-        if let Some(j) = r.task {
-            if r.there {
-                self.tasks[j].present -= 1;
-            } else if r.alive {
-                self.distance += r.from.distance(here);
-            }
-        }
-        self.robots[i] = Robot {
-            from: here,
-            since: self.now,
-            task: None,
-            there: false,
-            ..r
-        };
-    }
-
-    /// Robot `i` heads for task `j` from where it is.
-    fn send(&mut self, i: usize, j: usize) {
-        if self.robots[i].task == Some(j) {
-            return;
-        }
-        if self.robots[i].task.is_some() {
-            self.reassignments += 1;
-        }
-        self.stop(i);
-        self.robots[i].task = Some(j);
-        let time = self.arrival_time(i, j);
-        self.due.push(Due {
-            time,
-            robot: i as u32,
-            leg: self.legs[i],
-        });
-    }
-
     /// The earliest event after now: a scheduled one, an arrival, a completion, a
     /// decision landing or a replanning tick.
     fn next_event(&self) -> f64 {
@@ -809,115 +409,20 @@ impl<'m, 'a> Sim<'m, 'a> {
         }
         next
     }
-
-    /// A frame, if one is due.
-    fn snapshot(&mut self) {
-        let (Some(due), Some(every)) = (self.next_frame, self.options.frame_every) else {
-            return;
-        };
-        if due > self.now {
-            return;
-        }
-        self.next_frame = Some(due + every);
-        let frame = self.frame();
-        self.frames.push(frame);
-    }
-
-    /// The whole state now.
-    fn frame(&self) -> Frame {
-        let positions = (0..self.robots.len())
-            .map(|i| {
-                let p = self.position(i);
-                [p.x as f32, p.y as f32]
-            })
-            .collect();
-        let tasks = self
-            .robots
-            .iter()
-            .map(|r| match (r.alive, r.task) {
-                (false, _) => -2,
-                (true, None) => -1,
-                (true, Some(j)) => j as i32,
-            })
-            .collect();
-        let left = self
-            .tasks
-            .iter()
-            .zip(&self.mission.tasks)
-            .map(|(t, spec)| {
-                if t.open || t.done_at.is_some() {
-                    (t.remaining / spec.workload) as f32
-                } else {
-                    -1.0
-                }
-            })
-            .collect();
-        Frame {
-            time: self.now,
-            positions,
-            tasks,
-            left,
-        }
-    }
-
-    /// Moves time to `to`: work is done at the present coalitions' rates (robots'
-    /// positions follow from their legs).
-    fn advance(&mut self, to: f64) {
-        let dt = to - self.now;
-        for (j, t) in self.tasks.iter_mut().enumerate() {
-            if t.open && t.present > 0 {
-                let rate = work_rate(t.present, self.mission.tasks[j].eps);
-                t.remaining = (t.remaining - rate * dt).max(0.0);
-            }
-        }
-        self.now = to;
-    }
-
-    fn log(&mut self, event: TraceEvent) {
-        if self.options.trace {
-            self.trace.push(event);
-        }
-    }
-
-    fn record(&mut self) {
-        let point = TimelinePoint {
-            time: self.now,
-            open: self.tasks.iter().filter(|t| t.open).count(),
-            done: self.tasks.iter().filter(|t| t.done_at.is_some()).count(),
-            reward: self.reward_done(),
-        };
-        if self.timeline.last() != Some(&point) {
-            self.timeline.push(point);
-        }
-    }
-
-    /// Work done on each task so far, with its task's spec.
-    fn work(&self) -> impl Iterator<Item = (f64, &crate::TaskSpec)> + '_ {
-        (self.tasks.iter())
-            .zip(&self.mission.tasks)
-            .map(|(t, spec)| (spec.workload - t.remaining, spec))
-    }
-
-    /// `Σ r_j` times the work done on each task so far.
-    fn work_value(&self) -> f64 {
-        self.work().map(|(w, spec)| spec.reward * w).sum()
-    }
-
-    fn reward_done(&self) -> f64 {
-        self.tasks
-            .iter()
-            .zip(&self.mission.tasks)
-            .filter(|(t, _)| t.done_at.is_some())
-            .map(|(_, spec)| spec.reward * spec.workload)
-            .sum()
-    }
 }
 
 mod decide;
 mod env;
 mod finish;
+mod motion;
+mod options;
+mod outcome;
 mod swarm;
 
 pub use env::{EnvStep, MissionEnv, Perception, ROBOT_FEATURES, TASK_FEATURES};
+use motion::Arrival;
+pub(crate) use options::check_options;
+pub use options::{Latency, Replan, RunOptions};
+pub use outcome::{Frame, Metrics, MissionRun, TimelinePoint, TraceEvent};
 use swarm::SwarmState;
 pub use swarm::{Decentralised, SwarmMetrics};

@@ -6,15 +6,8 @@ use afg_graph::{GraphKind, RobotGraph};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
-use super::network::Network;
+use super::network::{Network, gilbert_elliott};
 use crate::AllocError;
-
-/// Gilbert–Elliott transition chances (good → bad, bad → good) for a long-run loss
-/// `loss` and a mean bad run of `burst` rounds.
-pub(super) fn gilbert_elliott(loss: f64, burst: f64) -> (f64, f64) {
-    let to_good = 1.0 / burst;
-    (loss * to_good / (1.0 - loss), to_good)
-}
 
 /// The links in force: a neighbour list per robot (by original robot id; a crashed
 /// robot has none), each directed link with its loss state and whether it crosses the

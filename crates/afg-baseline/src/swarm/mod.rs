@@ -16,8 +16,10 @@ mod auction;
 mod grape;
 mod links;
 mod live;
+mod moving;
 mod network;
 mod news;
+mod radio;
 
 use std::time::Duration;
 

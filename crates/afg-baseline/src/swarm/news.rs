@@ -3,7 +3,7 @@
 
 use afg_game::Point;
 
-use super::network::Radio;
+use super::radio::Radio;
 
 /// Bytes a fact (a task and its state) takes on the air.
 const FACT_BYTES: u64 = 5;

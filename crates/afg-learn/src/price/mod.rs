@@ -25,7 +25,7 @@
 //! retrained for the void).
 
 mod config;
-mod net;
+pub(crate) mod net;
 mod train;
 
 use std::path::Path;

@@ -2,7 +2,7 @@
 //! the running episodes, so that a resumed run ends with the same weights as an
 //! uninterrupted one.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use burn::optim::Optimizer;
 use burn::record::{FullPrecisionSettings, NamedMpkFileRecorder, Recorder};
@@ -11,6 +11,7 @@ use serde::{Deserialize, Serialize};
 
 use super::replay::EpisodeRecord;
 use super::{TrainConfig, Trainer, optimizer};
+use crate::run_dir::{checkpoint_dir, previous_checkpoint_dir};
 use crate::weights::write_record;
 use crate::weights::{load_network, save_network};
 use crate::{InferBackend, LearnError, TrainBackend};
@@ -189,19 +190,4 @@ impl Trainer {
             state.step,
         )
     }
-}
-
-/// Where [`Trainer::save_checkpoint`] puts the checkpoint of a run directory.
-pub fn checkpoint_dir(dir: &Path) -> PathBuf {
-    dir.join("checkpoint")
-}
-
-/// Where [`Trainer::save_checkpoint`] keeps the previous checkpoint.
-fn previous_checkpoint_dir(dir: &Path) -> PathBuf {
-    dir.join("checkpoint.old")
-}
-
-/// The checkpoint directories a run in `dir` may hold: the current and the previous.
-pub(crate) fn checkpoint_dirs(dir: &Path) -> [PathBuf; 2] {
-    [checkpoint_dir(dir), previous_checkpoint_dir(dir)]
 }

@@ -17,10 +17,11 @@
 
 mod batch;
 mod checkpoint;
-mod config;
+pub(crate) mod config;
 mod demos;
 mod replay;
 mod session;
+pub(crate) mod validation;
 
 use std::collections::VecDeque;
 
@@ -32,11 +33,10 @@ use burn::optim::{Adam, AdamConfig, GradientsParams, Optimizer};
 use burn::tensor::{Int, Tensor, TensorData};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use serde::{Deserialize, Serialize};
 
+pub use crate::run_dir::checkpoint_dir;
+pub(crate) use crate::run_dir::checkpoint_dirs;
 pub use crate::targets::{double_dqn_target, dqn_target, masked_argmax};
-pub use checkpoint::checkpoint_dir;
-pub(crate) use checkpoint::checkpoint_dirs;
 pub(crate) use config::validation_set;
 pub use config::{
     Algo, Demonstrations, Preset, TrainConfig, training_instance_seed, validation_instances,
@@ -44,6 +44,7 @@ pub use config::{
 use demos::{demonstrations, large_margins};
 use replay::{Episode, EpisodeRecord};
 pub use session::Session;
+pub use validation::Validation;
 
 use crate::network::QNetwork;
 use crate::rollout::greedy_rollouts;
@@ -62,29 +63,6 @@ pub struct StepReport {
     /// The validation after this step, when one was due (every `validate_every` steps
     /// and at the last step).
     pub validation: Option<Validation>,
-}
-
-/// The greedy policy of a network on the validation set.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Validation {
-    /// Mean welfare.
-    pub welfare: f64,
-    /// Mean of welfare / OPT, in percent.
-    pub percent_of_opt: f64,
-    /// Mean over instances of the share of robots on the most common task. Near 1 the
-    /// policy has collapsed onto one task index; OPT's share is far lower (about 0.3 in
-    /// the paper's distribution at M = 5).
-    pub largest_task_share: f64,
-}
-
-impl Validation {
-    /// Share of robots on one task above which a validation counts as collapsed.
-    pub const COLLAPSE_SHARE: f64 = 0.6;
-
-    /// Whether most robots went to one task ([`Validation::COLLAPSE_SHARE`]).
-    pub fn collapsed(&self) -> bool {
-        self.largest_task_share > Self::COLLAPSE_SHARE
-    }
 }
 
 type Optim = OptimizerAdaptor<Adam, QNetwork<TrainBackend>, TrainBackend>;

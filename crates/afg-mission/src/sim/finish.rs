@@ -1,6 +1,7 @@
-//! The metrics of a finished run.
+//! What a run records as it goes (frames, the trace, the timeline, the work done) and
+//! the metrics of a finished run.
 
-use super::{Metrics, MissionRun, Sim, SwarmState};
+use super::{Frame, Metrics, MissionRun, Sim, SwarmState, TimelinePoint, TraceEvent, work_rate};
 
 impl Sim<'_, '_> {
     /// The run's metrics, timeline and trace.
@@ -73,5 +74,107 @@ impl Sim<'_, '_> {
             trace: self.trace,
             frames: self.frames,
         }
+    }
+
+    /// A frame, if one is due.
+    pub(super) fn snapshot(&mut self) {
+        let (Some(due), Some(every)) = (self.next_frame, self.options.frame_every) else {
+            return;
+        };
+        if due > self.now {
+            return;
+        }
+        self.next_frame = Some(due + every);
+        let frame = self.frame();
+        self.frames.push(frame);
+    }
+
+    /// The whole state now.
+    pub(super) fn frame(&self) -> Frame {
+        let positions = (0..self.robots.len())
+            .map(|i| {
+                let p = self.position(i);
+                [p.x as f32, p.y as f32]
+            })
+            .collect();
+        let tasks = self
+            .robots
+            .iter()
+            .map(|r| match (r.alive, r.task) {
+                (false, _) => -2,
+                (true, None) => -1,
+                (true, Some(j)) => j as i32,
+            })
+            .collect();
+        let left = self
+            .tasks
+            .iter()
+            .zip(&self.mission.tasks)
+            .map(|(t, spec)| {
+                if t.open || t.done_at.is_some() {
+                    (t.remaining / spec.workload) as f32
+                } else {
+                    -1.0
+                }
+            })
+            .collect();
+        Frame {
+            time: self.now,
+            positions,
+            tasks,
+            left,
+        }
+    }
+
+    /// Moves time to `to`: work is done at the present coalitions' rates (robots'
+    /// positions follow from their legs).
+    pub(super) fn advance(&mut self, to: f64) {
+        let dt = to - self.now;
+        for (j, t) in self.tasks.iter_mut().enumerate() {
+            if t.open && t.present > 0 {
+                let rate = work_rate(t.present, self.mission.tasks[j].eps);
+                t.remaining = (t.remaining - rate * dt).max(0.0);
+            }
+        }
+        self.now = to;
+    }
+
+    pub(super) fn log(&mut self, event: TraceEvent) {
+        if self.options.trace {
+            self.trace.push(event);
+        }
+    }
+
+    pub(super) fn record(&mut self) {
+        let point = TimelinePoint {
+            time: self.now,
+            open: self.tasks.iter().filter(|t| t.open).count(),
+            done: self.tasks.iter().filter(|t| t.done_at.is_some()).count(),
+            reward: self.reward_done(),
+        };
+        if self.timeline.last() != Some(&point) {
+            self.timeline.push(point);
+        }
+    }
+
+    /// Work done on each task so far, with its task's spec.
+    pub(super) fn work(&self) -> impl Iterator<Item = (f64, &crate::TaskSpec)> + '_ {
+        (self.tasks.iter())
+            .zip(&self.mission.tasks)
+            .map(|(t, spec)| (spec.workload - t.remaining, spec))
+    }
+
+    /// `Σ r_j` times the work done on each task so far.
+    pub(super) fn work_value(&self) -> f64 {
+        self.work().map(|(w, spec)| spec.reward * w).sum()
+    }
+
+    pub(super) fn reward_done(&self) -> f64 {
+        self.tasks
+            .iter()
+            .zip(&self.mission.tasks)
+            .filter(|(t, _)| t.done_at.is_some())
+            .map(|(_, spec)| spec.reward * spec.workload)
+            .sum()
     }
 }

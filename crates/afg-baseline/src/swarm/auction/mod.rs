@@ -48,108 +48,19 @@
 
 use std::borrow::Cow;
 
-use afg_game::{Instance, Point, RobotId, TaskId};
+use afg_game::{Instance, RobotId, TaskId};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::live::{move_swarm, revive, tell};
-use super::network::{Network, Radio, Roster};
+use super::network::Network;
 use super::news::News;
+use super::radio::{Radio, Roster};
 use super::{Outcome, Simulation, TracePoint, Traffic, partition_of};
 use crate::AllocError;
 
-/// No winner.
-const NOBODY: u32 = u32::MAX;
-
-/// Bytes of a record on the air: place (task and index), price (f32) and winner.
-const RECORD_BYTES: u64 = 12;
-
-/// A message header: sender and length.
-const HEADER_BYTES: u64 = 8;
-
-/// One place's state in a robot's table.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) struct Record {
-    /// The auction's epoch: raised each time it restarts after a crash.
-    epoch: u32,
-    price: f64,
-    winner: u32,
-}
-
-impl Record {
-    /// A place nobody has bid for in `epoch`.
-    fn open(epoch: u32) -> Record {
-        Record {
-            epoch,
-            price: 0.0,
-            winner: NOBODY,
-        }
-    }
-
-    /// Max-consensus order: later epoch, then higher price, then the lower robot id.
-    fn beats(&self, other: &Record) -> bool {
-        self.epoch
-            .cmp(&other.epoch)
-            .then(self.price.total_cmp(&other.price))
-            .then(other.winner.cmp(&self.winner))
-            .is_gt()
-    }
-}
-
-/// A place: (task, index from 0).
-pub(super) type Place = (u32, u32);
-
-/// The void task's one place, held by every robot that stays out ([`Auction::choose`]).
-const VOID: Place = (u32::MAX, 0);
-
-/// A robot's table in its epoch: per task, the records of places 0..len (later ones
-/// are open).
-#[derive(Clone)]
-struct Table {
-    epoch: u32,
-    tasks: Vec<Vec<Record>>,
-    /// Records held (the table's size on the air).
-    len: u64,
-}
-
-impl Table {
-    /// Every place of `m` tasks open in `epoch`.
-    fn open(epoch: u32, m: usize) -> Table {
-        Table {
-            epoch,
-            tasks: vec![Vec::new(); m],
-            len: 0,
-        }
-    }
-
-    fn get(&self, (j, k): Place) -> Record {
-        self.tasks[j as usize]
-            .get(k as usize)
-            .copied()
-            .unwrap_or(Record::open(self.epoch))
-    }
-
-    fn set(&mut self, (j, k): Place, record: Record) {
-        let open = Record::open(self.epoch);
-        let places = &mut self.tasks[j as usize];
-        if places.len() <= k as usize {
-            self.len += (k as usize + 1 - places.len()) as u64;
-            places.resize(k as usize + 1, open);
-        }
-        places[k as usize] = record;
-    }
-
-    /// The task each robot holds a place of, by this table.
-    fn partition(&self, n: usize) -> Vec<Option<TaskId>> {
-        let mut tasks = vec![None; n];
-        for (j, places) in self.tasks.iter().enumerate() {
-            for r in places.iter().filter(|r| r.winner != NOBODY) {
-                tasks[r.winner as usize] = Some(TaskId(j as u32));
-            }
-        }
-        tasks
-    }
-}
+mod events;
+mod table;
+use table::{HEADER_BYTES, Place, RECORD_BYTES, Record, Table, VOID};
 
 /// The auction's state between rounds.
 pub(crate) struct Auction<'a> {
@@ -460,106 +371,6 @@ impl<'a> Auction<'a> {
             }
             self.pending[b as usize].extend(places);
         }
-    }
-}
-
-impl Auction<'_> {
-    /// `robots` will send every record of their tables again (they have new
-    /// neighbours, who may hold older ones).
-    fn resend(&mut self, robots: Vec<u32>) {
-        for a in robots {
-            let table = &self.tables[a as usize];
-            let places = table
-                .tasks
-                .iter()
-                .enumerate()
-                .flat_map(|(j, places)| (0..places.len() as u32).map(move |k| (j as u32, k)));
-            self.pending[a as usize].extend(places);
-            self.senders.add(a);
-        }
-    }
-
-    /// `robots` heard news: they open a new epoch (one for all of them), which spreads
-    /// with their bids. The auction's prices only rise, so a new task, a task done or
-    /// a task seen is a restart among those who hear of it.
-    fn renew(&mut self, robots: Vec<u32>) {
-        if robots.is_empty() {
-            return;
-        }
-        self.epochs += 1;
-        for a in robots {
-            if self.tables[a as usize].epoch < self.epochs {
-                self.restart(a, self.epochs);
-            }
-        }
-    }
-
-    /// A mission's news: `task` appeared (or is done); the robots that hear of it
-    /// restart the auction.
-    pub fn task_event(&mut self, task: usize, done: bool) {
-        let told = tell(&mut self.news, &self.radio, &self.instance, task, done);
-        self.renew(told);
-    }
-
-    /// The robots are at `points` now (see [`move_swarm`]): robots with new neighbours
-    /// resend their tables, and robots that see a task restart the auction.
-    ///
-    /// # Errors
-    /// As [`move_swarm`].
-    pub fn move_to(&mut self, points: Vec<Point>) -> Result<(), AllocError> {
-        let (relinked, saw) =
-            move_swarm(&mut self.instance, &mut self.radio, &mut self.news, points)?;
-        self.resend(relinked);
-        self.renew(saw);
-        Ok(())
-    }
-
-    /// `robots` fail now; their neighbours notice after `detect_after` rounds and
-    /// restart the auction among the survivors.
-    ///
-    /// # Errors
-    /// [`AllocError::Graph`] if the survivors' graph cannot be built.
-    pub fn fail(&mut self, robots: &[u32], detect_after: u64) -> Result<(), AllocError> {
-        let relinked = (self.radio).fail(robots, self.instance.robots(), detect_after)?;
-        self.resend(relinked);
-        Ok(())
-    }
-
-    /// `robot` is back and linked, and bids in the auction's current epoch.
-    ///
-    /// # Errors
-    /// [`AllocError::Graph`] if the graph cannot be built.
-    pub fn revive(&mut self, robot: u32) -> Result<(), AllocError> {
-        let relinked = revive(&mut self.radio, &self.instance, robot)?;
-        self.restart(robot, self.epochs);
-        self.resend(relinked);
-        Ok(())
-    }
-
-    /// The task of the place `robot` believes it holds, or, while it bids again (it
-    /// was outbid, or the auction restarted), of the last place it held if it does not
-    /// know that task is done.
-    pub fn own_task(&self, robot: u32) -> Option<TaskId> {
-        let known =
-            |j: &TaskId| (self.news.as_ref()).is_none_or(|n| n.knows_open(robot, j.index()));
-        self.last_task[robot as usize].filter(known)
-    }
-
-    /// Whether every living robot's table gives the same partition (O(N · places)).
-    pub fn agreed(&self) -> bool {
-        let n = self.tables.len();
-        let mut partitions = self
-            .radio
-            .living()
-            .map(|a| self.tables[a as usize].partition(n));
-        partitions
-            .next()
-            .is_none_or(|first| partitions.all(|p| p == first))
-    }
-
-    /// Messages and bytes sent so far.
-    pub fn traffic(&self) -> Traffic {
-        self.traffic
     }
 }
 
