@@ -109,3 +109,42 @@ fn robots_see_and_hear_only_what_is_in_range() {
     };
     assert!(MissionEnv::new(mission, bad).is_err());
 }
+
+/// A step's reward computed by hand: robots already at their one task, epochs every
+/// 0.5 time units; each epoch the coalition of n robots does `work_rate(n, eps)` units
+/// of work per time unit, worth `r` each, until the workload is done.
+#[test]
+fn a_steps_reward_is_the_reward_rate_times_the_time() {
+    for robots in [1usize, 2] {
+        let mut mission = MissionConfig::new(Preset::Static, robots, 1, 4)
+            .generate()
+            .unwrap();
+        let task = mission.tasks[0].clone();
+        for robot in &mut mission.robots {
+            robot.position = task.position;
+        }
+        let perception = Perception {
+            decide_every: Some(0.5),
+            ..Perception::default()
+        };
+        let mut env = MissionEnv::new(mission, perception).unwrap();
+        let rate = afg_mission::work_rate(robots, task.eps);
+        let (mut time, mut total) = (0.0, 0.0);
+        loop {
+            let go: Vec<(usize, usize)> = env.agents().iter().map(|&i| (i, 0)).collect();
+            let step = env.step(&go).unwrap();
+            let dt = (0.5f64).min(task.workload / rate - time);
+            let expected = task.reward * rate * dt;
+            assert!(
+                (step.reward - expected).abs() < 1e-9,
+                "{robots} robot(s) at t = {time}: reward {} for {expected}",
+                step.reward
+            );
+            (time, total) = (time + 0.5, total + step.reward);
+            if step.terminated {
+                break;
+            }
+        }
+        assert!((total - task.reward * task.workload).abs() < 1e-9);
+    }
+}

@@ -229,17 +229,99 @@ fn check_run(mission: &Mission, run: &MissionRun, capacities: bool) {
             _ => {}
         }
     }
-    let m = &run.metrics;
-    let done_work: f64 = run
-        .trace
-        .iter()
-        .filter_map(|e| match e {
-            TraceEvent::TaskDone { task, .. } => Some(mission.tasks[*task].workload),
-            _ => None,
+    // Work conserved: each task's work rebuilt from the trace alone is its workload
+    // when it is done, less when not, and adds up to the run's `work_done`.
+    let work = work_from_trace(mission, run);
+    let done: Vec<bool> = (0..mission.tasks.len())
+        .map(|j| {
+            (run.trace.iter()).any(|e| matches!(e, TraceEvent::TaskDone { task, .. } if *task == j))
         })
+        .collect();
+    for (j, (&w, spec)) in work.iter().zip(&mission.tasks).enumerate() {
+        let tolerance = 1e-6 * (1.0 + spec.workload);
+        if done[j] {
+            assert!(
+                (w - spec.workload).abs() <= tolerance,
+                "task {j}: {w} of {}",
+                spec.workload
+            );
+        } else {
+            assert!(
+                w <= spec.workload + tolerance,
+                "task {j} open with {w} of {}",
+                spec.workload
+            );
+        }
+    }
+    let total: f64 = (work.iter().zip(&mission.tasks))
+        .map(|(w, t)| w.min(t.workload))
         .sum();
-    assert!(m.work_done >= done_work - 1e-9);
-    assert!(m.work_done <= mission.tasks.iter().map(|t| t.workload).sum::<f64>() + 1e-9);
+    let m = &run.metrics;
+    assert!(
+        (total - m.work_done).abs() <= 1e-6 * (1.0 + total),
+        "{total} vs {}",
+        m.work_done
+    );
+}
+
+/// When `event` happened.
+fn time_of(event: &TraceEvent) -> f64 {
+    match event {
+        TraceEvent::TaskAppears { time, .. }
+        | TraceEvent::TaskDone { time, .. }
+        | TraceEvent::RobotFails { time, .. }
+        | TraceEvent::RobotReturns { time, .. }
+        | TraceEvent::Arrival { time, .. }
+        | TraceEvent::Decision { time, .. } => *time,
+    }
+}
+
+/// Each task's work, from the trace alone: between consecutive events the robots
+/// that arrived at a task and have not left it (sent elsewhere, failed, or freed by
+/// the task being done) work at `work_rate(present, eps)` until the run's end.
+fn work_from_trace(mission: &Mission, run: &MissionRun) -> Vec<f64> {
+    let (n, k) = (mission.robots.len(), mission.tasks.len());
+    let mut at: Vec<Option<usize>> = vec![None; n];
+    let mut assigned = vec![-1i64; n];
+    let mut done = vec![false; k];
+    let mut work = vec![0.0; k];
+    let mut last = 0.0;
+    let mut work_until = |time: f64, at: &[Option<usize>], done: &[bool], work: &mut [f64]| {
+        let mut present = vec![0usize; k];
+        for &j in at.iter().flatten() {
+            present[j] += 1;
+        }
+        for j in (0..k).filter(|&j| !done[j]) {
+            work[j] += work_rate(present[j], mission.tasks[j].eps) * (time - last);
+        }
+        last = time;
+    };
+    for event in &run.trace {
+        work_until(time_of(event), &at, &done, &mut work);
+        match event {
+            TraceEvent::Decision { tasks, .. } => {
+                for (i, &j) in tasks.iter().enumerate() {
+                    if j != assigned[i] {
+                        at[i] = None;
+                    }
+                    assigned[i] = j;
+                }
+            }
+            TraceEvent::Arrival { robot, task, .. } => at[*robot] = Some(*task),
+            TraceEvent::RobotFails { robot, .. } => (at[*robot], assigned[*robot]) = (None, -1),
+            TraceEvent::TaskDone { task, .. } => {
+                done[*task] = true;
+                for i in 0..n {
+                    if assigned[i] == *task as i64 {
+                        (at[i], assigned[i]) = (None, -1);
+                    }
+                }
+            }
+            TraceEvent::TaskAppears { .. } | TraceEvent::RobotReturns { .. } => {}
+        }
+    }
+    work_until(run.metrics.end, &at, &done, &mut work);
+    work
 }
 
 proptest! {

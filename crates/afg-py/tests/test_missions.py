@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import inspect
+import json
 import re
 import subprocess
 from pathlib import Path
@@ -46,7 +47,11 @@ def test_run_mission_gives_metrics_timeline_and_decisions() -> None:
     warm = afg.run_mission(mission, method="opt", warm=True)
     assert warm.metrics["tasks_done"] == opt.metrics["tasks_done"]
     late = afg.run_mission(mission, method="opt", latency=0.5, trace=True)
-    assert (late.decisions[0] >= 0.5 - 1e-12).all()
+    decisions = [e for e in map(json.loads, late.trace_jsonl().splitlines()) if e["event"] == "decision"]
+    assert len(decisions) == len(late.decisions[0]) > 0
+    # Each decision lands exactly 0.5 after it was asked for, the first at 0.5.
+    assert late.decisions[0][0] == 0.5
+    assert all(d["time"] - d["asked"] == pytest.approx(0.5, abs=1e-12) for d in decisions)
 
 
 def test_grape_runs_over_the_radio_inside_a_mission() -> None:

@@ -3,9 +3,14 @@ step the same episode as afg/Allocation-v0."""
 
 from __future__ import annotations
 
+import json
+import math
+
 import gymnasium as gym
 import numpy as np
 import pytest
+
+import afg
 
 pytest.importorskip("pettingzoo")
 from pettingzoo.test import api_test, seed_test  # noqa: E402
@@ -66,7 +71,7 @@ def test_mission_episode_returns_add_up_and_failed_robots_leave() -> None:
     env = mission_v0.parallel_env(robots=12, tasks=5, preset="attrition", fail_share=0.5)
     obs, _ = env.reset(seed=3)
     assert set(obs) == set(env.possible_agents)
-    total, ended = 0.0, set()
+    total, ended, played = 0.0, set(), []
     while env.agents:
         # Every agent heads for the nearest task it may take (or keeps its own).
         actions = {}
@@ -76,6 +81,10 @@ def test_mission_episode_returns_add_up_and_failed_robots_leave() -> None:
             rows = o["observation"][5:].reshape(5, 9)
             allowed = np.flatnonzero(o["action_mask"][:5])
             actions[agent] = int(allowed[np.argmin(rows[allowed, 3])]) if len(allowed) else 5
+        chosen = np.full(12, -1, dtype=np.int64)
+        for agent, action in actions.items():
+            chosen[int(agent.split("_")[1])] = action
+        played.append(chosen)
         obs, rewards, terminations, truncations, _ = env.step(actions)
         assert len(set(rewards.values())) <= 1, "a team reward"
         total += next(iter(rewards.values()), 0.0)
@@ -84,7 +93,11 @@ def test_mission_episode_returns_add_up_and_failed_robots_leave() -> None:
                 assert agent not in ended and agent not in env.agents
                 ended.add(agent)
     assert ended == set(env.possible_agents)
-    assert total > 0.0
+    # The team's return is the value of the work done, which the same mission run
+    # through the core environment with the same actions reports step by step.
+    seed = int(np.random.default_rng(3).integers(2**63))
+    mission = afg.Mission.generate("attrition", 12, 5, seed=seed, fail_share=0.5)
+    assert total == pytest.approx(_core_return(mission, played), rel=1e-12)
     # Robots that never move do no work: every reward is 0.
     obs, _ = env.reset(seed=3)
     while env.agents:
@@ -113,3 +126,36 @@ def test_the_mission_environment_steps_from_any_thread() -> None:
     thread.start()
     thread.join()
     assert errors == []
+
+
+def _core_return(mission: afg.Mission, played: list) -> float:
+    """The return of the actions `played` on `mission` through `afg.MissionEnv`."""
+    core = afg.MissionEnv(mission)
+    total = 0.0
+    for actions in played:
+        reward, _, terminated, truncated = core.step(actions)
+        total += reward
+        if terminated or truncated:
+            break
+    return total
+
+
+def test_a_steps_reward_is_the_reward_rate_times_the_time() -> None:
+    """Robots already at their one task, epochs every 0.5: each epoch the coalition of
+    n robots does log_eps(n + eps - 1) units of work per time unit, worth r each."""
+    for robots in (1, 2):
+        doc = json.loads(afg.Mission.generate("static", robots=robots, tasks=1, seed=4).to_json())
+        task = doc["tasks"][0]
+        for robot in doc["robots"]:
+            robot["position"] = task["position"]
+        env = afg.MissionEnv(afg.Mission.parse(json.dumps(doc)), decide_every=0.5)
+        rate = math.log(robots + task["eps"] - 1) / math.log(task["eps"])
+        time, total = 0.0, 0.0
+        while True:
+            reward, _, terminated, _ = env.step(np.zeros(robots, dtype=np.int64))
+            dt = min(0.5, task["workload"] / rate - time)
+            assert reward == pytest.approx(task["reward"] * rate * dt, abs=1e-9), (robots, time)
+            time, total = time + 0.5, total + reward
+            if terminated:
+                break
+        assert total == pytest.approx(task["reward"] * task["workload"], abs=1e-9)

@@ -39,7 +39,7 @@ from gymnasium import spaces
 from pettingzoo import AECEnv, ParallelEnv
 from pettingzoo.utils import parallel_to_aec, wrappers
 
-from .. import Mission, MissionEnv
+from .. import Mission, MissionEnv, RefusedError
 
 __all__ = ["env", "parallel_env", "raw_env"]
 
@@ -124,7 +124,7 @@ class MissionParallelEnv(ParallelEnv):
         Dict[str, Any], Dict[str, float], Dict[str, bool], Dict[str, bool], Dict[str, Dict[str, Any]]
     ]:
         if self._env is None:
-            raise RuntimeError("call reset() before step()")
+            raise RefusedError("call reset() before step()")
         chosen = np.full(len(self.possible_agents), -1, dtype=np.int64)
         for agent, action in actions.items():
             if agent in self.agents:
