@@ -44,14 +44,18 @@ fn new_task(rng: &mut ChaCha8Rng, n: usize, m: usize, capped: bool) -> Task {
     }
 }
 
-/// Checks the kept optimum against the solve from scratch of the same game.
-fn check(opt: &IncrementalOptimum, step: &str) {
-    let inst = opt.instance().unwrap();
+/// Checks the kept optimum against the game the test expects (its own record of the
+/// robots and tasks after each event): the same game, certified by its prices, of the
+/// welfare a solve from scratch of that game finds.
+fn check(opt: &IncrementalOptimum, expected: &Instance, step: &str) {
+    let kept = opt.instance().unwrap();
+    assert_eq!(kept.robots(), expected.robots(), "{step}: the robots");
+    assert_eq!(kept.tasks(), expected.tasks(), "{step}: the tasks");
     let a = opt.assignment();
-    let proof = verify_optimal(&inst, &a, &opt.prices())
+    let proof = verify_optimal(expected, &a, &opt.prices())
         .unwrap_or_else(|e| panic!("{step}: not certified: {e}"));
-    let (scratch, _) = Optimum.with_prices(&inst);
-    let best = inst.welfare(&scratch);
+    let (scratch, _) = Optimum.with_prices(expected);
+    let best = expected.welfare(&scratch);
     assert!(
         (proof.welfare - best).abs() <= 1e-9 * best.abs().max(1.0),
         "{step}: {} against {best} from scratch",
@@ -59,23 +63,49 @@ fn check(opt: &IncrementalOptimum, step: &str) {
     );
 }
 
-/// Applies `events` (codes) to the kept optimum of `inst`, checking after each; returns
-/// the final assignment's tasks and prices.
+/// The game of `robots` and `tasks` with `like`'s β and void.
+fn game_of(like: &Instance, robots: &[Point], tasks: &[Task]) -> Instance {
+    let (robots, tasks) = (robots.to_vec(), tasks.to_vec());
+    if like.allows_void() {
+        Instance::with_void(robots, tasks, like.beta()).unwrap()
+    } else {
+        Instance::new(robots, tasks, like.beta()).unwrap()
+    }
+}
+
+/// Applies `events` (codes) to the kept optimum of `inst`, checking after each against
+/// the robots and tasks the test tracks itself; returns the final assignment's tasks
+/// and prices.
 fn run(inst: &Instance, seed: u64, events: &[u8], capped: bool) -> (Vec<Option<TaskId>>, Vec<f64>) {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut opt = IncrementalOptimum::new(inst);
-    check(&opt, "the first solve");
+    let (mut robots, mut tasks) = (inst.robots().to_vec(), inst.tasks().to_vec());
+    check(&opt, inst, "the first solve");
     for (e, &code) in events.iter().enumerate() {
-        let (n, m) = (opt.num_robots(), opt.num_tasks());
+        let (n, m) = (robots.len(), tasks.len());
         let step = format!("event {e} (code {code}, N = {n}, M = {m})");
+        let (mut next_robots, mut next_tasks) = (robots.clone(), tasks.clone());
         let done = match code % 4 {
-            0 => opt.add_task(new_task(&mut rng, n, m, capped)).map(|_| ()),
-            1 => opt.remove_task(TaskId(rng.random_range(0..m) as u32)),
+            0 => {
+                let task = new_task(&mut rng, n, m, capped);
+                next_tasks.push(task);
+                opt.add_task(task)
+                    .map(|id| assert_eq!(id, TaskId(m as u32), "{step}"))
+            }
+            1 => {
+                let j = rng.random_range(0..m);
+                next_tasks.remove(j);
+                opt.remove_task(TaskId(j as u32))
+            }
             2 => {
                 let k = rng.random_range(1..=n.div_ceil(10));
                 let mut ids: Vec<u32> = (0..n as u32).collect();
                 let (gone, _) = ids.partial_shuffle(&mut rng, k);
                 let gone: Vec<RobotId> = gone.iter().map(|&r| RobotId(r)).collect();
+                next_robots = (0..n)
+                    .filter(|&i| !gone.contains(&RobotId(i as u32)))
+                    .map(|i| robots[i])
+                    .collect();
                 opt.remove_robots(&gone)
             }
             _ => {
@@ -83,15 +113,20 @@ fn run(inst: &Instance, seed: u64, events: &[u8], capped: bool) -> (Vec<Option<T
                 let spots: Vec<Point> = (0..k)
                     .map(|_| Point::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)))
                     .collect();
+                next_robots.extend(&spots);
                 opt.add_robots(&spots)
             }
         };
         // Refused events (the last task, no room left) leave the game as it was.
         if done.is_ok() {
-            check(&opt, &step);
-        } else {
-            assert_eq!((opt.num_robots(), opt.num_tasks()), (n, m), "{step}");
+            (robots, tasks) = (next_robots, next_tasks);
         }
+        assert_eq!(
+            (opt.num_robots(), opt.num_tasks()),
+            (robots.len(), tasks.len()),
+            "{step}"
+        );
+        check(&opt, &game_of(inst, &robots, &tasks), &step);
     }
     (opt.assignment().tasks().to_vec(), opt.prices())
 }
@@ -161,5 +196,5 @@ fn bad_events_are_refused() {
     let one = IncrementalOptimum::new(&GeneratorConfig::paper(5, 1, 1).generate().unwrap());
     let mut one = one;
     assert!(err(one.remove_task(TaskId(0)).unwrap_err()).contains("its last"));
-    check(&opt, "after the refusals");
+    check(&opt, &inst, "after the refusals");
 }

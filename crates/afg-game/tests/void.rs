@@ -82,8 +82,18 @@ proptest! {
             for pref in [Preference::Balanced, Preference::Selfish] {
                 for i in inst.robot_ids() {
                     let here = inst.current_score(&a, i, pref);
-                    let here_by_hand = a.task_of(i).map_or(0.0, |_| here);
-                    prop_assert_eq!(here, here_by_hand);
+                    // By the definitions: in task j with k robots (itself among them),
+                    // F_j(k) − F_j(k − 1) balanced or F_j(k) / k selfish, less its travel;
+                    // in the void, 0.
+                    let here_by_hand = a.task_of(i).map_or(0.0, |j| {
+                        let k = a.others_in(i, j) + 1;
+                        let value = match pref {
+                            Preference::Balanced => inst.coalition_value(j, k) - inst.coalition_value(j, k - 1),
+                            Preference::Selfish => inst.coalition_value(j, k) / k as f64,
+                        };
+                        value - inst.cost(i, j)
+                    });
+                    prop_assert!((here - here_by_hand).abs() <= 1e-12 * (1.0 + here.abs()), "{} vs {}", here, here_by_hand);
                     let alts = alternatives(&inst, &a, i, pref);
                     let best = alts.iter().map(|&(_, s)| s).fold(f64::NEG_INFINITY, f64::max);
                     let wants = strictly_better(best, here);

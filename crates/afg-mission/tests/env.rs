@@ -148,3 +148,35 @@ fn a_steps_reward_is_the_reward_rate_times_the_time() {
         assert!((total - task.reward * task.workload).abs() < 1e-9);
     }
 }
+
+/// News spreads one hop per epoch, computed by hand: on a line, robot 0 stands on the
+/// task (and sees it), robots 1 and 2 one and two units further (out of sight, each
+/// within hearing of the one before), robot 3 far away. Robot 1 knows the task after
+/// one epoch, robot 2 after two, robot 3 never.
+#[test]
+fn robots_hear_of_tasks_from_their_neighbours_one_hop_per_epoch() {
+    let mut mission = MissionConfig::new(Preset::Static, 4, 1, 1)
+        .generate()
+        .unwrap();
+    mission.tasks[0].workload = 1e6;
+    let at = mission.tasks[0].position;
+    for (i, robot) in mission.robots.iter_mut().enumerate() {
+        let offset = if i == 3 { 50.0 } else { i as f64 };
+        robot.position = afg_game::Point::new(at.x + offset, at.y);
+    }
+    let perception = Perception {
+        sensing: Some(0.5),
+        comm_radius: 1.2,
+        decide_every: Some(0.5),
+    };
+    let mut env = MissionEnv::new(mission, perception).unwrap();
+    let knows = |env: &MissionEnv| -> Vec<bool> { (0..4).map(|i| env.mask(i)[0]).collect() };
+    assert_eq!(knows(&env), [true, false, false, false]);
+    let keep: Vec<(usize, usize)> = (0..4).map(|i| (i, 1)).collect();
+    env.step(&keep).unwrap();
+    assert_eq!(knows(&env), [true, true, false, false]);
+    env.step(&keep).unwrap();
+    assert_eq!(knows(&env), [true, true, true, false]);
+    env.step(&keep).unwrap();
+    assert_eq!(knows(&env), [true, true, true, false]);
+}
