@@ -2,7 +2,7 @@
 //! measurements: the learned models of the paper's
 //! tables ([`ModelSpec`]), the numbers the paper reports ([`paper`]), the tables
 //! themselves ([`tables`], with the price model's ablation in [`price_ablation`] and
-//! the comparison of two renderings in [`markdown`]), the benchmarks ([`bench`](mod@bench),
+//! the comparison of two renderings in [`table_diff`]), the benchmarks ([`bench`](mod@bench),
 //! [`scale`]), the regret study ([`regret`]), the removal study
 //! ([`realloc_study`]), the mission study ([`mission_study`]) and GRAPE's published
 //! runs beside ours ([`grape_fig7`]).
@@ -18,7 +18,6 @@ pub mod crash;
 pub mod datasets;
 pub mod grape_fig7;
 pub mod manifest;
-pub mod markdown;
 pub mod mission_study;
 mod model;
 pub mod paper;
@@ -26,6 +25,7 @@ pub mod price_ablation;
 pub mod realloc_study;
 pub mod regret;
 pub mod scale;
+pub mod table_diff;
 pub mod tables;
 pub mod train_all;
 

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use afg_eval::EvalError;
 use afg_game::Preference;
 use xtask::grape_fig7::{DATASET, read_runs, source, table};
-use xtask::markdown::table_differences;
+use xtask::table_diff::table_differences;
 
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")

@@ -116,7 +116,7 @@ fn migrate_weights_header(path: &Path) -> Result<bool, LearnError> {
     }
     header["version"] = json!(RUN_FORMAT_VERSION);
     // Read back as the current format, so that what is written is what loads.
-    let network: crate::network::NetworkConfig = serde_json::from_value(header["network"].clone())
+    let network: crate::qnetwork::NetworkConfig = serde_json::from_value(header["network"].clone())
         .map_err(|e| bad(path, format!("not a network configuration: {e}")))?;
     let text = crate::weights::header_json(&network);
     write(path, &text)?;

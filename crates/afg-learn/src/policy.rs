@@ -8,7 +8,7 @@ use afg_game::{Assignment, Instance, Preference};
 use afg_graph::{GraphKind, RobotGraph};
 
 use crate::fast::FastPolicy;
-use crate::network::{NetworkConfig, QNetwork};
+use crate::qnetwork::{NetworkConfig, QNetwork};
 use crate::weights::load_network;
 use crate::{InferBackend, LearnError};
 

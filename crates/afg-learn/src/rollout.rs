@@ -7,7 +7,7 @@ use burn::tensor::backend::Backend;
 
 use crate::LearnError;
 use crate::env::Env;
-use crate::network::QNetwork;
+use crate::qnetwork::QNetwork;
 use crate::targets::masked_argmax;
 use crate::tensors::GraphTensors;
 

@@ -16,8 +16,8 @@ use burn::tensor::backend::Backend;
 use serde::{Deserialize, Serialize};
 
 use crate::LearnError;
-use crate::network::QNetworkRecord;
-use crate::network::{NetworkConfig, QNetwork};
+use crate::qnetwork::QNetworkRecord;
+use crate::qnetwork::{NetworkConfig, QNetwork};
 
 fn weights_error(path: &Path, reason: impl Into<String>) -> LearnError {
     LearnError::Weights {

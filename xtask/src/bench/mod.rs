@@ -8,7 +8,7 @@
 //! `cargo xtask bench-baselines`: a Markdown table of allocator times and welfare.
 
 pub mod mission;
-pub mod plain;
+pub mod padded_afgnet;
 
 use std::convert::Infallible;
 use std::time::{Duration, Instant};
@@ -31,7 +31,7 @@ use afg_eval::report::duration;
 
 /// Tasks of every instance and network timed here: the paper's M.
 const M: usize = GeneratorConfig::PAPER_TASKS;
-use plain::PaddedGraph;
+use padded_afgnet::PaddedGraph;
 
 /// The peak resident set size of this process in MiB (Linux; `None` elsewhere).
 ///
@@ -239,7 +239,9 @@ pub fn plain_timings(
     let device = Default::default();
     let config = NetworkConfig::afgnet(M, 0);
     let plain_q = |net: &QNetwork<TrainBackend>, b: &GraphBatch| match net {
-        QNetwork::AfgNet(a) => plain::forward(a, Activation::Relu, &PaddedGraph::new(b, &device)),
+        QNetwork::AfgNet(a) => {
+            padded_afgnet::forward(a, Activation::Relu, &PaddedGraph::new(b, &device))
+        }
         QNetwork::S2v(_) => unreachable!("an AFGNet configuration"),
     };
     let mut out = Vec::new();
@@ -348,7 +350,7 @@ pub fn networks_markdown(
     }
     md += "\nAFGNet's training step against the plain model of the first Burn notes of this project \
            (neighbours padded to the largest degree, gather + reshape + sum; same parameters, \
-           same Q values: tested in xtask/src/bench/plain.rs), in the same run:\n\n\
+           same Q values: tested in xtask/src/bench/padded_afgnet.rs), in the same run:\n\n\
            | N | train step, plain (padded gather) | train step, ours (dense) | speed-up |\n|---|---|---|---|\n";
     for (n, plain, ours) in plain_timings(sizes, batch, repeats)? {
         let (p, o, x) = (duration(plain), duration(ours), ratio(plain, ours));

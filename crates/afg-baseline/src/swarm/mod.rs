@@ -15,11 +15,11 @@
 mod auction;
 mod grape;
 mod links;
-mod live;
+mod live_swarm;
 mod moving;
 mod network;
-mod news;
 mod radio;
+mod task_news;
 
 use std::time::Duration;
 
@@ -30,7 +30,7 @@ use crate::{AllocError, Allocator, Optimum, percent_of_opt, timed};
 
 use auction::Auction;
 pub(crate) use grape::Grape;
-pub use live::{DETECT_AFTER, LiveSwarm};
+pub use live_swarm::{DETECT_AFTER, LiveSwarm};
 pub use network::{Failure, Network};
 
 /// A point of a run's trace.

@@ -5,13 +5,13 @@ use std::borrow::Cow;
 
 use afg_game::{Instance, Point};
 
-use super::news::News;
 use super::radio::Radio;
+use super::task_news::TaskNews;
 use crate::AllocError;
 
 /// The living robots told of `task` appearing (or done) by `news` (none without).
 pub(super) fn tell<M>(
-    news: &mut Option<News>,
+    news: &mut Option<TaskNews>,
     radio: &Radio<M>,
     instance: &Instance,
     task: usize,
@@ -34,7 +34,7 @@ pub(super) fn tell<M>(
 pub(super) fn move_swarm<M>(
     instance: &mut Cow<'_, Instance>,
     radio: &mut Radio<M>,
-    news: &mut Option<News>,
+    news: &mut Option<TaskNews>,
     points: Vec<Point>,
 ) -> Result<(Vec<u32>, Vec<u32>), AllocError> {
     if points == instance.robots() {

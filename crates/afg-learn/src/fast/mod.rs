@@ -52,7 +52,7 @@ use net::{FastAfgLayer, FastAfgNet, FastNet, FastPriceHead, FastS2v, Head, one_h
 
 use crate::LearnError;
 use crate::dense::{Dense, side_by_side};
-use crate::network::{NetworkConfig, QNetwork};
+use crate::qnetwork::{NetworkConfig, QNetwork};
 use crate::targets::masked_argmax;
 
 /// A trained Q network in the form the fast rollout uses (see the module docs).

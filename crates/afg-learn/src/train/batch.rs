@@ -197,7 +197,7 @@ mod tests {
 
     use super::*;
     use crate::env::Shaping;
-    use crate::network::NetworkConfig;
+    use crate::qnetwork::NetworkConfig;
     use crate::train::{Algo, TrainConfig};
 
     /// Checks every step of every episode in the replay buffer of a small `QStar` run.

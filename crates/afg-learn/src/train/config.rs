@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::LearnError;
 use crate::env::Shaping;
-use crate::network::NetworkConfig;
+use crate::qnetwork::NetworkConfig;
 
 /// What the network's Q values are fitted to: a bootstrap rule, or the exact `Q*`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

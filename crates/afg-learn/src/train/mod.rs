@@ -46,7 +46,7 @@ use replay::{Episode, EpisodeRecord};
 pub use session::Session;
 pub use validation::Validation;
 
-use crate::network::QNetwork;
+use crate::qnetwork::QNetwork;
 use crate::rollout::greedy_rollouts;
 use crate::tensors::GraphTensors;
 use crate::{InferBackend, LearnError, TrainBackend};

@@ -53,8 +53,8 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::network::Network;
-use super::news::News;
 use super::radio::{Radio, Roster};
+use super::task_news::TaskNews;
 use super::{Outcome, Simulation, TracePoint, Traffic, partition_of};
 use crate::AllocError;
 
@@ -66,7 +66,7 @@ use table::{HEADER_BYTES, Place, RECORD_BYTES, Record, Table, VOID};
 pub(crate) struct Auction<'a> {
     instance: Cow<'a, Instance>,
     /// In a mission: the tasks each robot knows of (`None`: every task known).
-    news: Option<News>,
+    news: Option<TaskNews>,
     epsilon: f64,
     radio: Radio<(Place, Record)>,
     /// Each task's place values `v_jk`, k from 0, as many as it has places.
@@ -117,7 +117,7 @@ impl<'a> Auction<'a> {
         epsilon: f64,
         radio: Radio<(Place, Record)>,
         seed: u64,
-        news: Option<News>,
+        news: Option<TaskNews>,
     ) -> Result<Self, AllocError> {
         if !(epsilon.is_finite() && epsilon > 0.0) {
             return Err(AllocError::InvalidParameter(format!(

@@ -29,8 +29,8 @@ use rand_chacha::ChaCha8Rng;
 
 use super::moving::{move_swarm, revive, tell};
 use super::network::Network;
-use super::news::News;
 use super::radio::{Radio, Roster};
+use super::task_news::TaskNews;
 use super::{Outcome, Simulation, TracePoint, Traffic, partition_of};
 use crate::AllocError;
 
@@ -56,7 +56,7 @@ pub(crate) struct Grape<'a> {
     noticed: Vec<Vec<u32>>,
     /// In a mission: the tasks each robot knows of, and how that news spreads
     /// (`None`: every task is known to every robot).
-    news: Option<News>,
+    news: Option<TaskNews>,
     sizes: MessageSizes,
     traffic: Traffic,
     proposals: u64,
@@ -92,7 +92,7 @@ impl<'a> Grape<'a> {
         preference: Preference,
         radio: Radio<Rc<View>>,
         seed: u64,
-        news: Option<News>,
+        news: Option<TaskNews>,
     ) -> Self {
         let (n, m) = (instance.num_robots(), instance.num_tasks());
         let empty = Rc::new(View::empty(n, m));

@@ -9,8 +9,8 @@ use afg_game::{Instance, Point};
 use super::auction::Auction;
 use super::grape::Grape;
 use super::network::Network;
-use super::news::News;
 use super::radio::Radio;
+use super::task_news::TaskNews;
 use super::{Simulation, SwarmMethod};
 use crate::AllocError;
 
@@ -28,7 +28,7 @@ pub const DETECT_AFTER: u64 = 3;
 /// fails is noticed by its neighbours [`DETECT_AFTER`] rounds later; one that comes
 /// back keeps the view it had.
 ///
-/// News of tasks: with no sensing radius every robot hears of a task the moment it
+/// TaskNews of tasks: with no sensing radius every robot hears of a task the moment it
 /// appears or is done (a base station announces it); with one, a robot sees the tasks
 /// within that radius, and tells its neighbours what they lack in each round's
 /// broadcast (lost as any message; 5 bytes a task).
@@ -103,7 +103,7 @@ impl LiveSwarm {
             return bad("the sensing radius must be finite and positive");
         }
         let places = game.tasks().iter().map(|t| t.position).collect();
-        let news = Some(News::new(game.num_robots(), places, sensing));
+        let news = Some(TaskNews::new(game.num_robots(), places, sensing));
         let engine = match method {
             SwarmMethod::Grape { preference } => {
                 let radio = Radio::moving(game.robots(), network, seed)?;

@@ -10,7 +10,7 @@ const FACT_BYTES: u64 = 5;
 
 /// Each robot's knowledge of the tasks, as two bit sets (appeared, done), and the
 /// truth it senses.
-pub(super) struct News {
+pub(super) struct TaskNews {
     words: usize,
     appeared: Vec<u64>,
     done: Vec<u64>,
@@ -23,11 +23,11 @@ pub(super) struct News {
     truth_done: Vec<bool>,
 }
 
-impl News {
+impl TaskNews {
     /// `n` robots knowing nothing of the tasks at `places`.
-    pub fn new(n: usize, places: Vec<Point>, sensing: Option<f64>) -> News {
+    pub fn new(n: usize, places: Vec<Point>, sensing: Option<f64>) -> TaskNews {
         let words = places.len().div_ceil(64).max(1);
-        News {
+        TaskNews {
             words,
             appeared: vec![0; n * words],
             done: vec![0; n * words],

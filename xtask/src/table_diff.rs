@@ -14,7 +14,7 @@ pub const RELATIVE_NOISE: f64 = 5e-4;
 ///
 /// # Examples
 /// ```
-/// use xtask::markdown::table_differences;
+/// use xtask::table_diff::table_differences;
 /// let old = "**N = 20**\n\n| method | welfare | time |\n|---|---|---|\n| Greedy | 21.80 | 2 µs |\n";
 /// assert!(table_differences(old, &old.replace("2 µs", "3 µs")).is_empty()); // a timing
 /// assert_eq!(
