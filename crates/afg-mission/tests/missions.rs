@@ -158,7 +158,7 @@ fn check_against_reference(mission: &Mission, run: &MissionRun, dt: f64) {
             .any(|e| matches!(*e, TraceEvent::TaskDone { task: t, .. } if t == task));
         let settled = at.is_nan() || at < run.metrics.end - 3.0 * dt * (1.0 + speed);
         assert!(
-            !settled || reported == !at.is_nan(),
+            !settled || reported != at.is_nan(),
             "task {task}: the reference has it done at {at}, the run {}",
             if reported { "too" } else { "never" }
         );

@@ -202,3 +202,27 @@ def test_errors_are_afg_errors_and_the_builtin_kinds(tmp_path: Path) -> None:
         afg.generate(robots=0, tasks=2)
     with pytest.raises(afg.InvalidInputError):
         afg.solve(afg.generate(robots=5, tasks=2), method="oracle")
+
+
+def _cli(*args: str) -> str:
+    """`afg <args>`'s standard output, from the workspace's build (built if missing)."""
+    binary = ROOT / "target" / "release" / "afg"
+    command = [str(binary)] if binary.exists() else ["cargo", "run", "--release", "--quiet", "--package", "afg-cli", "--"]
+    return subprocess.run([*command, *args], cwd=ROOT, check=True, capture_output=True, text=True).stdout
+
+
+def test_python_and_the_command_line_run_the_same_mission_alike(tmp_path: Path) -> None:
+    mission = afg.Mission.generate("attrition", robots=25, tasks=6, seed=7, capacity_slack=1.2)
+    path = tmp_path / "m.json"
+    mission.write(path)
+    timing = {"compute_mean_s", "compute_max_s", "compute_total_s"}
+    for flags, kwargs in [
+        (["--method", "greedy"], dict(method="greedy")),
+        (["--method", "opt", "--warm", "--latency", "0.25"], dict(method="opt", warm=True, latency=0.25)),
+        (["--method", "grape", "--loss", "0.3", "--knn", "4", "--seed", "2"], dict(method="grape", loss=0.3, knn=4, seed=2)),
+    ]:
+        cli = json.loads(_cli("mission", "run", "--mission", str(path), "--json", *flags))
+        ours = afg.run_mission(mission, **kwargs).metrics
+        assert set(cli) == set(ours), flags
+        for key in set(cli) - timing:
+            assert ours[key] == cli[key], (flags, key, ours[key], cli[key])

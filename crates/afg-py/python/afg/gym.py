@@ -42,7 +42,7 @@ from gymnasium import spaces
 from gymnasium.vector import VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from . import EnvCore, Instance, VecEnvCore, generate, score
+from . import EnvCore, Instance, InvalidInputError, VecEnvCore, generate, score
 
 __all__ = ["AllocationEnv", "AllocationVectorEnv"]
 
@@ -117,7 +117,7 @@ class AllocationEnv(gymnasium.Env):
             draw = int(self.np_random.integers(_SEED_BOUND))
             instance = generate(self.robots, self.tasks, draw, **self._draw)
         elif (instance.num_robots, instance.num_tasks) != (self.robots, self.tasks):
-            raise ValueError(
+            raise InvalidInputError(
                 f"the instance has {instance.num_robots} robots and {instance.num_tasks} "
                 f"tasks, the environment's spaces {self.robots} and {self.tasks}"
             )
