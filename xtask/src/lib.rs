@@ -3,7 +3,7 @@
 //! tables ([`ModelSpec`]), the numbers the paper reports ([`paper`]), the tables
 //! themselves ([`tables`], with the price model's ablation in [`price_ablation`] and
 //! the comparison of two renderings in [`table_diff`]), the benchmarks ([`bench`](mod@bench),
-//! [`scale`]), the regret study ([`regret`]), the removal study
+//! [`scale`]), the regret study ([`regret_study`]), the removal study
 //! ([`realloc_study`]), the mission study ([`mission_study`]) and GRAPE's published
 //! runs beside ours ([`grape_fig7`]).
 //!
@@ -17,13 +17,13 @@ pub mod bench_opt;
 pub mod crash;
 pub mod datasets;
 pub mod grape_fig7;
-pub mod manifest;
 pub mod mission_study;
 mod model;
 pub mod paper;
 pub mod price_ablation;
 pub mod realloc_study;
-pub mod regret;
+pub mod regret_study;
+pub mod run_manifests;
 pub mod scale;
 pub mod table_diff;
 pub mod tables;

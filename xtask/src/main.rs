@@ -5,8 +5,8 @@
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use xtask::{
-    bench, bench_opt, crash, datasets, grape_fig7, manifest, mission_study, realloc_study, regret,
-    scale, tables, train_all,
+    bench, bench_opt, crash, datasets, grape_fig7, mission_study, realloc_study, regret_study,
+    run_manifests, scale, tables, train_all,
 };
 
 /// See the `mimalloc` feature in Cargo.toml.
@@ -39,7 +39,7 @@ enum Command {
     /// The exact optimum against OR-Tools on the same files, each solution certified.
     BenchOpt(bench_opt::BenchOptArgs),
     /// The optimum re-solved after one event against from scratch; whole missions with allocators in the loop.
-    BenchMission(bench::mission::BenchMissionArgs),
+    BenchMission(bench::mission_loop::BenchMissionArgs),
     /// The learned policy (fast path, blocks, repair) against OPT, DA and greedy up to N = 100 000.
     BenchScale(scale::ScaleArgs),
     /// Robots leave an optimally allocated instance: warm-start reallocation against OPT from scratch.
@@ -49,9 +49,9 @@ enum Command {
     /// Allocators in the loop of generated missions (waves, Poisson, attrition), from scratch and warm-started.
     MissionStudy(mission_study::MissionStudyArgs),
     /// Where a trained model loses welfare along its rollouts, against the exact Q*.
-    Regret(regret::RegretArgs),
+    Regret(regret_study::RegretArgs),
     /// (Re)write manifest.json of finished training runs from their config and log.
-    Manifest(manifest::ManifestArgs),
+    Manifest(run_manifests::ManifestArgs),
     /// SIGKILL `afg train` and `afg train-price` at random moments, resume each time, and
     /// compare the final weights with an uninterrupted run's.
     CrashTest(crash::CrashArgs),
@@ -79,13 +79,13 @@ impl Command {
             Command::BenchBaselines(args) => bench::run(args),
             Command::BenchModels(args) => bench::run_models(args),
             Command::BenchOpt(args) => bench_opt::run(args),
-            Command::BenchMission(args) => bench::mission::run(args),
+            Command::BenchMission(args) => bench::mission_loop::run(args),
             Command::BenchScale(args) => scale::run(args),
             Command::ReallocStudy(args) => realloc_study::run(args),
             Command::GrapeFig7(args) => grape_fig7::run(args),
             Command::MissionStudy(args) => mission_study::run(args),
-            Command::Regret(args) => regret::run(args),
-            Command::Manifest(args) => manifest::run_manifest(args),
+            Command::Regret(args) => regret_study::run(args),
+            Command::Manifest(args) => run_manifests::run_manifest(args),
             Command::CrashTest(args) => crash::run(args),
             Command::Afg { command } => command.run(),
         }

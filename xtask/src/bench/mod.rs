@@ -7,7 +7,7 @@
 //!
 //! `cargo xtask bench-baselines`: a Markdown table of allocator times and welfare.
 
-pub mod mission;
+pub mod mission_loop;
 pub mod padded_afgnet;
 
 use std::convert::Infallible;

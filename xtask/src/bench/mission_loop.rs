@@ -100,7 +100,7 @@ fn events(inst: &Instance, prices: &[f64], seed: u64) -> Result<Vec<Event>, Eval
 ///
 /// # Examples
 /// ```
-/// let text = xtask::bench::mission::incremental(2_000, 10, 1, 0.01)?;
+/// let text = xtask::bench::mission_loop::incremental(2_000, 10, 1, 0.01)?;
 /// assert!(text.contains("| a task appears |") && text.contains("| yes |"));
 /// # Ok::<(), afg_eval::EvalError>(())
 /// ```
