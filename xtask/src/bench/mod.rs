@@ -1,6 +1,6 @@
 //! Measurements behind `cargo xtask bench-baselines` and `bench-models`: median wall
 //! times of allocators, of the networks' forward pass and training step (edge lists
-//! against dense adjacency, and against the [`plain`] padded-gather model), and of the
+//! against dense adjacency, and against the [`padded_afgnet`] padded-gather model), and of the
 //! greedy rollout (Burn path against the fast path).
 //!
 //! The machine is shared and noisy: compare ratios measured in one run.
@@ -226,7 +226,7 @@ pub fn network_timings(
     Ok(out)
 }
 
-/// AFGNet's training step, [`plain`] model against ours (dense), for each N of `sizes`
+/// AFGNet's training step, [`padded_afgnet`] model against ours (dense), for each N of `sizes`
 /// on a [`random_batch`] of `batch` states: `(N, plain, ours)`.
 ///
 /// # Errors

@@ -1,6 +1,6 @@
 //! The paper's Tables I and II as data, and their Markdown: what
 //! `cargo xtask reproduce-tables` prints and writes. [`compute`] evaluates every row
-//! on the committed datasets and weights; [`table_diff`] renders them.
+//! on the committed datasets and weights; [`markdown`] renders them.
 //!
 //! `cargo xtask reproduce-tables`: Tables I and II, Fig. 1 and an assignment map, from
 //! the committed datasets and weights.
@@ -33,7 +33,7 @@ pub struct Scale {
     pub rows: Vec<Row>,
 }
 
-/// Every table: what [`compute`] measures and [`table_diff`] renders.
+/// Every table: what [`compute`] measures and [`markdown`] renders.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Tables {
     /// A few instances per table only (a check of the pipeline, not results).
