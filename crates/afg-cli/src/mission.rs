@@ -138,14 +138,10 @@ pub struct SwarmArgs {
 
 impl LoopArgs {
     /// The plan of `method` with these options.
-    fn plan(&self, method: MissionMethod) -> MissionPlan {
-        let latency = match (self.latency, self.latency_factor) {
-            (Some(delay), _) => Latency::Fixed { delay },
-            (None, Some(factor)) => Latency::Measured { factor },
-            (None, None) => Latency::None,
-        };
+    fn plan(&self, method: MissionMethod) -> Result<MissionPlan> {
+        let latency = Latency::from_knobs(self.latency, self.latency_factor)?;
         let knobs = &self.swarm;
-        MissionPlan {
+        Ok(MissionPlan {
             method,
             warm: self.warm,
             seed: self.seed,
@@ -160,7 +156,7 @@ impl LoopArgs {
             latency,
             commit: self.commit,
             hysteresis: self.hysteresis,
-        }
+        })
     }
 }
 
@@ -281,7 +277,7 @@ fn run_one(args: &RunArgs) -> Result<()> {
     ];
     crate::refuse_overwriting_inputs(&outputs, &inputs)?;
     let mission = read_mission(&args.mission)?;
-    let plan = args.looping.plan(args.method);
+    let plan = args.looping.plan(args.method)?;
     let planner = planner(&plan, args.model.as_deref())?;
     let mut recording = Recording {
         trace: args.trace.is_some(),
@@ -386,13 +382,18 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
     let mut planners: Vec<Planner> = args
         .methods
         .iter()
-        .map(|&m| planner(&args.looping.plan(m), None))
-        .collect::<Result<_, _>>()?;
+        .map(|&m| Ok(planner(&args.looping.plan(m)?, None)?))
+        .collect::<Result<_>>()?;
     let models = args
         .model
         .iter()
-        .map(|dir| planner(&args.looping.plan(MissionMethod::default()), Some(dir)))
-        .collect::<Result<Vec<_>, _>>()?;
+        .map(|dir| {
+            Ok(planner(
+                &args.looping.plan(MissionMethod::default())?,
+                Some(dir),
+            )?)
+        })
+        .collect::<Result<Vec<_>>>()?;
     // Rows of the same name (two models of the same kind): theirs say which directory.
     let names: Vec<String> = (planners.iter().chain(&models))
         .map(|p| p.name().to_string())

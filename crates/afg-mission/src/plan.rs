@@ -224,7 +224,7 @@ impl SwarmKnobs {
 /// let planner = plan.planner()?;
 /// assert_eq!(planner.name(), "opt (warm)");
 /// let run = planner.run(&mission, Default::default(), |_| {})?;
-/// assert_eq!(run.metrics.decisions, run.metrics.decisions.max(1));
+/// assert!(run.metrics.decisions >= 1);
 /// // A radio knob is for the robots' own methods: refused with a central one.
 /// let mut radio = MissionPlan::default();
 /// radio.swarm.radio.loss = 0.3;

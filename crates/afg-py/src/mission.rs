@@ -331,16 +331,7 @@ pub(crate) fn run_mission(
             dir.display()
         )));
     }
-    let latency = match (latency, latency_factor) {
-        (Some(_), Some(_)) => {
-            return Err(crate::bad_input(
-                "pass latency= or latency_factor=, not both",
-            ));
-        }
-        (Some(delay), None) => Latency::Fixed { delay },
-        (None, Some(factor)) => Latency::Measured { factor },
-        (None, None) => Latency::None,
-    };
+    let latency = Latency::from_knobs(latency, latency_factor).map_err(crate::bad_input)?;
     let defaults = SwarmKnobs::default();
     let radio = RadioKnobs {
         radius,

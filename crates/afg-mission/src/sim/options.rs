@@ -49,6 +49,33 @@ pub enum Latency {
     },
 }
 
+impl Latency {
+    /// The latency the front ends' two knobs give: `delay` time units per decision, or
+    /// `factor` mission time units per second of compute, or none.
+    ///
+    /// # Errors
+    /// [`MissionError::Invalid`] when both are given.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_mission::Latency;
+    /// assert_eq!(Latency::from_knobs(Some(0.5), None)?, Latency::Fixed { delay: 0.5 });
+    /// assert_eq!(Latency::from_knobs(None, None)?, Latency::None);
+    /// assert!(Latency::from_knobs(Some(0.5), Some(2.0)).is_err());
+    /// # Ok::<(), afg_mission::MissionError>(())
+    /// ```
+    pub fn from_knobs(delay: Option<f64>, factor: Option<f64>) -> Result<Latency, MissionError> {
+        match (delay, factor) {
+            (Some(_), Some(_)) => Err(MissionError::Invalid(
+                "give a fixed latency or a latency factor, not both".into(),
+            )),
+            (Some(delay), None) => Ok(Latency::Fixed { delay }),
+            (None, Some(factor)) => Ok(Latency::Measured { factor }),
+            (None, None) => Ok(Latency::None),
+        }
+    }
+}
+
 /// The options of a run besides the allocator.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RunOptions {
