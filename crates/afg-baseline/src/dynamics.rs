@@ -37,7 +37,7 @@ use afg_game::{Assignment, Instance, Preference, RobotId};
 use afg_graph::GraphKind;
 
 use crate::swarm::{Grape, Network, drive};
-use crate::{AllocError, AllocStats, Allocation, Allocator, timed};
+use crate::{AllocError, AllocStats, Allocation, Allocator, Plays, check_game, timed};
 
 /// Best-response dynamics run centrally: robots take turns, first in the order of
 /// `schedule` (one turn per entry, so a robot may appear several times), then in
@@ -120,7 +120,8 @@ impl CentralisedDa {
 
     /// Index-order sweeps from `assignment` (complete or partial) until a sweep makes
     /// no change: afterwards every robot is satisfied under the preference (Def. 3 for
-    /// [`Preference::Balanced`]). Returns (changes, sweeps). This is the repair step
+    /// [`Preference::Balanced`]). In a team game, where a stable partition may not
+    /// exist, it gives up after 1000 + 4 N (N + 1) changes. Returns (changes, sweeps). This is the repair step
     /// that makes any allocation stable; the schedule is not used.
     ///
     /// # Examples
@@ -137,7 +138,8 @@ impl CentralisedDa {
     /// ```
     pub fn improve(&self, instance: &Instance, assignment: &mut Assignment) -> (u64, u64) {
         let (mut changes, mut sweeps) = (0u64, 0u64);
-        loop {
+        let limit = change_limit(instance.num_robots());
+        while changes <= limit {
             sweeps += 1;
             let mut changed = false;
             for i in instance.robot_ids() {
@@ -147,10 +149,18 @@ impl CentralisedDa {
                 }
             }
             if !changed {
-                return (changes, sweeps);
+                break;
             }
         }
+        (changes, sweeps)
     }
+}
+
+/// The changes after which the dynamics give up: far above the N(N + 1)/2 that GRAPE
+/// needs in the concave game, reached only in a team game without a stable partition.
+fn change_limit(n: usize) -> u64 {
+    let n = n as u64;
+    1000 + 4 * n * (n + 1)
 }
 
 impl Allocator for CentralisedDa {
@@ -162,6 +172,7 @@ impl Allocator for CentralisedDa {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
+        check_game(instance, self, Plays::Counts)?;
         let (result, wall_time) = timed(|| {
             let n = instance.num_robots();
             if let Some(i) = self.schedule.iter().find(|i| i.index() >= n) {
@@ -175,6 +186,10 @@ impl Allocator for CentralisedDa {
                 changes += u64::from(self.turn(instance, &mut a, i));
             }
             let (more, sweeps) = self.improve(instance, &mut a);
+            if more > change_limit(n) {
+                // A team game in which the dynamics cycle: no stable partition reached.
+                return Err(AllocError::NotConverged { rounds: sweeps });
+            }
             Ok((a, changes + more, sweeps))
         });
         let (assignment, iterations, rounds) = result?;
@@ -246,8 +261,8 @@ impl DecentralisedDa {
     /// [`AllocError::Graph`] if the communication graph cannot be built, and
     /// [`AllocError::NotConverged`] if the rounds exceed a safety bound (never seen).
     pub fn run(&self, instance: &Instance) -> Result<DecentralisedRun, AllocError> {
-        let n = instance.num_robots() as u64;
-        let limit = 1000 + 4 * n * (n + 1);
+        check_game(instance, self, Plays::Counts)?;
+        let limit = change_limit(instance.num_robots());
         let network = Network {
             graph: self.graph,
             ..Network::default()

@@ -35,7 +35,9 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 pub use dynamics::{CentralisedDa, DecentralisedDa, DecentralisedRun};
-pub use optimum::{Certificate, IncrementalOptimum, Optimum, verify_optimal};
+pub use optimum::{
+    Certificate, IncrementalOptimum, Optimum, TeamOptimum, TeamSolution, verify_optimal,
+};
 pub use simple::{Blind, Greedy, Nearest, RandomAllocator};
 pub use swarm::{
     DETECT_AFTER, Failure, LiveSwarm, Network, Swarm, SwarmMethod, SwarmReport, TracePoint,
@@ -154,6 +156,19 @@ pub enum AllocError {
         /// The method's name.
         method: String,
     },
+    /// The instance is a team game (thresholds or skills) that this method does not
+    /// play: its answer would count values the game does not pay.
+    #[error(
+        "{method} does not play games with {rules}: {reason}; `opt` solves them exactly, and `greedy`, `nearest`, `random` and `blind` play them"
+    )]
+    TeamsNotSupported {
+        /// The method's name.
+        method: String,
+        /// "team thresholds" or "skill requirements".
+        rules: &'static str,
+        /// Why the method cannot play them.
+        reason: &'static str,
+    },
     /// A method defined outside this crate failed.
     #[error("{method}: {message}")]
     Failed {
@@ -202,6 +217,55 @@ pub fn paper_game_only(instance: &Instance, method: &dyn Allocator) -> Result<()
         });
     }
     Ok(())
+}
+
+/// Which games a method plays correctly (see [`check_game`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Plays {
+    /// The paper's concave game only (the method reads values as a flow's prices, or
+    /// was trained there), with the reason.
+    Concave(&'static str),
+    /// Team thresholds too (the method reads a coalition's value from its size, which
+    /// [`Instance::coalition_value`] gives with the threshold), but not skills.
+    Counts,
+}
+
+/// Refuses a team game that `method` does not play ([`AllocError::TeamsNotSupported`]),
+/// rather than answering as if values were paid that the game does not pay.
+///
+/// # Errors
+/// [`AllocError::TeamsNotSupported`] naming the method, the rules and the reason.
+///
+/// # Examples
+/// ```
+/// use afg_baseline::{Greedy, Plays, check_game};
+/// use afg_game::{Instance, Point, Task};
+/// let task = Task { position: Point::new(0.0, 0.0), reward: 1.0, eps: 2.0, capacity: None };
+/// let inst = Instance::new(vec![Point::new(1.0, 0.0)], vec![task], 1.0)?.with_teams(vec![2], &[], &[])?;
+/// assert!(check_game(&inst, &Greedy, Plays::Counts).is_ok());
+/// let err = check_game(&inst, &Greedy, Plays::Concave("its bids are prices")).unwrap_err();
+/// assert!(err.to_string().starts_with("greedy does not play games with team thresholds: its bids are prices"));
+/// # Ok::<(), afg_game::GameError>(())
+/// ```
+pub fn check_game(
+    instance: &Instance,
+    method: &dyn Allocator,
+    plays: Plays,
+) -> Result<(), AllocError> {
+    let (rules, reason) = match plays {
+        Plays::Concave(reason) if instance.has_skill_rules() => ("skill requirements", reason),
+        Plays::Counts if instance.has_skill_rules() => (
+            "skill requirements",
+            "its preferences count a coalition's robots, not the skills they hold",
+        ),
+        Plays::Concave(reason) if instance.has_teams() => ("team thresholds", reason),
+        _ => return Ok(()),
+    };
+    Err(AllocError::TeamsNotSupported {
+        method: method.name(),
+        rules,
+        reason,
+    })
 }
 
 /// The built-in methods, by command-line name.

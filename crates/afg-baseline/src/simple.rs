@@ -16,7 +16,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
-use crate::{AllocError, AllocStats, Allocation, Allocator, timed};
+use crate::{AllocError, AllocStats, Allocation, Allocator, Plays, check_game, timed};
 
 /// Robot–task pairs from which the robots of an uncapped instance are placed on all cores.
 const PARALLEL_PAIRS: usize = 1 << 16;
@@ -92,6 +92,7 @@ impl Allocator for Greedy {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
+        check_game(instance, self, Plays::Counts)?;
         let empty = Assignment::unassigned(instance.num_robots(), instance.num_tasks());
         let (assignment, wall_time) = timed(|| self.complete(instance, &empty));
         Ok(pass_allocation(instance, assignment, wall_time, None))
@@ -126,6 +127,10 @@ impl Allocator for Nearest {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
+        if instance.allows_void() {
+            // Staying out weighs a place's marginal value, counted by size.
+            check_game(instance, self, Plays::Counts)?;
+        }
         let positions = task_positions(instance);
         // The first nearest task among those `open` says have room, and its distance.
         let nearest = |robot: Point, open: &dyn Fn(usize) -> bool| {

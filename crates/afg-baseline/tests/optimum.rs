@@ -8,56 +8,10 @@ use afg_game::{Assignment, GOLDEN_RATIO, GeneratorConfig, Instance, RobotId, Tas
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use common::{into_void, small_instance, small_void_instance};
-
-/// The best welfare over all M^N assignments that respect capacities ((M + 1)^N where
-/// the instance allows the void task).
-fn brute_force(inst: &Instance) -> f64 {
-    brute_force_completion(
-        inst,
-        &Assignment::unassigned(inst.num_robots(), inst.num_tasks()),
-    )
-}
-
-/// The best welfare over all complete assignments that respect capacities and keep
-/// the robots assigned in `partial` where they are.
-fn brute_force_completion(inst: &Instance, partial: &Assignment) -> f64 {
-    brute_force_fixing(inst, partial, None)
-}
-
-/// [`brute_force_completion`] with robot `out`, if any, in the void.
-fn brute_force_fixing(inst: &Instance, partial: &Assignment, out: Option<RobotId>) -> f64 {
-    let (n, m) = (inst.num_robots(), inst.num_tasks());
-    let places = m + usize::from(inst.allows_void());
-    let mut best = f64::NEG_INFINITY;
-    let mut code = vec![0usize; n];
-    'outer: loop {
-        let tasks = code
-            .iter()
-            .enumerate()
-            .map(|(i, &j)| {
-                let robot = RobotId(i as u32);
-                let place = (j < m).then_some(TaskId(j as u32));
-                if Some(robot) == out {
-                    None
-                } else {
-                    partial.task_of(robot).or(place)
-                }
-            })
-            .collect();
-        if let Ok(a) = Assignment::from_tasks(inst, tasks) {
-            best = best.max(inst.welfare(&a));
-        }
-        for digit in code.iter_mut() {
-            *digit += 1;
-            if *digit < places {
-                continue 'outer;
-            }
-            *digit = 0;
-        }
-        return best;
-    }
-}
+use common::{
+    brute_force, brute_force_completion, brute_force_fixing, into_void, small_instance,
+    small_void_instance,
+};
 
 #[test]
 fn opt_equals_brute_force_on_small_instances() {

@@ -40,6 +40,23 @@ pub struct GenArgs {
     /// brings ("allow_void": true in each instance).
     #[arg(long)]
     allow_void: bool,
+    /// Team thresholds: each task earns nothing until its coalition has at least
+    /// `min_team` robots, drawn uniformly from LO..=HI (default: 1, the paper's game),
+    /// e.g. `--min-team 1,5`.
+    #[arg(long, value_delimiter = ',', num_args = 1, value_names = ["LO,HI"])]
+    min_team: Option<Vec<usize>>,
+    /// Skills: S skills, each robot holding each one with probability --skill-share;
+    /// a task earns nothing until its coalition holds what it requires of each
+    /// (default: no skills).
+    #[arg(long, value_name = "S")]
+    skills: Option<usize>,
+    /// The probability that a robot holds a skill (with --skills; default 0.5).
+    #[arg(long, value_name = "P")]
+    skill_share: Option<f64>,
+    /// Each task requires each skill in an amount drawn uniformly from LO..=HI (with
+    /// --skills; default 1,2).
+    #[arg(long, value_delimiter = ',', num_args = 1, value_names = ["LO,HI"])]
+    requires: Option<Vec<usize>>,
     /// Output JSON Lines file (one instance per line, generator parameters inside).
     #[arg(long)]
     out: PathBuf,
@@ -50,17 +67,16 @@ pub fn generate(args: &GenArgs) -> Result<Vec<Instance>> {
     if args.count == 0 {
         bail!("--count must be at least 1");
     }
-    let rewards = match args.rewards.as_deref() {
-        None => None,
-        Some(&[lo, hi]) => Some((lo, hi)),
-        Some(_) => bail!("--rewards takes two numbers, LO,HI"),
-    };
     let knobs = GeneratorKnobs {
         capacity_slack: args.capacity_slack,
         eps: args.eps,
         beta: args.beta,
-        rewards,
+        rewards: pair("--rewards", args.rewards.as_deref())?,
         allow_void: args.allow_void,
+        min_team: pair("--min-team", args.min_team.as_deref())?,
+        skills: args.skills,
+        skill_share: args.skill_share,
+        requires: pair("--requires", args.requires.as_deref())?,
     };
     (0..args.count as u64)
         .map(|i| {
@@ -70,12 +86,22 @@ pub fn generate(args: &GenArgs) -> Result<Vec<Instance>> {
         .collect()
 }
 
-/// Draws the instances and writes them, atomically.
+/// A `LO,HI` flag's two values.
+fn pair<T: Copy>(flag: &str, values: Option<&[T]>) -> Result<Option<(T, T)>> {
+    match values {
+        None => Ok(None),
+        Some(&[lo, hi]) => Ok(Some((lo, hi))),
+        Some(_) => bail!("{flag} takes two numbers, LO,HI"),
+    }
+}
+
+/// Draws the instances and writes them, atomically; names the tasks no team can staff.
 ///
 /// # Errors
 /// A knob out of range, or the file not written.
 pub fn run(args: GenArgs) -> Result<()> {
     let instances = generate(&args)?;
+    crate::warn_unstaffable(&instances);
     write_atomic(&args.out, dataset_to_jsonl(&instances).as_bytes())?;
     println!(
         "wrote {} ({} instance{}, N = {}, M = {})",
@@ -128,6 +154,33 @@ mod tests {
     }
 
     #[test]
+    fn team_knobs_draw_thresholds_and_skills_in_their_ranges() {
+        let args = gen_args(
+            "--robots 40 --tasks 6 --seed 3 --min-team 2,5 --skills 3 --skill-share 0.25 --requires 0,2 --out x.jsonl",
+        );
+        let inst = &generate(&args).unwrap()[0];
+        assert!(inst.has_teams() && inst.num_skills() == 3);
+        assert!(inst.task_ids().all(|j| (2..=5).contains(&inst.min_team(j))));
+        assert!(
+            inst.task_ids()
+                .all(|j| inst.requires(j).iter().all(|&r| r <= 2))
+        );
+        let held: u32 = inst.robot_ids().flat_map(|i| inst.skills(i).to_vec()).sum();
+        assert!(
+            inst.robot_ids()
+                .all(|i| inst.skills(i).iter().all(|&q| q <= 1))
+        );
+        // About a quarter of the 120 robot-skill pairs (the seed makes it exact).
+        assert!((15..=45).contains(&held), "{held}");
+        // Without the team knobs the same seed draws the same game as before.
+        let plain =
+            &generate(&gen_args("--robots 40 --tasks 6 --seed 3 --out x.jsonl")).unwrap()[0];
+        assert_eq!(plain.robots(), inst.robots());
+        assert_eq!(plain.tasks(), inst.tasks());
+        assert!(!plain.has_teams());
+    }
+
+    #[test]
     fn bad_knobs_are_clear_errors() {
         for (flags, needle) in [
             ("--robots 10 --eps 1.2 --out x.jsonl", "eps"),
@@ -139,6 +192,17 @@ mod tests {
             ("--robots 10 --count 0 --out x.jsonl", "count"),
             ("--robots 10 --rewards 5,2 --out x.jsonl", "reward"),
             ("--robots 10 --rewards 5 --out x.jsonl", "two numbers"),
+            ("--robots 10 --min-team 0,3 --out x.jsonl", "at least 1"),
+            ("--robots 10 --min-team 4,3 --out x.jsonl", "empty"),
+            (
+                "--robots 10 --min-team 2 --out x.jsonl",
+                "--min-team takes two",
+            ),
+            (
+                "--robots 10 --skills 2 --skill-share 1.5 --out x.jsonl",
+                "share",
+            ),
+            ("--robots 10 --requires 1,2 --out x.jsonl", "need skills"),
         ] {
             let err = generate(&gen_args(flags)).unwrap_err();
             assert!(

@@ -193,6 +193,33 @@ pub(crate) fn refuse_overwriting_inputs(
     Ok(())
 }
 
+/// Warns on standard error about the tasks of `instances` that no team can ever staff
+/// (a threshold above N or the capacity, a skill nobody holds enough of): legal, they
+/// earn nothing.
+pub(crate) fn warn_unstaffable(instances: &[afg_game::Instance]) {
+    for (index, instance) in instances.iter().enumerate() {
+        let tasks = instance.unstaffable_tasks();
+        if !tasks.is_empty() {
+            let names: Vec<String> = tasks.iter().map(|j| j.index().to_string()).collect();
+            let which = if instances.len() > 1 {
+                format!("instance {index}: ")
+            } else {
+                String::new()
+            };
+            eprintln!(
+                "warning: {which}no team can staff task{} {} (a threshold above the robots or the capacity, or a skill the robots lack): {} earn nothing",
+                if tasks.len() == 1 { "" } else { "s" },
+                names.join(", "),
+                if tasks.len() == 1 {
+                    "it will"
+                } else {
+                    "they will"
+                }
+            );
+        }
+    }
+}
+
 /// Parses a count that must be at least 1 (clap's `value_parser`).
 ///
 /// # Errors

@@ -136,7 +136,9 @@ impl Assignment {
 
 impl Instance {
     /// Welfare (sum of robot utilities) of a full or partial assignment:
-    /// `sum_j F_j(n_j) - beta * sum_{assigned i} d(i, g_i)`; unassigned robots add 0.
+    /// `sum_j F_j(n_j) - beta * sum_{assigned i} d(i, g_i)`; unassigned robots add 0. A
+    /// coalition below its task's threshold, or short of a skill its task requires,
+    /// adds no value (its robots still pay their travel).
     ///
     /// # Examples
     /// ```
@@ -158,8 +160,11 @@ impl Instance {
             self.num_robots(),
             "assignment of another instance"
         );
+        let held = self.skills_held(assignment);
+        let s = self.num_skills();
         let value: f64 = self
             .task_ids()
+            .filter(|j| s == 0 || self.skills_met(*j, &held[j.index() * s..][..s]))
             .map(|j| self.coalition_value(j, assignment.size(j)))
             .sum();
         let cost: f64 = self

@@ -72,6 +72,43 @@ pub enum GameError {
         /// Number of robots.
         robots: usize,
     },
+    /// A task's `min_team` is 0.
+    #[error("task {task} has min_team 0: a threshold is a whole number of robots, at least 1")]
+    InvalidMinTeam {
+        /// The task.
+        task: usize,
+    },
+    /// A team list (`min_team`, `skills`, `requires`) of the wrong length.
+    #[error("{what} has {len} entries, but the instance has {expected}")]
+    TeamListLength {
+        /// Which list.
+        what: &'static str,
+        /// Its length.
+        len: usize,
+        /// One per task (robot).
+        expected: usize,
+    },
+    /// Two skill lists of different lengths.
+    #[error(
+        "{what} {index} lists {len} skills but {first} {first_index} lists {expected}: every non-empty `skills` and `requires` list must have the same length"
+    )]
+    SkillLength {
+        /// "robot" (`skills`) or "task" (`requires`).
+        what: &'static str,
+        /// Its index.
+        index: usize,
+        /// Its length.
+        len: usize,
+        /// The length of the first non-empty list.
+        expected: usize,
+        /// What the first non-empty list belongs to.
+        first: &'static str,
+        /// Its index.
+        first_index: usize,
+    },
+    /// Other robots for a game with skills, whose skills are not known.
+    #[error("a game with skills cannot take other robots without their skills")]
+    SkillsOfNewRobots,
     /// An assignment has a different number of entries than the instance has robots.
     #[error("assignment has {got} entries but the instance has {expected} robots")]
     AssignmentLength {

@@ -6,14 +6,41 @@ use serde::{Deserialize, Serialize};
 
 use crate::{GameError, Instance, Point, Task};
 
-/// Inclusive range from which each task's capacity is drawn uniformly.
+/// Inclusive range of whole numbers from which each task's capacity (or threshold) is
+/// drawn uniformly.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct CapacityRange {
-    /// Smallest capacity.
+pub struct CountRange {
+    /// Smallest value.
     pub min: usize,
-    /// Largest capacity.
+    /// Largest value.
     pub max: usize,
+}
+
+impl CountRange {
+    fn check(self, what: &str) -> Result<Self, GameError> {
+        if self.min > self.max {
+            return Err(GameError::InvalidGenerator(format!(
+                "{what} range {}..={} is empty",
+                self.min, self.max
+            )));
+        }
+        Ok(self)
+    }
+}
+
+/// How the generator draws skills: S skills, each robot holding each one with
+/// probability `share` (a binary skill matrix), each task requiring each skill in an
+/// amount uniform in `requires`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SkillDraw {
+    /// S, the number of skills.
+    pub count: usize,
+    /// The probability that a robot holds a skill.
+    pub share: f64,
+    /// The amount of each skill a task requires.
+    pub requires: CountRange,
 }
 
 /// Every parameter of the generator, already resolved to numbers, so that an
@@ -21,7 +48,9 @@ pub struct CapacityRange {
 ///
 /// Draw order (part of the format: changing it changes every dataset): robot
 /// positions `(x, y)` in index order, then per task its position, reward and,
-/// if capacities are drawn, its capacity. All uniform, from one
+/// if capacities are drawn, its capacity; then, in the team games, every task's
+/// threshold, every robot's skills (robot by robot, skill by skill) and every task's
+/// requirements. All uniform (skills: each held with probability `share`), from one
 /// `ChaCha8Rng::seed_from_u64(seed)`.
 ///
 /// # Examples
@@ -54,7 +83,13 @@ pub struct GeneratorConfig {
     pub beta: f64,
     /// Capacity range; `None` for unbounded tasks.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub capacity: Option<CapacityRange>,
+    pub capacity: Option<CountRange>,
+    /// Thresholds (`min_team`) range; `None`: every threshold 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min_team: Option<CountRange>,
+    /// Skills; `None`: no skill rule.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub skills: Option<SkillDraw>,
     /// GRAPE's game: robots may join the void task ([`Instance::with_void`]). Absent
     /// (false) in the paper's game, so the committed datasets read as before.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
@@ -92,6 +127,21 @@ pub struct GeneratorKnobs {
     pub rewards: Option<(f64, f64)>,
     /// Draw instances of GRAPE's game, where robots may join the void task.
     pub allow_void: bool,
+    /// Thresholds uniform in `[lo, hi]` (default: none, every threshold 1).
+    pub min_team: Option<(usize, usize)>,
+    /// S, the number of skills (default 0: no skill rule).
+    pub skills: Option<usize>,
+    /// The probability that a robot holds a skill (default 0.5).
+    pub skill_share: Option<f64>,
+    /// Each task requires each skill in an amount uniform in `[lo, hi]` (default 1, 2).
+    pub requires: Option<(usize, usize)>,
+}
+
+impl GeneratorKnobs {
+    /// The default share of robots holding a skill.
+    pub const SKILL_SHARE: f64 = 0.5;
+    /// The default range of a task's requirement of a skill.
+    pub const REQUIRES: (usize, usize) = (1, 2);
 }
 
 impl GeneratorKnobs {
@@ -125,6 +175,37 @@ impl GeneratorKnobs {
             }
             cfg = cfg.with_capacity_slack(slack);
         }
+        if let Some((min, max)) = self.min_team {
+            if min == 0 {
+                return Err(GameError::InvalidGenerator(
+                    "thresholds (min_team) must be at least 1".into(),
+                ));
+            }
+            cfg.min_team = Some(CountRange { min, max }.check("threshold (min_team)")?);
+        }
+        match self.skills {
+            Some(count) if count > 0 => {
+                let share = self.skill_share.unwrap_or(Self::SKILL_SHARE);
+                if !(0.0..=1.0).contains(&share) {
+                    return Err(GameError::InvalidGenerator(format!(
+                        "skill share must be between 0 and 1 (got {share})"
+                    )));
+                }
+                let (min, max) = self.requires.unwrap_or(Self::REQUIRES);
+                let requires = CountRange { min, max }.check("requires")?;
+                cfg.skills = Some(SkillDraw {
+                    count,
+                    share,
+                    requires,
+                });
+            }
+            _ if self.skill_share.is_some() || self.requires.is_some() => {
+                return Err(GameError::InvalidGenerator(
+                    "a skill share or requirements need skills (a number of skills S ≥ 1)".into(),
+                ));
+            }
+            _ => {}
+        }
         Ok(cfg)
     }
 }
@@ -146,6 +227,8 @@ impl GeneratorConfig {
             eps: per_task.max(2.0),
             beta: 1.0,
             capacity: None,
+            min_team: None,
+            skills: None,
             allow_void: false,
         }
     }
@@ -156,7 +239,7 @@ impl GeneratorConfig {
         let per_task = self.robots as f64 / self.tasks.max(1) as f64;
         let min = per_task.ceil() as usize;
         let max = (slack * per_task).ceil().max(min as f64) as usize;
-        self.capacity = Some(CapacityRange { min, max });
+        self.capacity = Some(CountRange { min, max });
         self
     }
 
@@ -176,13 +259,22 @@ impl GeneratorConfig {
                 self.reward_min, self.reward_max
             )));
         }
-        if let Some(c) = self.capacity
-            && c.min > c.max
-        {
-            return Err(GameError::InvalidGenerator(format!(
-                "capacity range {}..={} is empty",
-                c.min, c.max
-            )));
+        for (range, what) in [
+            (self.capacity, "capacity"),
+            (self.min_team, "threshold (min_team)"),
+        ] {
+            if let Some(range) = range {
+                range.check(what)?;
+            }
+        }
+        if let Some(draw) = self.skills {
+            draw.requires.check("requires")?;
+            if !(0.0..=1.0).contains(&draw.share) {
+                return Err(GameError::InvalidGenerator(format!(
+                    "skill share must be between 0 and 1 (got {})",
+                    draw.share
+                )));
+            }
         }
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
         let point = |rng: &mut ChaCha8Rng| Point::new(rng.random::<f64>(), rng.random::<f64>());
@@ -206,6 +298,45 @@ impl GeneratorConfig {
         } else {
             Instance::new(robots, tasks, self.beta)?
         };
+        let instance = self.draw_teams(&mut rng, instance)?;
         Ok(instance.with_generator(self.clone()))
+    }
+}
+
+impl GeneratorConfig {
+    /// Draws the thresholds and skills (after everything else: the paper's game keeps
+    /// its draws) and puts them on `instance`.
+    fn draw_teams(&self, rng: &mut ChaCha8Rng, instance: Instance) -> Result<Instance, GameError> {
+        if self.min_team.is_none() && self.skills.is_none() {
+            return Ok(instance);
+        }
+        let min_team = match self.min_team {
+            Some(c) => (0..self.tasks)
+                .map(|_| rng.random_range(c.min..=c.max))
+                .collect(),
+            None => Vec::new(),
+        };
+        let (skills, requires) = match self.skills {
+            Some(draw) => {
+                let skills: Vec<Vec<u32>> = (0..self.robots)
+                    .map(|_| {
+                        (0..draw.count)
+                            .map(|_| u32::from(rng.random_bool(draw.share)))
+                            .collect()
+                    })
+                    .collect();
+                let (lo, hi) = (draw.requires.min, draw.requires.max);
+                let requires: Vec<Vec<u32>> = (0..self.tasks)
+                    .map(|_| {
+                        (0..draw.count)
+                            .map(|_| u32::try_from(rng.random_range(lo..=hi)).unwrap_or(u32::MAX))
+                            .collect()
+                    })
+                    .collect();
+                (skills, requires)
+            }
+            None => (Vec::new(), Vec::new()),
+        };
+        instance.with_teams(min_team, &skills, &requires)
     }
 }

@@ -160,6 +160,8 @@ pub struct Instance {
     allow_void: bool,
     /// F_j of every task.
     values: Vec<ValueFunction>,
+    /// Thresholds and skills (none in the paper's game).
+    pub(crate) teams: crate::teams::TeamRules,
 }
 
 impl Instance {
@@ -279,14 +281,18 @@ impl Instance {
             generator: None,
             allow_void,
             values,
+            teams: Default::default(),
         })
     }
 
-    /// The same game — tasks, β and the void option — with other robots (survivors,
-    /// newcomers, robots that have moved). The generator record is not kept.
+    /// The same game — tasks, β, the void option and the tasks' thresholds — with other
+    /// robots (survivors, newcomers, robots that have moved). The generator record is
+    /// not kept.
     ///
     /// # Errors
-    /// As [`Instance::new`] (or [`Instance::with_void`]) for the new robots.
+    /// As [`Instance::new`] (or [`Instance::with_void`]) for the new robots, and
+    /// [`GameError::SkillsOfNewRobots`] in a game with skills (the new robots' skills
+    /// are unknown).
     ///
     /// # Examples
     /// ```
@@ -298,7 +304,12 @@ impl Instance {
     /// # Ok::<(), afg_game::GameError>(())
     /// ```
     pub fn with_robots(&self, robots: Vec<Point>) -> Result<Self, GameError> {
-        Self::build(robots, self.tasks.clone(), self.beta, self.allow_void)
+        if self.num_skills() > 0 {
+            return Err(GameError::SkillsOfNewRobots);
+        }
+        let mut instance = Self::build(robots, self.tasks.clone(), self.beta, self.allow_void)?;
+        instance.teams.min_team = self.teams.min_team.clone();
+        Ok(instance)
     }
 
     /// Records the generator parameters that produced this instance.
@@ -380,7 +391,10 @@ impl Instance {
         self.beta * self.distance(robot, task)
     }
 
-    /// Coalition value `F_j(n) = r_j log_{eps_j}(n + eps_j - 1)`, with `F_j(0) = 0`.
+    /// Coalition value `F_j(n) = r_j log_{eps_j}(n + eps_j - 1)`, with `F_j(0) = 0`,
+    /// and 0 below the task's threshold ([`Instance::min_team`]). In a game with skill
+    /// rules ([`Instance::has_skill_rules`]) a coalition also needs its skills: see
+    /// [`Instance::welfare`].
     ///
     /// # Examples
     /// ```
@@ -392,16 +406,26 @@ impl Instance {
     /// ```
     #[inline]
     pub fn coalition_value(&self, task: TaskId, n: usize) -> f64 {
+        if n < self.min_team(task) {
+            return 0.0;
+        }
         self.values[task.index()].value(n)
     }
 
-    /// Marginal value of the n-th member, `F_j(n) - F_j(n - 1)` (n ≥ 1); decreasing in n.
+    /// Marginal value of the n-th member, `F_j(n) - F_j(n - 1)` (n ≥ 1) of
+    /// [`Instance::coalition_value`]: decreasing in n without a threshold; with one
+    /// (k > 1), 0 below k and the whole `F_j(k)` at k.
     #[inline]
     pub fn marginal_value(&self, task: TaskId, n: usize) -> f64 {
-        self.values[task.index()].marginal(n)
+        let k = self.min_team(task);
+        match n.cmp(&k) {
+            std::cmp::Ordering::Less => 0.0,
+            std::cmp::Ordering::Equal if k > 1 => self.values[task.index()].value(n),
+            _ => self.values[task.index()].marginal(n),
+        }
     }
 
-    /// F_j of a task.
+    /// F_j of a task, concave, without its threshold.
     #[inline]
     pub fn value_function(&self, task: TaskId) -> ValueFunction {
         self.values[task.index()]

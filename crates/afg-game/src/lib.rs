@@ -35,10 +35,11 @@ pub mod io;
 mod named;
 pub mod realloc;
 mod stability;
+mod teams;
 
 pub use assignment::Assignment;
 pub use error::GameError;
-pub use generate::{CapacityRange, GeneratorConfig, GeneratorKnobs};
+pub use generate::{CountRange, GeneratorConfig, GeneratorKnobs, SkillDraw};
 pub use ids::{RobotId, TaskId};
 pub use instance::{GOLDEN_RATIO, Instance, MAX_VALUE, Point, Task, ValueFunction};
 pub use named::Named;

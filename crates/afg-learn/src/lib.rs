@@ -62,6 +62,10 @@ pub mod run {
 
 pub use error::LearnError;
 
+/// Why the trained models refuse the team games (`afg_baseline::check_game`).
+pub(crate) const TRAINED_CONCAVE: &str =
+    "it was trained on the paper's concave game, where every member adds value";
+
 /// The CPU inference back end.
 pub type InferBackend = burn::backend::NdArray<f32>;
 /// The CPU training back end.

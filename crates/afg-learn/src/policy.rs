@@ -220,6 +220,11 @@ impl Allocator for LearnedPolicy {
     /// Stats: `iterations` = robots placed + repair moves, `rounds` = network passes.
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
         afg_baseline::paper_game_only(instance, self)?;
+        afg_baseline::check_game(
+            instance,
+            self,
+            afg_baseline::Plays::Concave(crate::TRAINED_CONCAVE),
+        )?;
         let start = Instant::now();
         let run = self.run(instance).map_err(|e| AllocError::Failed {
             method: self.name(),

@@ -391,9 +391,11 @@ fn write_jsonl(path: PathBuf, instances: Vec<PyRef<'_, PyInstance>>) -> PyResult
 
 /// Draws an instance from the paper's distribution (uniform positions, rewards in
 /// [N/M, 2N/M], eps = max(2, N/M), beta = 1), with the generator's knobs;
-/// `allow_void=True` draws GRAPE's game, where robots may join the void task.
+/// `allow_void=True` draws GRAPE's game, where robots may join the void task;
+/// `min_team=(lo, hi)`, `skills=S`, `skill_share=p` and `requires=(lo, hi)` draw the
+/// team games (as `afg gen`'s flags of the same names).
 #[pyfunction]
-#[pyo3(signature = (robots, tasks=5, seed=0, capacity_slack=None, eps=None, beta=1.0, rewards=None, allow_void=false))]
+#[pyo3(signature = (robots, tasks=5, seed=0, capacity_slack=None, eps=None, beta=1.0, rewards=None, allow_void=false, min_team=None, skills=None, skill_share=None, requires=None))]
 // Python's keyword arguments, one per knob.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn generate(
@@ -405,6 +407,10 @@ pub(crate) fn generate(
     beta: f64,
     rewards: Option<(f64, f64)>,
     allow_void: bool,
+    min_team: Option<(usize, usize)>,
+    skills: Option<usize>,
+    skill_share: Option<f64>,
+    requires: Option<(usize, usize)>,
 ) -> PyResult<PyInstance> {
     let knobs = GeneratorKnobs {
         capacity_slack,
@@ -412,6 +418,10 @@ pub(crate) fn generate(
         beta: Some(beta),
         rewards,
         allow_void,
+        min_team,
+        skills,
+        skill_share,
+        requires,
     };
     knobs
         .config(robots, tasks, seed)

@@ -16,7 +16,7 @@
 
 use afg_game::{Assignment, Instance, Point, RobotId, Task, TaskId, ValueFunction};
 
-use super::transport::{self, Column, Flow};
+use super::transport::{self, Column, Flow, Slots};
 use crate::AllocError;
 
 /// The exact optimum of a game that changes by events, re-solved after each from the
@@ -171,7 +171,7 @@ impl IncrementalOptimum {
             ));
         }
         let column = Column::Task {
-            value: ValueFunction::of(&task),
+            value: Slots::concave(ValueFunction::of(&task)),
             capacity: task.capacity.unwrap_or(usize::MAX),
         };
         let c = self.flow.open(column, &costs);

@@ -34,12 +34,14 @@ mod augmenting;
 mod certificate;
 mod incremental;
 mod movers;
+mod teams;
 mod transport;
 
 use afg_game::{Assignment, Instance, RobotId, TaskId};
 
 pub use certificate::{Certificate, verify_optimal};
 pub use incremental::IncrementalOptimum;
+pub use teams::{TeamOptimum, TeamSolution};
 
 use crate::{AllocError, AllocStats, Allocation, Allocator, timed};
 
@@ -302,6 +304,18 @@ impl Allocator for Optimum {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
+        if instance.has_teams() {
+            let (solution, wall_time) = timed(|| TeamOptimum::default().solve(instance));
+            let solution = solution?;
+            return Ok(Allocation {
+                assignment: solution.assignment,
+                stats: AllocStats {
+                    iterations: solution.nodes,
+                    wall_time,
+                    ..AllocStats::default()
+                },
+            });
+        }
         let (solution, wall_time) = timed(|| transport::solve(instance));
         Ok(Allocation {
             assignment: assignment_of(instance, &solution.task_of),

@@ -298,6 +298,21 @@ impl Swarm {
         instance: &Instance,
         on_round: impl FnMut(u64),
     ) -> Result<SwarmReport, AllocError> {
+        if instance.has_teams() {
+            return Err(AllocError::TeamsNotSupported {
+                method: match self.method {
+                    SwarmMethod::Grape { .. } => "grape",
+                    SwarmMethod::Auction { .. } => "auction",
+                }
+                .into(),
+                rules: if instance.has_skill_rules() {
+                    "skill requirements"
+                } else {
+                    "team thresholds"
+                },
+                reason: "the radio swarms bid and move for the concave game",
+            });
+        }
         let limit = self.round_limit(instance.num_robots());
         let (outcome, wall_time) = timed(|| match self.method {
             SwarmMethod::Grape { preference } => {

@@ -339,6 +339,11 @@ impl Allocator for PricePolicy {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
+        afg_baseline::check_game(
+            instance,
+            self,
+            afg_baseline::Plays::Concave(crate::TRAINED_CONCAVE),
+        )?;
         let start = std::time::Instant::now();
         let state = self.rollout(instance)?;
         Ok(Allocation {

@@ -125,6 +125,7 @@ impl InstanceSource {
             beta: Some(self.beta),
             rewards: None,
             allow_void: self.allow_void,
+            ..GeneratorKnobs::default()
         }
         .config(self.robots, self.tasks, seed)?
         .generate()

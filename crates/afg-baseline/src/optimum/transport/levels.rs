@@ -5,13 +5,17 @@ use super::*;
 
 /// The prices of the subsample of every `stride`-th robot, solved from the prices of
 /// its own subsample; `None` below [`BASE_ROBOTS`].
-pub(super) fn coarse_prices(inst: &Instance, stride: usize) -> Option<Vec<f64>> {
+pub(super) fn coarse_prices(
+    inst: &Instance,
+    columns: &[Column],
+    stride: usize,
+) -> Option<Vec<f64>> {
     if inst.num_robots().div_ceil(stride) < BASE_ROBOTS {
         return None;
     }
-    let warm = coarse_prices(inst, stride * FACTOR);
+    let warm = coarse_prices(inst, columns, stride * FACTOR);
     Some(
-        Flow::solved(Level::new(inst, stride, 0), warm.as_deref())
+        Flow::solved(Level::new(inst, columns, stride, 0), warm.as_deref())
             .into_solution()
             .prices,
     )
@@ -33,18 +37,10 @@ pub(super) struct Level {
 }
 
 impl Level {
-    /// The level of every `stride`-th robot, with `spare` closed columns last.
-    pub(super) fn new(inst: &Instance, stride: usize, spare: usize) -> Self {
-        let mut columns: Vec<Column> = inst
-            .task_ids()
-            .map(|j| Column::Task {
-                value: inst.value_function(j),
-                capacity: inst.capacity(j),
-            })
-            .collect();
-        if inst.allows_void() {
-            columns.push(Column::Void);
-        }
+    /// The level of every `stride`-th robot of `inst` with `columns` (its tasks', then
+    /// the void's), and `spare` closed columns last.
+    pub(super) fn new(inst: &Instance, columns: &[Column], stride: usize, spare: usize) -> Self {
+        let mut columns = columns.to_vec();
         columns.resize(columns.len() + spare, Column::Closed);
         Level {
             stride,

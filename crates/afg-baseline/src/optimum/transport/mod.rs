@@ -63,34 +63,130 @@ pub(super) fn solve(inst: &Instance) -> Solution {
     solved(inst, 0).into_solution()
 }
 
+/// The columns of `inst` as they are: each task's concave value function (its
+/// threshold left out) and capacity, then the void where the instance allows it.
+pub(super) fn task_columns(inst: &Instance) -> Vec<Column> {
+    let mut columns: Vec<Column> = inst
+        .task_ids()
+        .map(|j| Column::Task {
+            value: Slots::concave(inst.value_function(j)),
+            capacity: inst.capacity(j),
+        })
+        .collect();
+    if inst.allows_void() {
+        columns.push(Column::Void);
+    }
+    columns
+}
+
+/// Solves the problem of `inst`'s robots and costs with other `columns` (one per task,
+/// then the void's where the instance allows it) exactly, from `warm` prices (or from
+/// its subsamples' where there are none).
+pub(super) fn solve_columns(inst: &Instance, columns: &[Column], warm: Option<&[f64]>) -> Solution {
+    let coarse;
+    let warm = match warm {
+        Some(prices) => Some(prices),
+        None => {
+            coarse = coarse_prices(inst, columns, FACTOR);
+            coarse.as_deref()
+        }
+    };
+    Flow::solved(Level::new(inst, columns, 1, 0), warm).into_solution()
+}
+
 /// The solved residual state of `inst` (from its subsample's prices), to keep, with
 /// `spare` closed columns to open later.
 pub(super) fn solved(inst: &Instance, spare: usize) -> Flow {
-    let mut warm = coarse_prices(inst, FACTOR);
+    let columns = task_columns(inst);
+    let mut warm = coarse_prices(inst, &columns, FACTOR);
     if let Some(prices) = &mut warm {
         prices.resize(prices.len() + spare, 0.0);
     }
-    Flow::solved(Level::new(inst, 1, spare), warm.as_deref())
+    Flow::solved(Level::new(inst, &columns, 1, spare), warm.as_deref())
 }
 
 /// Solves `inst` exactly from `prices` (one per column: the tasks', then the void's
 /// where the instance allows it; any common offset), without subsample levels.
 pub(super) fn solve_from(inst: &Instance, prices: &[f64]) -> Solution {
-    Flow::solved(Level::new(inst, 1, 0), Some(prices)).into_solution()
+    Flow::solved(Level::new(inst, &task_columns(inst), 1, 0), Some(prices)).into_solution()
 }
 
 /// What a column of the problem is.
 #[derive(Clone, Copy)]
 pub(super) enum Column {
-    /// A task: its value function and its capacity (in robots of the instance).
-    Task {
-        value: ValueFunction,
-        capacity: usize,
-    },
+    /// A task: its slots' values and its capacity (in robots of the instance).
+    Task { value: Slots, capacity: usize },
     /// The void task: cost 0, every member worth 0, room for all.
     Void,
     /// No task (one that was removed): no room.
     Closed,
+}
+
+/// What a task column's members are worth: a concave value function F, whose first
+/// `flat` members are each worth `F(flat) / flat` (the concave envelope of a team
+/// threshold of `flat`: F earned only from `flat` members on, spread over them), plus
+/// `bonus` each (a large bonus forces them in), or nothing at all (`worthless`: a task
+/// that may not earn). Concave in every case, since `F(k) / k ≥ F(k + 1) − F(k)`.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Slots {
+    value: ValueFunction,
+    flat: usize,
+    bonus: f64,
+    worthless: bool,
+}
+
+impl Slots {
+    /// F's own marginal values.
+    pub(super) fn concave(value: ValueFunction) -> Self {
+        Slots {
+            value,
+            flat: 0,
+            bonus: 0.0,
+            worthless: false,
+        }
+    }
+
+    /// The envelope of F earned from `k` members on, with `bonus` on each of the first
+    /// `k`.
+    pub(super) fn envelope(value: ValueFunction, k: usize, bonus: f64) -> Self {
+        Slots {
+            value,
+            flat: k,
+            bonus,
+            worthless: false,
+        }
+    }
+
+    /// Members worth nothing.
+    pub(super) fn worthless(value: ValueFunction) -> Self {
+        Slots {
+            worthless: true,
+            ..Slots::concave(value)
+        }
+    }
+
+    /// What the first n members are worth together.
+    pub(super) fn value(&self, n: usize) -> f64 {
+        if self.worthless || n == 0 {
+            0.0
+        } else if n <= self.flat {
+            n as f64 * (self.value.value(self.flat) / self.flat as f64 + self.bonus)
+        } else {
+            self.value.value(n) + self.flat as f64 * self.bonus
+        }
+    }
+
+    /// What the n-th member (n ≥ 1) is worth.
+    #[inline]
+    pub(super) fn marginal(&self, n: usize) -> f64 {
+        if self.worthless {
+            0.0
+        } else if n <= self.flat {
+            self.value.value(self.flat) / self.flat as f64 + self.bonus
+        } else {
+            self.value.marginal(n)
+        }
+    }
 }
 
 /// The residual state of one level: where every robot is, the count each column sends

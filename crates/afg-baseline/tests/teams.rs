@@ -1,0 +1,204 @@
+//! The team-threshold game: the exact solver against brute force and by hand, its
+//! bound and gap under a time limit, and what every allocator does with team games.
+
+mod common;
+
+use std::time::Duration;
+
+use afg_baseline::{AllocError, Allocator, Method, Optimum, TeamOptimum};
+use afg_game::{Assignment, CountRange, GeneratorConfig, Instance, Point, Task, TaskId};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use common::{brute_force, small_instance, small_void_instance};
+
+/// `inst` with thresholds drawn from 1..=N (so some tasks cannot be staffed together,
+/// and some never).
+fn with_thresholds(rng: &mut ChaCha8Rng, inst: Instance) -> Instance {
+    let n = inst.num_robots();
+    let min_team = (0..inst.num_tasks())
+        .map(|_| rng.random_range(1..=n + 1))
+        .collect();
+    inst.with_teams(min_team, &[], &[]).unwrap()
+}
+
+#[test]
+fn the_team_optimum_equals_brute_force_on_small_instances() {
+    let mut rng = ChaCha8Rng::seed_from_u64(54);
+    for case in 0..300 {
+        let plain = if case % 3 == 2 {
+            small_void_instance(&mut rng, case)
+        } else {
+            small_instance(&mut rng, case)
+        };
+        let inst = with_thresholds(&mut rng, plain);
+        let best = TeamOptimum::default().solve(&inst).unwrap();
+        let brute = brute_force(&inst);
+        let tol = 1e-9 * brute.abs().max(1.0);
+        assert!(best.proven && best.gap() == 0.0, "case {case}");
+        assert!(
+            (best.welfare - brute).abs() < tol,
+            "case {case}: {} vs {brute}",
+            best.welfare
+        );
+        assert!(
+            (inst.welfare(&best.assignment) - brute).abs() < tol,
+            "case {case}"
+        );
+        assert!(
+            (best.bound - brute).abs() < tol,
+            "case {case}: bound {}",
+            best.bound
+        );
+        inst.check(&best.assignment).unwrap();
+        // `opt` solves team games with the same search.
+        let opt = Optimum.allocate(&inst).unwrap().assignment;
+        assert!((inst.welfare(&opt) - brute).abs() < tol, "case {case}");
+    }
+}
+
+#[test]
+fn two_robots_needed_by_hand() {
+    // Task 0 at the origin needs 2 robots and pays r = 4 (eps = 2: F(2) = 4 log2 3);
+    // task 1 at (10, 0) pays 1 to one robot. Robots at (1, 0) and (0, 1).
+    let task = |x: f64, reward: f64| Task {
+        position: Point::new(x, 0.0),
+        reward,
+        eps: 2.0,
+        capacity: None,
+    };
+    let robots = vec![Point::new(1.0, 0.0), Point::new(0.0, 1.0)];
+    let inst = Instance::new(robots, vec![task(0.0, 4.0), task(10.0, 1.0)], 1.0)
+        .unwrap()
+        .with_teams(vec![2, 1], &[], &[])
+        .unwrap();
+    let best = TeamOptimum::default().solve(&inst).unwrap();
+    assert_eq!(best.assignment.tasks(), [Some(TaskId(0)); 2]);
+    assert!((best.welfare - (4.0 * 3f64.log2() - 2.0)).abs() < 1e-12);
+    // With r = 1 the pair is worth log2 3 − 2 < 0 and one robot at task 1 is worth
+    // 1 − √101 … still worse: the optimum puts both at task 0 anyway (every robot
+    // joins a task), but in GRAPE's game they stay out.
+    let robots = vec![Point::new(1.0, 0.0), Point::new(0.0, 1.0)];
+    let void = Instance::with_void(robots, vec![task(0.0, 1.0), task(10.0, 1.0)], 1.0)
+        .unwrap()
+        .with_teams(vec![2, 1], &[], &[])
+        .unwrap();
+    let best = TeamOptimum::default().solve(&void).unwrap();
+    assert_eq!(best.assignment.tasks(), [None, None]);
+    assert_eq!(best.welfare, 0.0);
+}
+
+/// A scarce instance: thresholds add up to more than the robots.
+fn scarce(robots: usize, tasks: usize, seed: u64) -> Instance {
+    let per_task = robots / tasks;
+    let mut cfg = GeneratorConfig::paper(robots, tasks, seed);
+    cfg.min_team = Some(CountRange {
+        min: per_task,
+        max: 2 * per_task,
+    });
+    cfg.generate().unwrap()
+}
+
+#[test]
+fn a_time_limit_returns_the_best_found_with_a_certified_bound() {
+    let inst = scarce(100, 10, 3);
+    let exact = TeamOptimum::default().solve(&inst).unwrap();
+    assert!(exact.proven);
+    let cut = TeamOptimum {
+        time_limit: Some(Duration::ZERO),
+    }
+    .solve(&inst)
+    .unwrap();
+    // The root and its dive are always solved: a feasible answer and a true bound.
+    assert!(cut.nodes >= 1);
+    assert!((inst.welfare(&cut.assignment) - cut.welfare).abs() < 1e-9);
+    assert!(cut.welfare <= exact.welfare + 1e-9);
+    assert!(
+        cut.bound >= exact.welfare - 1e-9,
+        "{} < {}",
+        cut.bound,
+        exact.welfare
+    );
+    assert!(cut.gap() >= 0.0);
+    if !cut.proven {
+        assert!((cut.gap() - (cut.bound - cut.welfare) / cut.welfare.abs()).abs() < 1e-12);
+    }
+}
+
+#[test]
+fn the_same_instance_gives_the_same_answer() {
+    let inst = scarce(60, 6, 11);
+    let a = TeamOptimum::default().solve(&inst).unwrap();
+    let b = TeamOptimum::default().solve(&inst).unwrap();
+    assert_eq!(a.assignment, b.assignment);
+    assert_eq!(
+        (a.nodes, a.welfare.to_bits()),
+        (b.nodes, b.welfare.to_bits())
+    );
+}
+
+#[test]
+fn allocators_play_thresholds_validly_or_refuse_skills() {
+    let inst = scarce(40, 5, 2);
+    let best = TeamOptimum::default().solve(&inst).unwrap().welfare;
+    let thresholds = inst.task_ids().map(|j| inst.min_team(j)).collect();
+    let skills = inst
+        .clone()
+        .with_teams(
+            thresholds,
+            &vec![vec![1]; 40],
+            &[vec![1], vec![], vec![], vec![], vec![]],
+        )
+        .unwrap();
+    for method in Method::ALL {
+        let allocator = method.allocator(7);
+        let a = allocator.allocate(&inst).unwrap().assignment;
+        inst.check(&a).unwrap();
+        assert!(a.is_complete(), "{method}");
+        assert!(inst.welfare(&a) <= best + 1e-9, "{method}");
+        match allocator.allocate(&skills) {
+            Ok(a) => {
+                assert!(
+                    matches!(method, Method::Nearest | Method::Random | Method::Blind),
+                    "{method} played a skill game"
+                );
+                skills.check(&a.assignment).unwrap();
+            }
+            Err(err) => assert!(
+                matches!(err, AllocError::TeamsNotSupported { .. }),
+                "{method}: {err}"
+            ),
+        }
+    }
+}
+
+#[test]
+fn welfare_counts_a_coalition_only_when_its_team_is_complete() {
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    for case in 0..50 {
+        let plain = small_instance(&mut rng, case);
+        let inst = with_thresholds(&mut rng, plain);
+        let tasks = (0..inst.num_robots())
+            .map(|_| Some(TaskId(rng.random_range(0..inst.num_tasks() as u32))))
+            .collect();
+        let Ok(a) = Assignment::from_tasks(&inst, tasks) else {
+            continue;
+        };
+        let by_hand: f64 = inst
+            .task_ids()
+            .map(|j| {
+                let n = a.size(j);
+                if n >= inst.min_team(j) {
+                    inst.value_function(j).value(n)
+                } else {
+                    0.0
+                }
+            })
+            .sum::<f64>()
+            - inst
+                .robot_ids()
+                .map(|i| inst.cost(i, a.task_of(i).unwrap()))
+                .sum::<f64>();
+        assert!((inst.welfare(&a) - by_hand).abs() < 1e-9);
+    }
+}

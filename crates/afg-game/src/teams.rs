@@ -1,0 +1,275 @@
+//! The team games: tasks that earn nothing until their coalition is large enough
+//! (`min_team`), and robots with skills that tasks require in given amounts.
+//!
+//! A coalition of n robots at task j earns `F_j(n)` only when `n ≥ k_j` (its
+//! `min_team`, 1 by default) and, for every skill s, its robots hold at least
+//! `requires_j[s]` of it together; otherwise it earns 0 and its robots still pay their
+//! travel. Without either rule the game is the paper's.
+
+use crate::{Assignment, GameError, Instance, RobotId, TaskId};
+
+/// What the tasks need of their coalitions: a minimum team size per task, and a
+/// skill matrix (S skills: one amount per robot and skill, one requirement per task and
+/// skill). The default has neither: the paper's game.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub(crate) struct TeamRules {
+    /// `k_j` of every task (all 1 when empty).
+    pub(crate) min_team: Vec<usize>,
+    /// S, the number of skills (0: no skill rule).
+    pub(crate) num_skills: usize,
+    /// Row-major N × S: robot i's amount of skill s.
+    pub(crate) skills: Vec<u32>,
+    /// Row-major M × S: what task j needs of skill s.
+    pub(crate) requires: Vec<u32>,
+}
+
+/// The number of skills of the given lists: the length of the non-empty ones, which
+/// must all agree (an empty list holds none of every skill).
+fn skill_count(skills: &[Vec<u32>], requires: &[Vec<u32>]) -> Result<usize, GameError> {
+    let mut count: Option<(usize, &'static str, usize)> = None;
+    let lists = skills
+        .iter()
+        .enumerate()
+        .map(|(i, s)| ("robot", i, s))
+        .chain(requires.iter().enumerate().map(|(j, r)| ("task", j, r)));
+    for (what, index, list) in lists {
+        if list.is_empty() {
+            continue;
+        }
+        match count {
+            None => count = Some((list.len(), what, index)),
+            Some((len, first, first_index)) if len != list.len() => {
+                return Err(GameError::SkillLength {
+                    what,
+                    index,
+                    len: list.len(),
+                    expected: len,
+                    first,
+                    first_index,
+                });
+            }
+            Some(_) => {}
+        }
+    }
+    Ok(count.map_or(0, |(len, ..)| len))
+}
+
+/// Flattens per-row lists into a row-major matrix of `width` columns (empty rows: 0).
+fn matrix(rows: &[Vec<u32>], width: usize) -> Vec<u32> {
+    let mut flat = vec![0; rows.len() * width];
+    for (row, list) in flat.chunks_mut(width.max(1)).zip(rows) {
+        if !list.is_empty() {
+            row.copy_from_slice(list);
+        }
+    }
+    flat
+}
+
+impl TeamRules {
+    /// Rules from per-task thresholds and per-robot / per-task skill lists, checked
+    /// against N robots and M tasks.
+    pub(crate) fn new(
+        num_robots: usize,
+        num_tasks: usize,
+        min_team: Vec<usize>,
+        skills: &[Vec<u32>],
+        requires: &[Vec<u32>],
+    ) -> Result<Self, GameError> {
+        for (what, len, expected) in [
+            ("min_team", min_team.len(), num_tasks),
+            ("requires", requires.len(), num_tasks),
+            ("skills", skills.len(), num_robots),
+        ] {
+            if len != 0 && len != expected {
+                return Err(GameError::TeamListLength {
+                    what,
+                    len,
+                    expected,
+                });
+            }
+        }
+        if let Some(task) = min_team.iter().position(|&k| k == 0) {
+            return Err(GameError::InvalidMinTeam { task });
+        }
+        let num_skills = skill_count(skills, requires)?;
+        let (skills, requires) = if num_skills == 0 {
+            (Vec::new(), Vec::new())
+        } else {
+            let mut robots = skills.to_vec();
+            robots.resize(num_robots, Vec::new());
+            let mut tasks = requires.to_vec();
+            tasks.resize(num_tasks, Vec::new());
+            (matrix(&robots, num_skills), matrix(&tasks, num_skills))
+        };
+        let min_team = if min_team.iter().all(|&k| k == 1) {
+            Vec::new()
+        } else {
+            min_team
+        };
+        Ok(TeamRules {
+            min_team,
+            num_skills,
+            skills,
+            requires,
+        })
+    }
+}
+
+impl Instance {
+    /// The same game with team rules: task j earns `F_j(n)` only when its coalition has
+    /// at least `min_team[j]` robots and, for every skill s, holds at least
+    /// `requires[j][s]` of it (robot i holds `skills[i][s]`). An empty list leaves that
+    /// rule out (all thresholds 1, no skills); an empty robot or task entry holds none
+    /// of every skill. The robots' skills and the tasks' requirements must all have the
+    /// same length S when not empty.
+    ///
+    /// # Errors
+    /// [`GameError::InvalidMinTeam`] for a threshold of 0,
+    /// [`GameError::TeamListLength`] for a list with neither 0 nor one entry per task
+    /// (robot), [`GameError::SkillLength`] for skill lists of different lengths.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::{Assignment, Instance, Point, Task, TaskId};
+    /// let task = Task { position: Point::new(0.0, 0.0), reward: 2.0, eps: 2.0, capacity: None };
+    /// let robots = vec![Point::new(1.0, 0.0), Point::new(0.0, 1.0)];
+    /// let inst = Instance::new(robots, vec![task], 1.0)?.with_teams(vec![2], &[], &[])?;
+    /// let one = Assignment::from_tasks(&inst, vec![Some(TaskId(0)), None])?;
+    /// assert_eq!(inst.welfare(&one), -1.0); // a team of one earns nothing
+    /// let two = Assignment::from_tasks(&inst, vec![Some(TaskId(0)); 2])?;
+    /// assert!((inst.welfare(&two) - (2.0 * 3f64.log2() - 2.0)).abs() < 1e-12);
+    /// # Ok::<(), afg_game::GameError>(())
+    /// ```
+    pub fn with_teams(
+        mut self,
+        min_team: Vec<usize>,
+        skills: &[Vec<u32>],
+        requires: &[Vec<u32>],
+    ) -> Result<Self, GameError> {
+        self.teams = TeamRules::new(
+            self.num_robots(),
+            self.num_tasks(),
+            min_team,
+            skills,
+            requires,
+        )?;
+        Ok(self)
+    }
+
+    /// Whether any task needs a team: a threshold above 1 or a skill requirement. Such
+    /// games are NP-hard; allocators built for the paper's concave game refuse them.
+    pub fn has_teams(&self) -> bool {
+        !self.teams.min_team.is_empty() || self.has_skill_rules()
+    }
+
+    /// Whether any task requires a skill (then a coalition's value depends on which
+    /// robots it holds, not only on how many).
+    pub fn has_skill_rules(&self) -> bool {
+        self.teams.requires.iter().any(|&r| r > 0)
+    }
+
+    /// Task j's threshold `k_j` (1 unless set).
+    #[inline]
+    pub fn min_team(&self, task: TaskId) -> usize {
+        self.teams.min_team.get(task.index()).copied().unwrap_or(1)
+    }
+
+    /// S, the number of skills (0 without the skill rule).
+    pub fn num_skills(&self) -> usize {
+        self.teams.num_skills
+    }
+
+    /// Robot i's amount of every skill (empty when S = 0).
+    pub fn skills(&self, robot: RobotId) -> &[u32] {
+        let s = self.teams.num_skills;
+        &self.teams.skills[robot.index() * s..][..s]
+    }
+
+    /// What task j requires of every skill (empty when S = 0).
+    pub fn requires(&self, task: TaskId) -> &[u32] {
+        let s = self.teams.num_skills;
+        &self.teams.requires[task.index() * s..][..s]
+    }
+
+    /// Whether a coalition holding `held[s]` of every skill meets task j's requirements.
+    pub fn skills_met(&self, task: TaskId, held: &[u64]) -> bool {
+        self.requires(task)
+            .iter()
+            .zip(held)
+            .all(|(&need, &have)| have >= u64::from(need))
+    }
+
+    /// The skills each coalition of `assignment` holds: row-major M × S totals.
+    pub fn skills_held(&self, assignment: &Assignment) -> Vec<u64> {
+        let s = self.teams.num_skills;
+        let mut held = vec![0u64; self.num_tasks() * s];
+        if s == 0 {
+            return held;
+        }
+        for robot in self.robot_ids() {
+            if let Some(task) = assignment.task_of(robot) {
+                let row = &mut held[task.index() * s..][..s];
+                for (h, &q) in row.iter_mut().zip(self.skills(robot)) {
+                    *h += u64::from(q);
+                }
+            }
+        }
+        held
+    }
+
+    /// The tasks no coalition can ever staff: a threshold above the number of robots
+    /// or the task's capacity, or a skill that all the robots together hold less of
+    /// than the task needs. Legal (they earn nothing); front ends warn about them.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::{Instance, Point, Task, TaskId};
+    /// let task = Task { position: Point::new(0.0, 0.0), reward: 1.0, eps: 2.0, capacity: None };
+    /// let inst = Instance::new(vec![Point::new(0.0, 0.0)], vec![task; 3], 1.0)?
+    ///     .with_teams(vec![1, 2, 1], &[vec![1, 0]], &[vec![], vec![], vec![0, 1]])?;
+    /// assert_eq!(inst.unstaffable_tasks(), vec![TaskId(1), TaskId(2)]);
+    /// # Ok::<(), afg_game::GameError>(())
+    /// ```
+    pub fn unstaffable_tasks(&self) -> Vec<TaskId> {
+        let s = self.teams.num_skills;
+        let mut everyone = vec![0u64; s];
+        for robot in self.robot_ids() {
+            for (e, &q) in everyone.iter_mut().zip(self.skills(robot)) {
+                *e += u64::from(q);
+            }
+        }
+        self.task_ids()
+            .filter(|&j| {
+                let k = self.min_team(j);
+                k > self.num_robots() || k > self.capacity(j) || !self.skills_met(j, &everyone)
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn skill_lists_of_different_lengths_are_refused_naming_both() {
+        let err = skill_count(&[vec![1, 0], vec![]], &[vec![1]]).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "task 0 lists 1 skills but robot 0 lists 2: every non-empty `skills` and `requires` list must have the same length"
+        );
+        assert_eq!(
+            skill_count(&[vec![], vec![2, 0]], &[vec![0, 1]]).unwrap(),
+            2
+        );
+        assert_eq!(skill_count(&[], &[]).unwrap(), 0);
+    }
+
+    #[test]
+    fn empty_rows_hold_none_of_every_skill() {
+        assert_eq!(
+            matrix(&[vec![1, 2], vec![], vec![3, 4]], 2),
+            [1, 2, 0, 0, 3, 4]
+        );
+    }
+}
