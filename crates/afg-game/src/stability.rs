@@ -74,15 +74,39 @@ impl Instance {
         task: TaskId,
         pref: Preference,
     ) -> f64 {
-        self.score_among(robot, task, assignment.others_in(robot, task), pref)
+        self.score_among(robot, task, assignment.others_in(robot, task), pref, None)
     }
 
-    /// Score of `robot` in `task` with `others` other robots there.
+    /// Score of `robot` in `task` with `others` other robots there; in a game with
+    /// skill rules, `held` has what each coalition holds (the robot counted in its own).
     #[inline]
-    fn score_among(&self, robot: RobotId, task: TaskId, others: usize, pref: Preference) -> f64 {
-        let value = match pref {
-            Preference::Balanced => self.marginal_value(task, others + 1),
-            Preference::Selfish => self.coalition_value(task, others + 1) / (others + 1) as f64,
+    fn score_among(
+        &self,
+        robot: RobotId,
+        task: TaskId,
+        others: usize,
+        pref: Preference,
+        held: Option<Held<'_>>,
+    ) -> f64 {
+        let value = match held {
+            None => match pref {
+                Preference::Balanced => self.marginal_value(task, others + 1),
+                Preference::Selfish => self.coalition_value(task, others + 1) / (others + 1) as f64,
+            },
+            Some(held) => {
+                let (with, without) = held.rows(self, robot, task);
+                let worth = |n: usize, row: &[u64]| {
+                    if self.skills_met(task, row) {
+                        self.coalition_value(task, n)
+                    } else {
+                        0.0
+                    }
+                };
+                match pref {
+                    Preference::Balanced => worth(others + 1, &with) - worth(others, &without),
+                    Preference::Selfish => worth(others + 1, &with) / (others + 1) as f64,
+                }
+            }
         };
         value - self.cost(robot, task)
     }
@@ -192,15 +216,29 @@ impl Instance {
         pref: Preference,
         known: impl Fn(TaskId) -> bool,
     ) -> Option<Option<TaskId>> {
+        self.best_move_held(robot, current, sizes, pref, &known, None)
+    }
+
+    /// [`Instance::best_move_among`], judged with the skills each coalition holds where
+    /// `held` has them.
+    fn best_move_held(
+        &self,
+        robot: RobotId,
+        current: Option<TaskId>,
+        sizes: &[usize],
+        pref: Preference,
+        known: &dyn Fn(TaskId) -> bool,
+        held: Option<Held<'_>>,
+    ) -> Option<Option<TaskId>> {
         let others = |task: TaskId| sizes[task.index()] - usize::from(current == Some(task));
-        if let Some(task) = self.best_response_among(robot, current, sizes, pref, known) {
+        if let Some(task) = self.best_response_held(robot, current, sizes, pref, known, held) {
             // The task beats where the robot is; the void beats it only when it scores < 0.
-            let s = self.score_among(robot, task, others(task), pref);
+            let s = self.score_among(robot, task, others(task), pref, held);
             let void_better = self.allows_void() && current.is_some() && s < 0.0;
             return Some(if void_better { None } else { Some(task) });
         }
         let here = current.map_or(self.outside_score(), |c| {
-            self.score_among(robot, c, others(c), pref)
+            self.score_among(robot, c, others(c), pref, held)
         });
         (self.allows_void() && current.is_some() && strictly_better(0.0, here)).then_some(None)
     }
@@ -255,17 +293,19 @@ impl Instance {
         sizes: &[usize],
         pref: Preference,
     ) -> Option<TaskId> {
-        self.best_response_among(robot, current, sizes, pref, |_| true)
+        self.best_response_held(robot, current, sizes, pref, &|_| true, None)
     }
 
-    /// [`Instance::best_response_given`] among the tasks `known` accepts.
-    fn best_response_among(
+    /// [`Instance::best_response_given`] among the tasks `known` accepts, judged with
+    /// the skills each coalition holds where `held` has them.
+    fn best_response_held(
         &self,
         robot: RobotId,
         current: Option<TaskId>,
         sizes: &[usize],
         pref: Preference,
-        known: impl Fn(TaskId) -> bool,
+        known: &dyn Fn(TaskId) -> bool,
+        held: Option<Held<'_>>,
     ) -> Option<TaskId> {
         let others = |task: TaskId| sizes[task.index()] - usize::from(current == Some(task));
         let mut best: Option<(TaskId, f64)> = None;
@@ -273,29 +313,48 @@ impl Instance {
             if Some(task) == current || others(task) >= self.capacity(task) || !known(task) {
                 continue;
             }
-            let s = self.score_among(robot, task, others(task), pref);
+            let s = self.score_among(robot, task, others(task), pref, held);
             if best.is_none_or(|(_, b)| s > b) {
                 best = Some((task, s));
             }
         }
         let (task, s) = best?;
         let here = current.map_or(self.outside_score(), |c| {
-            self.score_among(robot, c, others(c), pref)
+            self.score_among(robot, c, others(c), pref, held)
         });
         strictly_better(s, here).then_some(task)
     }
 
-    /// Whether `robot` has no strictly preferred move (Def. 3 for one robot).
+    /// Whether `robot` has no strictly preferred move (Def. 3 for one robot). In a game
+    /// with skill rules a move is judged by what the two coalitions hold with and
+    /// without the robot.
     pub fn is_satisfied(&self, assignment: &Assignment, robot: RobotId, pref: Preference) -> bool {
-        self.best_move(assignment, robot, pref).is_none()
+        let totals = self.skills_held(assignment);
+        self.satisfied(assignment, robot, pref, &totals)
+    }
+
+    /// [`Instance::is_satisfied`] with the coalitions' skills (`totals`) already summed.
+    fn satisfied(
+        &self,
+        assignment: &Assignment,
+        robot: RobotId,
+        pref: Preference,
+        totals: &[u64],
+    ) -> bool {
+        let current = assignment.task_of(robot);
+        let held = self.has_skill_rules().then_some(Held { totals, current });
+        self.best_move_held(robot, current, assignment.sizes(), pref, &|_| true, held)
+            .is_none()
     }
 
     /// Whether no robot strictly prefers another task (Def. 3), or the void where the
     /// instance allows it. In the paper's game unassigned robots always prefer a task,
-    /// so only a complete assignment can be stable.
+    /// so only a complete assignment can be stable. A team game may have no stable
+    /// assignment at all.
     pub fn is_stable(&self, assignment: &Assignment, pref: Preference) -> bool {
+        let totals = self.skills_held(assignment);
         self.robot_ids()
-            .all(|i| self.is_satisfied(assignment, i, pref))
+            .all(|i| self.satisfied(assignment, i, pref, &totals))
     }
 
     /// NS_rate: the fraction of robots that are satisfied (no strictly preferred move)
@@ -313,10 +372,35 @@ impl Instance {
     /// # Ok::<(), afg_game::GameError>(())
     /// ```
     pub fn ns_rate(&self, assignment: &Assignment, pref: Preference) -> f64 {
+        let totals = self.skills_held(assignment);
         let satisfied = self
             .robot_ids()
-            .filter(|&i| self.is_satisfied(assignment, i, pref))
+            .filter(|&i| self.satisfied(assignment, i, pref, &totals))
             .count();
         satisfied as f64 / self.num_robots() as f64
+    }
+}
+
+/// What every coalition holds of every skill (row-major M × S, each robot counted in
+/// its own task), and the task of the robot whose moves are judged.
+#[derive(Clone, Copy)]
+struct Held<'a> {
+    totals: &'a [u64],
+    current: Option<TaskId>,
+}
+
+impl Held<'_> {
+    /// What `task`'s coalition holds with `robot` in it, and without.
+    fn rows(self, instance: &Instance, robot: RobotId, task: TaskId) -> (Vec<u64>, Vec<u64>) {
+        let s = instance.num_skills();
+        let row = &self.totals[task.index() * s..][..s];
+        let own = instance.skills(robot).iter().map(|&q| u64::from(q));
+        if self.current == Some(task) {
+            let without = row.iter().zip(own).map(|(h, q)| h - q).collect();
+            (row.to_vec(), without)
+        } else {
+            let with = row.iter().zip(own).map(|(h, q)| h + q).collect();
+            (with, row.to_vec())
+        }
     }
 }
