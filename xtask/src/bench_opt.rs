@@ -47,11 +47,13 @@ pub struct BenchOptArgs {
     json: bool,
 }
 
-/// One size of the benchmark.
+/// One size of a benchmark, written `NxM`.
 #[derive(Clone, Copy, Debug, Serialize)]
-struct Case {
-    robots: usize,
-    tasks: usize,
+pub struct Case {
+    /// Robots N.
+    pub robots: usize,
+    /// Tasks M.
+    pub tasks: usize,
 }
 
 impl FromStr for Case {

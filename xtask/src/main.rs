@@ -5,8 +5,8 @@
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use xtask::{
-    bench, bench_opt, crash, datasets, grape_fig7, mission_study, realloc_study, regret_study,
-    run_manifests, scale, tables, train_all,
+    bench, bench_opt, bench_teams, crash, datasets, grape_fig7, mission_study, realloc_study,
+    regret_study, run_manifests, scale, tables, train_all,
 };
 
 /// See the `mimalloc` feature in Cargo.toml.
@@ -38,6 +38,8 @@ enum Command {
     BenchModels(bench::ModelBenchArgs),
     /// The exact optimum against OR-Tools on the same files, each solution certified.
     BenchOpt(bench_opt::BenchOptArgs),
+    /// The team-threshold game on scarce instances: afg's exact solver (bound and gap) beside CP-SAT and HiGHS, and every allocator that plays it.
+    BenchTeams(bench_teams::BenchTeamsArgs),
     /// The optimum re-solved after one event against from scratch; whole missions with allocators in the loop.
     BenchMission(bench::mission_loop::BenchMissionArgs),
     /// The learned policy (fast path, blocks, repair) against OPT, DA and greedy up to N = 100 000.
@@ -79,6 +81,7 @@ impl Command {
             Command::BenchBaselines(args) => bench::run(args),
             Command::BenchModels(args) => bench::run_models(args),
             Command::BenchOpt(args) => bench_opt::run(args),
+            Command::BenchTeams(args) => bench_teams::run(args),
             Command::BenchMission(args) => bench::mission_loop::run(args),
             Command::BenchScale(args) => scale::run(args),
             Command::ReallocStudy(args) => realloc_study::run(args),

@@ -282,6 +282,7 @@ impl DecentralisedDa {
             messages: outcome.traffic.messages,
             wall_time,
             seed: Some(self.seed),
+            bound: None,
         };
         Ok(DecentralisedRun {
             allocation: Allocation {

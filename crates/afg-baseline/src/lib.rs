@@ -117,6 +117,10 @@ pub struct AllocStats {
     pub wall_time: Duration,
     /// Seed of a randomised method.
     pub seed: Option<u64>,
+    /// An exact method's proven upper bound on every assignment's welfare: the
+    /// welfare itself when proven optimal, above it when stopped by a time limit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bound: Option<f64>,
 }
 
 mod seconds {

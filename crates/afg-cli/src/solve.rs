@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use afg_baseline::{Allocator, Method};
+use afg_baseline::{Allocator, Method, TeamOptimum};
 use afg_eval::solve::{Report, Row};
 use afg_game::fs::write_atomic_making_dirs;
 use afg_game::io::read_instances;
@@ -63,6 +63,11 @@ pub struct SolveArgs {
     /// Use only the first K instances (K ≥ 1).
     #[arg(long, value_parser = crate::at_least_one)]
     pub(crate) limit: Option<usize>,
+    /// The exact optimum (--method opt) stops after SECS seconds with the best
+    /// assignment found, its proven bound and the gap (the team games are NP-hard;
+    /// without a limit it runs until optimality is proven).
+    #[arg(long, value_name = "SECS")]
+    pub(crate) time_limit: Option<f64>,
     /// Seed of the randomised methods (random, da-decentralised).
     #[arg(long, default_value_t = 0)]
     pub(crate) seed: u64,
@@ -128,7 +133,21 @@ pub fn run(args: SolveArgs) -> Result<()> {
         };
         return crate::realloc::run(args.method, from, &instances, &out);
     }
+    crate::warn_unstaffable(&instances);
     let (name, method): (String, Box<dyn Allocator>) = match (&args.method, &args.model) {
+        (Some(Method::Opt), _) if args.time_limit.is_some() => {
+            let time_limit = args.time_limit.map(std::time::Duration::try_from_secs_f64);
+            let Some(Ok(limit)) = time_limit else {
+                anyhow::bail!("--time-limit takes a number of seconds, at least 0");
+            };
+            let exact = TeamOptimum {
+                time_limit: Some(limit),
+            };
+            ("opt".to_owned(), Box::new(exact))
+        }
+        _ if args.time_limit.is_some() => {
+            anyhow::bail!("--time-limit applies to the exact optimum (--method opt)")
+        }
         (Some(m), _) => (m.to_string(), m.allocator(args.seed)),
         (None, Some(dir)) => {
             let options = ModelOptions {

@@ -158,6 +158,15 @@ impl Instance {
         robot: RobotId,
         pref: Preference,
     ) -> Option<Option<TaskId>> {
+        if self.has_skill_rules() {
+            let totals = self.skills_held(assignment);
+            let current = assignment.task_of(robot);
+            let held = Some(Held {
+                totals: &totals,
+                current,
+            });
+            return self.best_move_held(robot, current, assignment.sizes(), pref, &|_| true, held);
+        }
         self.best_move_given(robot, assignment.task_of(robot), assignment.sizes(), pref)
     }
 

@@ -179,7 +179,9 @@ impl PyInstance {
     /// Builds and validates an instance from arrays: robot positions (N, 2), task
     /// positions (M, 2), rewards (M,), eps (M,), optional capacities (M,; -1 = none).
     #[new]
-    #[pyo3(signature = (robots, tasks, rewards, eps, capacities=None, beta=1.0, allow_void=false))]
+    #[pyo3(signature = (robots, tasks, rewards, eps, capacities=None, beta=1.0, allow_void=false, min_team=None, skills=None, requires=None))]
+    // Python's keyword arguments, one per field.
+    #[allow(clippy::too_many_arguments)]
     fn py_new(
         robots: PyReadonlyArray2<'_, f64>,
         tasks: PyReadonlyArray2<'_, f64>,
@@ -188,6 +190,9 @@ impl PyInstance {
         capacities: Option<IntVector<'_>>,
         beta: f64,
         allow_void: bool,
+        min_team: Option<Vec<i64>>,
+        skills: Option<Vec<Vec<i64>>>,
+        requires: Option<Vec<Vec<i64>>>,
     ) -> PyResult<Self> {
         let positions = points(&tasks, "tasks")?;
         let m = positions.len();
@@ -225,6 +230,31 @@ impl PyInstance {
             Instance::new(robots, tasks, beta)
         }
         .map_err(crate_error)?;
+        if min_team.is_none() && skills.is_none() && requires.is_none() {
+            return Ok(Self::new_from(inst));
+        }
+        let whole = |what: &str, v: i64| {
+            u32::try_from(v).map_err(|_| {
+                bad_input(format!(
+                    "{what} holds {v}: amounts are whole numbers, at least 0"
+                ))
+            })
+        };
+        let matrix = |what: &str, rows: Option<Vec<Vec<i64>>>| -> PyResult<Vec<Vec<u32>>> {
+            rows.unwrap_or_default()
+                .into_iter()
+                .map(|row| row.into_iter().map(|v| whole(what, v)).collect())
+                .collect()
+        };
+        let min_team = min_team
+            .unwrap_or_default()
+            .into_iter()
+            .map(|k| whole("min_team", k).map(|k| k as usize))
+            .collect::<PyResult<Vec<usize>>>()?;
+        let (skills, requires) = (matrix("skills", skills)?, matrix("requires", requires)?);
+        let inst = inst
+            .with_teams(min_team, &skills, &requires)
+            .map_err(crate_error)?;
         Ok(Self::new_from(inst))
     }
 
@@ -323,6 +353,30 @@ impl PyInstance {
         v.into_pyarray(py)
     }
 
+    /// Team thresholds `min_team`, shape (M,): a task earns nothing below it (1: the
+    /// paper's game).
+    #[getter]
+    fn min_team<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+        let v: Vec<i64> = (self.inner.task_ids())
+            .map(|j| self.inner.min_team(j) as i64)
+            .collect();
+        v.into_pyarray(py)
+    }
+
+    /// Each robot's amount of each skill, shape (N, S) (S = 0 without skills).
+    #[getter]
+    fn skills<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<i64>> {
+        let rows = self.inner.robot_ids().map(|i| self.inner.skills(i));
+        skill_matrix(py, rows, self.inner.num_robots(), self.inner.num_skills())
+    }
+
+    /// What each task requires of each skill, shape (M, S).
+    #[getter]
+    fn requires<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<i64>> {
+        let rows = self.inner.task_ids().map(|j| self.inner.requires(j));
+        skill_matrix(py, rows, self.inner.num_tasks(), self.inner.num_skills())
+    }
+
     /// The distance penalty beta.
     #[getter]
     fn beta(&self) -> f64 {
@@ -379,6 +433,19 @@ impl PyInstance {
 fn read_jsonl(path: PathBuf) -> PyResult<Vec<PyInstance>> {
     let instances = afg_game::io::read_instances(&path).map_err(crate_error)?;
     Ok(instances.into_iter().map(PyInstance::new_from).collect())
+}
+
+/// A (rows, S) int64 array of skill amounts.
+fn skill_matrix<'py, 'a>(
+    py: Python<'py>,
+    rows: impl Iterator<Item = &'a [u32]>,
+    n: usize,
+    s: usize,
+) -> Bound<'py, PyArray2<i64>> {
+    let flat: Vec<i64> = rows.flatten().map(|&q| i64::from(q)).collect();
+    numpy::ndarray::Array2::from_shape_vec((n, s), flat)
+        .expect("one row of S amounts each")
+        .into_pyarray(py)
 }
 
 /// Writes instances as a JSON Lines dataset (atomically).

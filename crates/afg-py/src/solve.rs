@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::str::FromStr;
 use std::time::Instant;
 
-use afg_baseline::{AllocStats, Allocator, Method};
+use afg_baseline::{Allocator, Method};
 use afg_eval::scorecard::{Scorecard, scorecard};
 use afg_eval::solve::Row;
 use afg_game::Preference;
@@ -28,15 +28,21 @@ pub struct SolveResult {
     stats: Vec<(String, f64)>,
 }
 
-fn alloc_stats(s: &AllocStats) -> Vec<(String, f64)> {
-    [
+fn alloc_stats(row: &Row) -> Vec<(String, f64)> {
+    let s = &row.stats;
+    let mut stats: Vec<(String, f64)> = [
         ("iterations", s.iterations as f64),
         ("rounds", s.rounds as f64),
         ("messages", s.messages as f64),
         ("wall_time_s", s.wall_time.as_secs_f64()),
     ]
     .map(|(k, v)| (k.to_owned(), v))
-    .to_vec()
+    .to_vec();
+    if let (Some(bound), Some(gap)) = (s.bound, row.gap) {
+        stats.push(("bound".into(), bound));
+        stats.push(("gap".into(), gap));
+    }
+    stats
 }
 
 #[pymethods]
@@ -218,7 +224,7 @@ fn run(py: Python<'_>, instance: &PyInstance, allocator: &dyn Allocator) -> PyRe
             Ok::<_, afg_eval::EvalError>((row, assignment, card))
         })
         .map_err(bad_input)?;
-    let mut stats = alloc_stats(&row.stats);
+    let mut stats = alloc_stats(&row);
     // The crates' whole part of the call (the method, the optimum it is scored
     // against, and its stability and NS rates), for measuring what the binding adds.
     stats.push(("core_s".into(), start.elapsed().as_secs_f64()));
@@ -235,16 +241,32 @@ fn method(name: &str) -> PyResult<Method> {
 
 /// Solves one instance by a built-in method (`opt`, `da`, `da-decentralised`,
 /// `da-balanced`, `greedy`, `nearest`, `random`, `blind`) or a trained model (a run
-/// directory or a loaded `Model`), scored against the exact optimum.
+/// directory or a loaded `Model`), scored against the exact optimum. `time_limit`
+/// (seconds, `opt` only) stops the exact search with the best found; `stats` then
+/// has its proven `bound` and `gap`, as for every exact solve of a team game.
 #[pyfunction]
-#[pyo3(signature = (instance, method=None, model=None, seed=0))]
+#[pyo3(signature = (instance, method=None, model=None, seed=0, time_limit=None))]
 fn solve(
     py: Python<'_>,
     instance: &PyInstance,
     method: Option<&str>,
     model: Option<&Bound<'_, PyAny>>,
     seed: u64,
+    time_limit: Option<f64>,
 ) -> PyResult<SolveResult> {
+    if let Some(seconds) = time_limit {
+        if method != Some("opt") {
+            return Err(crate::bad_input(
+                "time_limit applies to method=\"opt\" only",
+            ));
+        }
+        let limit = std::time::Duration::try_from_secs_f64(seconds)
+            .map_err(|_| crate::bad_input("time_limit is a number of seconds, at least 0"))?;
+        let exact = afg_baseline::TeamOptimum {
+            time_limit: Some(limit),
+        };
+        return run(py, instance, &exact);
+    }
     match (method, model) {
         (Some(name), None) => run(py, instance, self::method(name)?.allocator(seed).as_ref()),
         (None, Some(model)) => match model.cast::<PyModel>() {

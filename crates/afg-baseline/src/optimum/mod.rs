@@ -305,16 +305,7 @@ impl Allocator for Optimum {
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
         if instance.has_teams() {
-            let (solution, wall_time) = timed(|| TeamOptimum::default().solve(instance));
-            let solution = solution?;
-            return Ok(Allocation {
-                assignment: solution.assignment,
-                stats: AllocStats {
-                    iterations: solution.nodes,
-                    wall_time,
-                    ..AllocStats::default()
-                },
-            });
+            return TeamOptimum::default().allocate(instance);
         }
         let (solution, wall_time) = timed(|| transport::solve(instance));
         Ok(Allocation {

@@ -23,7 +23,7 @@ use afg_game::{Assignment, Instance, TaskId};
 
 use super::assignment_of;
 use super::transport::{self, Column, Slots, Solution};
-use crate::AllocError;
+use crate::{AllocError, AllocStats, Allocation, Allocator, timed};
 
 /// The exact optimum of a game with team thresholds (or the paper's game), with a
 /// proven upper bound: branch and bound over which tasks are staffed (see the module
@@ -183,6 +183,28 @@ impl TeamOptimum {
             welfare: search.best_welfare,
             assignment: search.best,
             nodes: search.nodes,
+        })
+    }
+}
+
+/// `opt` with a time limit: the best assignment found, its bound in
+/// [`AllocStats::bound`] and the nodes solved in [`AllocStats::iterations`].
+impl Allocator for TeamOptimum {
+    fn name(&self) -> String {
+        "opt".into()
+    }
+
+    fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
+        let (solution, wall_time) = timed(|| self.solve(instance));
+        let solution = solution?;
+        Ok(Allocation {
+            stats: AllocStats {
+                iterations: solution.nodes,
+                wall_time,
+                bound: Some(solution.bound),
+                ..AllocStats::default()
+            },
+            assignment: solution.assignment,
         })
     }
 }

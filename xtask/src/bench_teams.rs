@@ -1,0 +1,397 @@
+//! `cargo xtask bench-teams`: the team-threshold game on scarce instances — afg's exact
+//! solver (proven optimum, or best found, bound and gap under a time limit), OR-Tools
+//! CP-SAT and HiGHS on the same files at their budgets, and every allocator that plays
+//! the game, as a share of the best proven bound.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use afg_baseline::{AllocError, Method, TeamOptimum};
+use afg_game::fs::write_atomic;
+use afg_game::io::dataset_to_jsonl;
+use afg_game::{Assignment, GeneratorKnobs, Instance, TaskId};
+use anyhow::{Context, Result, bail, ensure};
+use clap::Args;
+use serde::{Deserialize, Serialize};
+
+use crate::bench_opt::Case;
+
+/// The options of `cargo xtask bench-teams`.
+#[derive(Args)]
+pub struct BenchTeamsArgs {
+    /// Sizes as N x M; thresholds uniform in [N/M, 2N/M] (scarce: they add up to
+    /// about 1.5 N, so not every task can be staffed).
+    #[arg(long, value_delimiter = ',', default_values = ["100x10", "300x20", "1000x50"])]
+    cases: Vec<Case>,
+    /// Instances per size (seeds seed, seed + 1, …).
+    #[arg(long, default_value_t = 3)]
+    instances: usize,
+    /// Seed of the first instance: `afg gen --robots N --tasks M --min-team N/M,2N/M --seed S`.
+    #[arg(long, default_value_t = 54)]
+    seed: u64,
+    /// afg's time limit per instance, seconds.
+    #[arg(long, default_value_t = 10.0)]
+    time_limit: f64,
+    /// A Python with ortools, highspy and numpy, for the CP-SAT and HiGHS columns (e.g.
+    /// after `python3 -m venv .venv-bench && .venv-bench/bin/pip install ortools
+    /// highspy numpy`, pass `.venv-bench/bin/python`). Without it they are left out.
+    #[arg(long)]
+    python: Option<PathBuf>,
+    /// The peers' time budgets, seconds.
+    #[arg(long, value_delimiter = ',', default_values_t = [1.0, 60.0])]
+    budgets: Vec<f64>,
+    /// Threads of CP-SAT's and HiGHS' own parallel search (default: every core).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Folder for the instance files (kept); default: a temporary folder.
+    #[arg(long)]
+    dir: Option<PathBuf>,
+    /// Print JSON lines (one per instance) instead of the Markdown tables.
+    #[arg(long)]
+    json: bool,
+}
+
+/// The allocators that play the threshold game (the auction and the learned models
+/// refuse it; see docs/teams.md).
+const ALLOCATORS: [Method; 6] = [
+    Method::Greedy,
+    Method::Nearest,
+    Method::Da,
+    Method::DaDecentralised,
+    Method::DaBalanced,
+    Method::Random,
+];
+
+/// One instance's measurements.
+#[derive(Serialize)]
+struct Row {
+    robots: usize,
+    tasks: usize,
+    seed: u64,
+    afg: Exact,
+    peers: Vec<Peer>,
+    /// Each allocator's welfare and seconds; `None` where it found no stable partition.
+    allocators: Vec<(String, Option<f64>, f64)>,
+    /// The lowest proven bound of all exact solvers.
+    best_bound: f64,
+    /// The best welfare of all exact solvers.
+    best_welfare: f64,
+}
+
+/// What afg's exact solver did.
+#[derive(Serialize)]
+struct Exact {
+    welfare: f64,
+    bound: f64,
+    proven: bool,
+    nodes: u64,
+    seconds: f64,
+    peak_rss_mib: Option<f64>,
+}
+
+/// What a peer did at one budget.
+#[derive(Serialize)]
+struct Peer {
+    solver: String,
+    budget: f64,
+    status: String,
+    /// The welfare of its assignment, computed by afg (`None`: none found).
+    welfare: Option<f64>,
+    bound: f64,
+    seconds: f64,
+}
+
+/// Runs `cargo xtask bench-teams`.
+pub fn run(args: BenchTeamsArgs) -> Result<()> {
+    let dir = match &args.dir {
+        Some(d) => d.clone(),
+        None => std::env::temp_dir().join(format!("afg-bench-teams-{}", std::process::id())),
+    };
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    if let Some(python) = &args.python {
+        let ok = Command::new(python)
+            .args(["-c", "import ortools, highspy, numpy"])
+            .status()
+            .with_context(|| format!("running {}", python.display()))?;
+        ensure!(
+            ok.success(),
+            "{} cannot import ortools, highspy and numpy: install them with `{0} -m pip install ortools highspy numpy`",
+            python.display()
+        );
+    }
+    let total = (args.cases.len() * args.instances) as u64;
+    let bar = afg_eval::report::progress(total, "bench-teams");
+    let mut rows = Vec::new();
+    for &case in &args.cases {
+        for k in 0..args.instances as u64 {
+            bar.set_message(format!(
+                "bench-teams N = {} M = {}",
+                case.robots, case.tasks
+            ));
+            let row = measure(case, args.seed + k, &args, &dir)?;
+            if args.json {
+                bar.suspend(|| println!("{}", serde_json::to_string(&row).expect("a row")));
+            }
+            rows.push(row);
+            bar.inc(1);
+        }
+    }
+    bar.finish_and_clear();
+    if !args.json {
+        print!("{}", markdown(&rows, &args));
+    }
+    Ok(())
+}
+
+/// The scarce threshold instance of `case` and `seed`.
+pub fn scarce(case: Case, seed: u64) -> Result<Instance> {
+    let per_task = (case.robots / case.tasks).max(1);
+    let knobs = GeneratorKnobs {
+        min_team: Some((per_task, 2 * per_task)),
+        ..GeneratorKnobs::default()
+    };
+    Ok(knobs.config(case.robots, case.tasks, seed)?.generate()?)
+}
+
+fn measure(case: Case, seed: u64, args: &BenchTeamsArgs, dir: &Path) -> Result<Row> {
+    let inst = scarce(case, seed)?;
+    let file = dir.join(format!(
+        "teams_n{}_m{}_seed{seed}.jsonl",
+        case.robots, case.tasks
+    ));
+    write_atomic(
+        &file,
+        dataset_to_jsonl(std::slice::from_ref(&inst)).as_bytes(),
+    )?;
+    crate::bench::reset_peak_rss();
+    let limit = Duration::try_from_secs_f64(args.time_limit).context("--time-limit")?;
+    let start = Instant::now();
+    let one_core = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
+    let exact = one_core.install(|| {
+        TeamOptimum {
+            time_limit: Some(limit),
+        }
+        .solve(&inst)
+    })?;
+    let afg = Exact {
+        seconds: start.elapsed().as_secs_f64(),
+        peak_rss_mib: crate::bench::peak_rss_mib(),
+        welfare: exact.welfare,
+        bound: exact.bound,
+        proven: exact.proven,
+        nodes: exact.nodes,
+    };
+    let mut peers = Vec::new();
+    if let Some(python) = &args.python {
+        for solver in ["cpsat", "highs"] {
+            for &budget in &args.budgets {
+                peers.push(peer(python, solver, budget, args.threads, &file, &inst)?);
+            }
+        }
+    }
+    let allocators = ALLOCATORS
+        .iter()
+        .map(|&method| {
+            let start = Instant::now();
+            let welfare = match method.allocator(seed).allocate(&inst) {
+                Ok(out) => Some(inst.welfare(&out.assignment)),
+                Err(AllocError::NotConverged { .. }) => None,
+                Err(e) => return Err(e.into()),
+            };
+            Ok((
+                method.label().to_owned(),
+                welfare,
+                start.elapsed().as_secs_f64(),
+            ))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let best_bound = peers.iter().map(|p| p.bound).fold(afg.bound, f64::min);
+    let best_welfare = peers
+        .iter()
+        .filter_map(|p| p.welfare)
+        .fold(afg.welfare, f64::max);
+    ensure!(
+        best_welfare <= best_bound + 1e-6 * best_bound.abs().max(1.0),
+        "N = {} M = {} seed {seed}: a solver's welfare {best_welfare} is above a proven bound {best_bound}",
+        case.robots,
+        case.tasks
+    );
+    Ok(Row {
+        robots: case.robots,
+        tasks: case.tasks,
+        seed,
+        afg,
+        peers,
+        allocators,
+        best_bound,
+        best_welfare,
+    })
+}
+
+/// Runs `scripts/teams_milp.py` with `solver` at `budget` seconds on `file`.
+fn peer(
+    python: &Path,
+    solver: &str,
+    budget: f64,
+    threads: Option<usize>,
+    file: &Path,
+    inst: &Instance,
+) -> Result<Peer> {
+    #[derive(Deserialize)]
+    struct Solved {
+        status: String,
+        seconds: f64,
+        bound: f64,
+        tasks: Option<Vec<i64>>,
+    }
+    let out = file.with_extension(format!("{solver}-{budget}.json"));
+    let script = crate::repo_root().join("scripts").join("teams_milp.py");
+    let threads =
+        threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from));
+    let status = Command::new(python)
+        .arg(&script)
+        .args([file, &out])
+        .args(["--solver", solver, "--time-limit", &budget.to_string()])
+        .args(["--threads", &threads.to_string()])
+        .stdout(std::process::Stdio::null())
+        .status()?;
+    if !status.success() {
+        bail!(
+            "{} --solver {solver} failed on {}",
+            script.display(),
+            file.display()
+        );
+    }
+    let mut solved: Vec<Solved> = serde_json::from_slice(&std::fs::read(&out)?)?;
+    let solved = solved.pop().context("the peer returned no result")?;
+    let welfare = match solved.tasks {
+        Some(tasks) => {
+            let tasks = tasks
+                .iter()
+                .map(|&j| u32::try_from(j).ok().map(TaskId))
+                .collect();
+            Some(inst.welfare(&Assignment::from_tasks(inst, tasks)?))
+        }
+        None => None,
+    };
+    Ok(Peer {
+        solver: solver.to_owned(),
+        budget,
+        status: solved.status,
+        welfare,
+        bound: solved.bound,
+        seconds: solved.seconds,
+    })
+}
+
+/// Means over a case's rows.
+fn mean(rows: &[&Row], f: impl Fn(&Row) -> f64) -> f64 {
+    rows.iter().map(|r| f(r)).sum::<f64>() / rows.len() as f64
+}
+
+/// `100 · welfare / bound` as printed.
+fn percent(welfare: f64, bound: f64) -> f64 {
+    100.0 * welfare / bound
+}
+
+fn markdown(rows: &[Row], args: &BenchTeamsArgs) -> String {
+    let cases: Vec<Vec<&Row>> = args
+        .cases
+        .iter()
+        .map(|c| {
+            rows.iter()
+                .filter(|r| (r.robots, r.tasks) == (c.robots, c.tasks))
+                .collect()
+        })
+        .collect();
+    let k = args.instances;
+    let mut md = format!(
+        "Exact solvers ({k} scarce instances per size; % of the best proven bound, mean; \
+         proven: instances proven optimal; afg with a {}s limit on one core):\n\n| N | M | afg time | afg proven | afg % of bound | afg nodes | afg peak RSS |",
+        args.time_limit
+    );
+    let peer_names: Vec<(String, f64)> = rows
+        .first()
+        .map(|r| {
+            r.peers
+                .iter()
+                .map(|p| (p.solver.clone(), p.budget))
+                .collect()
+        })
+        .unwrap_or_default();
+    for (solver, budget) in &peer_names {
+        let name = if solver == "cpsat" { "CP-SAT" } else { "HiGHS" };
+        md += &format!(" {name} {budget}s: proven | % of bound | time |");
+    }
+    md += "\n|---|---|---|---|---|---|---|";
+    md += &"---|---|---|".repeat(peer_names.len());
+    md.push('\n');
+    for rows in cases.iter().filter(|r| !r.is_empty()) {
+        let r0 = rows[0];
+        let proven = rows.iter().filter(|r| r.afg.proven).count();
+        md += &format!(
+            "| {} | {} | {:.3} s | {proven}/{k} | {:.3} | {:.0} | {} |",
+            r0.robots,
+            r0.tasks,
+            mean(rows, |r| r.afg.seconds),
+            mean(rows, |r| percent(r.afg.welfare, r.best_bound)),
+            mean(rows, |r| r.afg.nodes as f64),
+            r0.afg
+                .peak_rss_mib
+                .map_or("—".into(), |m| format!("{m:.0} MiB")),
+        );
+        for (p, _) in peer_names.iter().enumerate() {
+            let proven = rows
+                .iter()
+                .filter(|r| r.peers[p].status == "optimal")
+                .count();
+            let found = rows.iter().all(|r| r.peers[p].welfare.is_some());
+            let share = if found {
+                format!(
+                    "{:.3}",
+                    mean(rows, |r| percent(
+                        r.peers[p].welfare.unwrap_or(0.0),
+                        r.best_bound
+                    ))
+                )
+            } else {
+                "none found".into()
+            };
+            md += &format!(
+                " {proven}/{k} | {share} | {:.2} s |",
+                mean(rows, |r| r.peers[p].seconds)
+            );
+        }
+        md.push('\n');
+    }
+    md += "\nAllocators (% of the best proven bound, mean; time per instance):\n\n| N | M |";
+    let names: Vec<&str> = ALLOCATORS.iter().map(|m| m.label()).collect();
+    for name in &names {
+        md += &format!(" {name} |");
+    }
+    md += "\n|---|---|";
+    md += &"---|".repeat(names.len());
+    md.push('\n');
+    for rows in cases.iter().filter(|r| !r.is_empty()) {
+        md += &format!("| {} | {} |", rows[0].robots, rows[0].tasks);
+        for a in 0..names.len() {
+            let settled = rows.iter().filter(|r| r.allocators[a].1.is_some()).count();
+            let cell = if settled == rows.len() {
+                format!(
+                    "{:.1} % ({:.1} ms)",
+                    mean(rows, |r| percent(
+                        r.allocators[a].1.unwrap_or(0.0),
+                        r.best_bound
+                    )),
+                    1e3 * mean(rows, |r| r.allocators[a].2)
+                )
+            } else {
+                format!("no stable partition on {}/{k}", rows.len() - settled)
+            };
+            md += &format!(" {cell} |");
+        }
+        md.push('\n');
+    }
+    md
+}
