@@ -60,7 +60,10 @@ fn team_files() -> Result<Vec<(PathBuf, String)>> {
         .map(|c| serde_json::to_string(c).expect("a record"))
         .collect();
     Ok(vec![
-        (dir.join("teams-thresholds.jsonl"), dataset_to_jsonl(&instances)),
+        (
+            dir.join("teams-thresholds.jsonl"),
+            dataset_to_jsonl(&instances),
+        ),
         (
             dir.join("teams-thresholds.optima.json"),
             format!("[\n{}\n]\n", optima.join(",\n")),

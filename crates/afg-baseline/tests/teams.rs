@@ -57,6 +57,49 @@ fn the_team_optimum_equals_brute_force_on_small_instances() {
     }
 }
 
+/// `inst` with thresholds (every second case) and S = 1..=3 binary skills, each task
+/// requiring 0..=2 of each.
+fn with_skills(rng: &mut ChaCha8Rng, inst: Instance, case: usize) -> Instance {
+    let (n, m) = (inst.num_robots(), inst.num_tasks());
+    let s = rng.random_range(1..=3);
+    let min_team = if case.is_multiple_of(2) {
+        (0..m).map(|_| rng.random_range(1..=n.min(4))).collect()
+    } else {
+        Vec::new()
+    };
+    let skills: Vec<Vec<u32>> = (0..n)
+        .map(|_| (0..s).map(|_| u32::from(rng.random_bool(0.5))).collect())
+        .collect();
+    let requires: Vec<Vec<u32>> = (0..m)
+        .map(|_| (0..s).map(|_| rng.random_range(0..=2)).collect())
+        .collect();
+    inst.with_teams(min_team, &skills, &requires).unwrap()
+}
+
+#[test]
+fn the_skill_optimum_equals_brute_force_on_small_instances() {
+    let mut rng = ChaCha8Rng::seed_from_u64(55);
+    let mut pair_branches = 0;
+    for case in 0..300 {
+        let plain = if case % 3 == 2 {
+            small_void_instance(&mut rng, case)
+        } else {
+            small_instance(&mut rng, case)
+        };
+        let inst = with_skills(&mut rng, plain, case);
+        let best = TeamOptimum::default().solve(&inst).unwrap();
+        let brute = brute_force(&inst);
+        let tol = 1e-9 * brute.abs().max(1.0);
+        assert!(best.proven, "case {case}");
+        assert!((best.welfare - brute).abs() < tol, "case {case}: {} vs {brute}", best.welfare);
+        assert!((inst.welfare(&best.assignment) - brute).abs() < tol, "case {case}");
+        assert!((best.bound - brute).abs() < tol, "case {case}: bound {}", best.bound);
+        pair_branches += usize::from(best.nodes > 3);
+    }
+    // Many searches went past the root and its dive.
+    assert!(pair_branches > 30, "{pair_branches}");
+}
+
 #[test]
 fn two_robots_needed_by_hand() {
     // Task 0 at the origin needs 2 robots and pays r = 4 (eps = 2: F(2) = 4 log2 3);
@@ -138,7 +181,36 @@ fn the_same_instance_gives_the_same_answer() {
 }
 
 #[test]
-fn allocators_play_thresholds_validly_or_refuse_skills() {
+fn a_skill_by_hand_picks_the_robot_that_holds_it() {
+    // One task needing two robots and one unit of skill 0; robot 2 holds it but is
+    // further than robots 0 and 1. The optimum takes robots 0 (or 1) and 2.
+    let task = Task {
+        position: Point::new(0.0, 0.0),
+        reward: 10.0,
+        eps: 2.0,
+        capacity: Some(2),
+    };
+    let spare = Task {
+        position: Point::new(0.0, 1.0),
+        reward: 0.0,
+        eps: 2.0,
+        capacity: None,
+    };
+    let robots = vec![Point::new(0.1, 0.0), Point::new(0.2, 0.0), Point::new(0.5, 0.0)];
+    let inst = Instance::new(robots, vec![task, spare], 1.0)
+        .unwrap()
+        .with_teams(vec![2, 1], &[vec![0], vec![0], vec![1]], &[vec![1], vec![]])
+        .unwrap();
+    let best = TeamOptimum::default().solve(&inst).unwrap();
+    let tasks = best.assignment.tasks();
+    assert_eq!((tasks[0], tasks[2]), (Some(TaskId(0)), Some(TaskId(0))));
+    assert_eq!(tasks[1], Some(TaskId(1)));
+    let by_hand = 10.0 * 3f64.log2() - 0.1 - 0.5 - (0.2f64.powi(2) + 1.0).sqrt();
+    assert!((best.welfare - by_hand).abs() < 1e-12);
+}
+
+#[test]
+fn allocators_play_thresholds_validly_and_skills_or_refuse() {
     let inst = scarce(40, 5, 2);
     let best = TeamOptimum::default().solve(&inst).unwrap().welfare;
     let thresholds = inst.task_ids().map(|j| inst.min_team(j)).collect();
@@ -159,7 +231,10 @@ fn allocators_play_thresholds_validly_or_refuse_skills() {
         match allocator.allocate(&skills) {
             Ok(a) => {
                 assert!(
-                    matches!(method, Method::Nearest | Method::Random | Method::Blind),
+                    matches!(
+                        method,
+                        Method::Opt | Method::Nearest | Method::Random | Method::Blind
+                    ),
                     "{method} played a skill game"
                 );
                 skills.check(&a.assignment).unwrap();

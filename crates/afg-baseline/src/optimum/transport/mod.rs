@@ -81,17 +81,29 @@ pub(super) fn task_columns(inst: &Instance) -> Vec<Column> {
 
 /// Solves the problem of `inst`'s robots and costs with other `columns` (one per task,
 /// then the void's where the instance allows it) exactly, from `warm` prices (or from
-/// its subsamples' where there are none).
-pub(super) fn solve_columns(inst: &Instance, columns: &[Column], warm: Option<&[f64]>) -> Solution {
+/// its subsamples' where there are none), each `(robot, column, delta)` of `adjust`
+/// added to that robot's cost there (without subsamples when there are any).
+pub(super) fn solve_columns(
+    inst: &Instance,
+    columns: &[Column],
+    warm: Option<&[f64]>,
+    adjust: &[(usize, usize, f64)],
+) -> Solution {
     let coarse;
     let warm = match warm {
         Some(prices) => Some(prices),
-        None => {
+        None if adjust.is_empty() => {
             coarse = coarse_prices(inst, columns, FACTOR);
             coarse.as_deref()
         }
+        None => None,
     };
-    Flow::solved(Level::new(inst, columns, 1, 0), warm).into_solution()
+    let mut level = Level::new(inst, columns, 1, 0);
+    let m = level.m();
+    for &(robot, column, delta) in adjust {
+        level.costs[robot * m + column] += delta;
+    }
+    Flow::solved(level, warm).into_solution()
 }
 
 /// The solved residual state of `inst` (from its subsample's prices), to keep, with

@@ -1,0 +1,357 @@
+//! The branch and bound's nodes: what a node decides, its relaxation (a concave game
+//! for the transport solver), and how it branches.
+
+use std::cmp::Ordering;
+
+use afg_game::{Assignment, Instance, RobotId, TaskId};
+
+use super::super::assignment_of;
+use super::super::transport::{self, Column, Slots, Solution};
+
+/// What a node decides of one task.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Decision {
+    /// Not decided: its value replaced by its envelope.
+    Open,
+    /// Staffed: it earns (at least k members, and the skills it requires).
+    Staffed,
+    /// Unstaffed: it earns nothing (in a game without skills, at most k − 1 members).
+    Unstaffed,
+}
+
+/// A robot fixed at a task (`true`) or kept out of it (`false`).
+type Pair = (RobotId, TaskId, bool);
+
+/// A node: its decisions, its relaxation's bound, and where that relaxation put every
+/// robot (the branching is read from it).
+#[derive(Clone)]
+pub(super) struct Node {
+    decisions: Vec<Decision>,
+    pairs: Vec<Pair>,
+    pub(super) bound: f64,
+    prices: Vec<f64>,
+    assignment: Assignment,
+}
+
+impl PartialEq for Node {
+    fn eq(&self, other: &Self) -> bool {
+        self.bound.total_cmp(&other.bound) == Ordering::Equal
+    }
+}
+impl Eq for Node {}
+impl PartialOrd for Node {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+impl Ord for Node {
+    fn cmp(&self, other: &Self) -> Ordering {
+        self.bound.total_cmp(&other.bound)
+    }
+}
+
+/// Where a node branches.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Branch {
+    /// An open task between 0 and its threshold: staffed, or not.
+    Task(usize),
+    /// An earning task short of a skill, and the cheapest robot free to bring it: it
+    /// joins the task, or it may not.
+    Pair(RobotId, TaskId),
+}
+
+/// The search's data: the instance, the bonus that forces a staffed task's first
+/// members (and, four times over, a fixed robot's place), and the best found so far.
+pub(super) struct Search<'a> {
+    instance: &'a Instance,
+    bonus: f64,
+    best: Assignment,
+    best_welfare: f64,
+    nodes: u64,
+}
+
+impl<'a> Search<'a> {
+    pub(super) fn new(instance: &'a Instance) -> Self {
+        let max_cost = instance
+            .robot_ids()
+            .flat_map(|i| instance.task_ids().map(move |j| instance.cost(i, j)))
+            .fold(0.0, f64::max);
+        let max_reward = instance
+            .tasks()
+            .iter()
+            .map(|t| t.reward)
+            .fold(0.0, f64::max);
+        Search {
+            instance,
+            // More than any other member or move is worth: a staffed task's first k
+            // members come before anything else.
+            bonus: 2.0 * (max_cost + max_reward) + 1.0,
+            best: Assignment::unassigned(instance.num_robots(), instance.num_tasks()),
+            best_welfare: f64::NEG_INFINITY,
+            nodes: 0,
+        }
+    }
+
+    /// The best assignment, its welfare, and the nodes solved.
+    pub(super) fn into_best(self) -> (Assignment, f64, u64) {
+        (self.best, self.best_welfare, self.nodes)
+    }
+
+    /// The root's decisions: the tasks no team can staff are unstaffed.
+    pub(super) fn root_decisions(&self) -> Vec<Decision> {
+        let mut decisions = vec![Decision::Open; self.instance.num_tasks()];
+        for j in self.instance.unstaffable_tasks() {
+            decisions[j.index()] = Decision::Unstaffed;
+        }
+        decisions
+    }
+
+    /// Whether a node of this bound cannot beat the best found (beyond rounding).
+    pub(super) fn closes(&self, bound: f64) -> bool {
+        bound <= self.best_welfare + 1e-9 * self.best_welfare.abs().max(1.0)
+    }
+
+    /// The largest coalition an unstaffed task may hold: below its threshold where
+    /// only the threshold can keep it from earning, its capacity where skills can.
+    fn unstaffed_room(&self, j: TaskId) -> usize {
+        let inst = self.instance;
+        if inst.requires(j).iter().any(|&r| r > 0) {
+            inst.capacity(j)
+        } else {
+            inst.capacity(j).min(inst.min_team(j) - 1)
+        }
+    }
+
+    /// Whether task j can still get every skill it requires from the robots free to
+    /// join it (not kept out of it, not fixed elsewhere).
+    fn skills_reachable(&self, j: TaskId, pairs: &[Pair]) -> bool {
+        let inst = self.instance;
+        if inst.num_skills() == 0 {
+            return true;
+        }
+        let free = |i: RobotId| {
+            !pairs
+                .iter()
+                .any(|&(r, t, fixed)| r == i && (if fixed { t != j } else { t == j }))
+        };
+        let mut held = vec![0u64; inst.num_skills()];
+        for i in inst.robot_ids().filter(|&i| free(i)) {
+            for (h, &q) in held.iter_mut().zip(inst.skills(i)) {
+                *h += u64::from(q);
+            }
+        }
+        inst.skills_met(j, &held)
+    }
+
+    /// The columns of a node's relaxation; `None` where no assignment meets its
+    /// decisions (staffed thresholds above N, a staffed task that can no longer get its
+    /// skills, or too little room in all). An open task that can no longer get its
+    /// skills is decided unstaffed.
+    fn columns(&self, decisions: &mut [Decision], pairs: &[Pair]) -> Option<Vec<Column>> {
+        let inst = self.instance;
+        for j in inst.task_ids() {
+            if decisions[j.index()] != Decision::Unstaffed && !self.skills_reachable(j, pairs) {
+                if decisions[j.index()] == Decision::Staffed {
+                    return None;
+                }
+                decisions[j.index()] = Decision::Unstaffed;
+            }
+        }
+        let staffed: usize = inst
+            .task_ids()
+            .filter(|j| decisions[j.index()] == Decision::Staffed)
+            .map(|j| inst.min_team(j))
+            .sum();
+        if staffed > inst.num_robots() {
+            return None;
+        }
+        let mut room = 0usize;
+        let mut columns: Vec<Column> = inst
+            .task_ids()
+            .map(|j| {
+                let (value, k) = (inst.value_function(j), inst.min_team(j));
+                let (value, capacity) = match decisions[j.index()] {
+                    Decision::Open => (Slots::envelope(value, k, 0.0), inst.capacity(j)),
+                    Decision::Staffed => (Slots::envelope(value, k, self.bonus), inst.capacity(j)),
+                    Decision::Unstaffed => (Slots::worthless(value), self.unstaffed_room(j)),
+                };
+                room = room.saturating_add(capacity);
+                Column::Task { value, capacity }
+            })
+            .collect();
+        if inst.allows_void() {
+            columns.push(Column::Void);
+        } else if room < inst.num_robots() {
+            return None;
+        }
+        Some(columns)
+    }
+
+    /// Solves a node's relaxation (warm from its parent's prices), offers its
+    /// assignment to the best found, and returns it; `None` if infeasible.
+    pub(super) fn node(
+        &mut self,
+        mut decisions: Vec<Decision>,
+        pairs: Vec<Pair>,
+        parent: Option<&Node>,
+    ) -> Option<Node> {
+        let inst = self.instance;
+        let columns = self.columns(&mut decisions, &pairs)?;
+        let warm = parent.map(|p| {
+            let mut prices = p.prices.clone();
+            for (j, (&now, &before)) in decisions.iter().zip(&p.decisions).enumerate() {
+                match (now, before) {
+                    (Decision::Staffed, Decision::Open) => prices[j] += self.bonus,
+                    (Decision::Unstaffed, Decision::Open) => prices[j] = 0.0,
+                    _ => {}
+                }
+            }
+            prices
+        });
+        let fix = 4.0 * self.bonus;
+        let adjust: Vec<(usize, usize, f64)> = pairs
+            .iter()
+            .map(|&(i, j, fixed)| (i.index(), j.index(), if fixed { -fix } else { fix }))
+            .collect();
+        let Solution {
+            task_of, prices, ..
+        } = transport::solve_columns(inst, &columns, warm.as_deref(), &adjust);
+        self.nodes += 1;
+        let assignment = assignment_of(inst, &task_of);
+        if pairs
+            .iter()
+            .any(|&(i, j, fixed)| (assignment.task_of(i) == Some(j)) != fixed)
+        {
+            return None; // no assignment keeps every robot where the node fixed it
+        }
+        let mut bound = -inst
+            .robot_ids()
+            .map(|i| assignment.task_of(i).map_or(0.0, |j| inst.cost(i, j)))
+            .sum::<f64>();
+        for j in inst.task_ids() {
+            let Column::Task { value, .. } = columns[j.index()] else {
+                unreachable!("tasks come first")
+            };
+            bound += value.value(assignment.size(j));
+            if decisions[j.index()] == Decision::Staffed {
+                bound -= self.bonus * inst.min_team(j) as f64;
+            }
+        }
+        let welfare = inst.welfare(&assignment);
+        if welfare > self.best_welfare {
+            self.best_welfare = welfare;
+            self.best = assignment.clone();
+        }
+        Some(Node {
+            decisions,
+            pairs,
+            bound,
+            prices,
+            assignment,
+        })
+    }
+
+    /// Where a node branches: first an open task whose relaxed coalition is between 0
+    /// and its threshold (the most envelope value at stake), then an earning task short
+    /// of a skill (the most value at stake) and the cheapest robot free to bring it;
+    /// `None` when there is neither (the relaxation is a real assignment, worth its
+    /// bound).
+    pub(super) fn branch(&self, node: &Node) -> Option<Branch> {
+        let inst = self.instance;
+        let sizes = node.assignment.sizes();
+        let task = inst
+            .task_ids()
+            .filter(|j| node.decisions[j.index()] == Decision::Open)
+            .filter_map(|j| {
+                let (n, k) = (sizes[j.index()], inst.min_team(j));
+                (n > 0 && n < k).then(|| {
+                    let at_stake = n as f64 * inst.value_function(j).value(k) / k as f64;
+                    (j.index(), at_stake)
+                })
+            })
+            .max_by(|a, b| a.1.total_cmp(&b.1));
+        if let Some((j, _)) = task {
+            return Some(Branch::Task(j));
+        }
+        self.skill_branch(node)
+    }
+
+    /// The earning task short of a skill with the most value at stake, and the
+    /// cheapest robot free to bring that skill there.
+    fn skill_branch(&self, node: &Node) -> Option<Branch> {
+        let inst = self.instance;
+        if !inst.has_skill_rules() {
+            return None;
+        }
+        let (s, a) = (inst.num_skills(), &node.assignment);
+        let held = inst.skills_held(a);
+        let (j, _) = inst
+            .task_ids()
+            .filter(|&j| node.decisions[j.index()] != Decision::Unstaffed)
+            .filter(|&j| a.size(j) >= inst.min_team(j))
+            .filter(|&j| !inst.skills_met(j, &held[j.index() * s..][..s]))
+            .map(|j| (j, inst.coalition_value(j, a.size(j))))
+            .max_by(|x, y| x.1.total_cmp(&y.1))?;
+        let row = &held[j.index() * s..][..s];
+        let short = (0..s).find(|&k| row[k] < u64::from(inst.requires(j)[k]))?;
+        let decided = |i: RobotId| {
+            node.pairs.iter().any(|&(r, _, fixed)| r == i && fixed)
+                || node.pairs.iter().any(|&(r, t, _)| r == i && t == j)
+        };
+        let robot = inst
+            .robot_ids()
+            .filter(|&i| inst.skills(i)[short] > 0 && a.task_of(i) != Some(j) && !decided(i))
+            .min_by(|&x, &y| inst.cost(x, j).total_cmp(&inst.cost(y, j)))?;
+        Some(Branch::Pair(robot, j))
+    }
+
+    /// The two children of a branch: its decisions and fixed robots.
+    pub(super) fn children(&self, node: &Node, branch: Branch) -> [(Vec<Decision>, Vec<Pair>); 2] {
+        let with = |decision: Option<(usize, Decision)>, pair: Option<Pair>| {
+            let mut decisions = node.decisions.clone();
+            if let Some((j, d)) = decision {
+                decisions[j] = d;
+            }
+            let mut pairs = node.pairs.clone();
+            pairs.extend(pair);
+            (decisions, pairs)
+        };
+        match branch {
+            Branch::Task(j) => [
+                with(Some((j, Decision::Staffed)), None),
+                with(Some((j, Decision::Unstaffed)), None),
+            ],
+            Branch::Pair(i, j) => [
+                with(None, Some((i, j, true))),
+                with(None, Some((i, j, false))),
+            ],
+        }
+    }
+
+    /// Rounds the relaxation task by task (staffed where at least half the threshold is
+    /// there, else unstaffed) down to an assignment with no task between 0 and its
+    /// threshold: a good first incumbent.
+    pub(super) fn dive(&mut self, root: &Node) {
+        let mut current = root.clone();
+        while let Some(Branch::Task(task)) = self.branch(&current) {
+            let k = self.instance.min_team(TaskId(task as u32));
+            let mut decisions = current.decisions.clone();
+            decisions[task] = if 2 * current.assignment.sizes()[task] >= k {
+                Decision::Staffed
+            } else {
+                Decision::Unstaffed
+            };
+            let pairs = current.pairs.clone();
+            let next = self
+                .node(decisions.clone(), pairs.clone(), Some(&current))
+                .or_else(|| {
+                    decisions[task] = Decision::Unstaffed;
+                    self.node(decisions, pairs, Some(&current))
+                });
+            match next {
+                Some(next) => current = next,
+                None => return,
+            }
+        }
+    }
+}
