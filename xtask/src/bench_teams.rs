@@ -365,7 +365,13 @@ fn markdown(rows: &[Row], args: &BenchTeamsArgs) -> String {
         }
         md.push('\n');
     }
-    md += "\nAllocators (% of the best proven bound, mean; time per instance):\n\n| N | M |";
+    md + "\n" + &allocator_table(&cases, k)
+}
+
+/// The allocators' table: each one's welfare as a share of the best proven bound.
+fn allocator_table(cases: &[Vec<&Row>], k: usize) -> String {
+    let mut md =
+        "Allocators (% of the best proven bound, mean; time per instance):\n\n| N | M |".to_owned();
     let names: Vec<&str> = ALLOCATORS.iter().map(|m| m.label()).collect();
     for name in &names {
         md += &format!(" {name} |");

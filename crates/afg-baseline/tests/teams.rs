@@ -91,9 +91,20 @@ fn the_skill_optimum_equals_brute_force_on_small_instances() {
         let brute = brute_force(&inst);
         let tol = 1e-9 * brute.abs().max(1.0);
         assert!(best.proven, "case {case}");
-        assert!((best.welfare - brute).abs() < tol, "case {case}: {} vs {brute}", best.welfare);
-        assert!((inst.welfare(&best.assignment) - brute).abs() < tol, "case {case}");
-        assert!((best.bound - brute).abs() < tol, "case {case}: bound {}", best.bound);
+        assert!(
+            (best.welfare - brute).abs() < tol,
+            "case {case}: {} vs {brute}",
+            best.welfare
+        );
+        assert!(
+            (inst.welfare(&best.assignment) - brute).abs() < tol,
+            "case {case}"
+        );
+        assert!(
+            (best.bound - brute).abs() < tol,
+            "case {case}: bound {}",
+            best.bound
+        );
         pair_branches += usize::from(best.nodes > 3);
     }
     // Many searches went past the root and its dive.
@@ -196,7 +207,11 @@ fn a_skill_by_hand_picks_the_robot_that_holds_it() {
         eps: 2.0,
         capacity: None,
     };
-    let robots = vec![Point::new(0.1, 0.0), Point::new(0.2, 0.0), Point::new(0.5, 0.0)];
+    let robots = vec![
+        Point::new(0.1, 0.0),
+        Point::new(0.2, 0.0),
+        Point::new(0.5, 0.0),
+    ];
     let inst = Instance::new(robots, vec![task, spare], 1.0)
         .unwrap()
         .with_teams(vec![2, 1], &[vec![0], vec![0], vec![1]], &[vec![1], vec![]])
