@@ -38,6 +38,9 @@ pub struct BenchTeamsArgs {
     /// highspy numpy`, pass `.venv-bench/bin/python`). Without it they are left out.
     #[arg(long)]
     python: Option<PathBuf>,
+    /// Run the peers on sizes up to this N only (their models have N · M variables).
+    #[arg(long, default_value_t = 1000)]
+    peers_up_to: usize,
     /// The peers' time budgets, seconds.
     #[arg(long, value_delimiter = ',', default_values_t = [1.0, 60.0])]
     budgets: Vec<f64>,
@@ -183,7 +186,11 @@ fn measure(case: Case, seed: u64, args: &BenchTeamsArgs, dir: &Path) -> Result<R
         nodes: exact.nodes,
     };
     let mut peers = Vec::new();
-    if let Some(python) = &args.python {
+    if let Some(python) = args
+        .python
+        .as_ref()
+        .filter(|_| case.robots <= args.peers_up_to)
+    {
         for solver in ["cpsat", "highs"] {
             for &budget in &args.budgets {
                 peers.push(peer(python, solver, budget, args.threads, &file, &inst)?);
@@ -342,6 +349,10 @@ fn markdown(rows: &[Row], args: &BenchTeamsArgs) -> String {
                 .map_or("—".into(), |m| format!("{m:.0} MiB")),
         );
         for (p, _) in peer_names.iter().enumerate() {
+            if rows.iter().any(|r| r.peers.len() <= p) {
+                md += " — | — | — |"; // above --peers-up-to
+                continue;
+            }
             let proven = rows
                 .iter()
                 .filter(|r| r.peers[p].status == "optimal")

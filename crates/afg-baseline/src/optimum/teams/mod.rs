@@ -12,8 +12,8 @@
 //! members it is a real assignment worth exactly its bound, and the node is closed;
 //! otherwise the task with the most envelope value at stake is branched on, both ways.
 //! Every node's assignment is a feasible one whose true welfare may improve the best
-//! found; a dive from the root (rounding each fractional task to the nearer side) finds
-//! a good one before the search, which takes the open node of highest bound first. A
+//! found; a dive from the root (rounding every fractional task to the nearer side at
+//! once, re-solved until none is left) finds a good one before the search, which takes the open node of highest bound first. A
 //! time limit stops it with the best assignment, the highest open bound and the gap.
 //!
 //! **Skills.** The relaxation counts a team's value without its skills. Where a node's
@@ -98,7 +98,7 @@ impl TeamOptimum {
         let Some(root) = search.node(search.root_decisions(), Vec::new(), None) else {
             unreachable!("the root is feasible: the instance holds every robot")
         };
-        search.dive(&root);
+        search.dive(&root, &out_of_time);
         let mut open = BinaryHeap::from([root]);
         while let Some(node) = open.peek() {
             if search.closes(node.bound) {

@@ -19,18 +19,24 @@ pub(super) enum Decision {
     Unstaffed,
 }
 
+/// The most decisions a child may change from its parent and still start from the
+/// parent's prices.
+const WARM_CHANGES: usize = 8;
+
 /// A robot fixed at a task (`true`) or kept out of it (`false`).
 type Pair = (RobotId, TaskId, bool);
 
-/// A node: its decisions, its relaxation's bound, and where that relaxation put every
-/// robot (the branching is read from it).
+/// A node: its decisions, its relaxation's bound, and what the branching reads of its
+/// relaxed optimum: the coalition sizes and, in a game with skills, where every robot
+/// is (an open node of a large game holds M numbers, not N).
 #[derive(Clone)]
 pub(super) struct Node {
     decisions: Vec<Decision>,
     pairs: Vec<Pair>,
     pub(super) bound: f64,
     prices: Vec<f64>,
-    assignment: Assignment,
+    sizes: Vec<usize>,
+    assignment: Option<Assignment>,
 }
 
 impl PartialEq for Node {
@@ -197,7 +203,16 @@ impl<'a> Search<'a> {
     ) -> Option<Node> {
         let inst = self.instance;
         let columns = self.columns(&mut decisions, &pairs)?;
-        let warm = parent.map(|p| {
+        // A parent's prices help where a few tasks changed; after many (a dive's
+        // rounding), the subsample levels start closer.
+        let changed = |p: &Node| {
+            decisions
+                .iter()
+                .zip(&p.decisions)
+                .filter(|(a, b)| a != b)
+                .count()
+        };
+        let warm = parent.filter(|p| changed(p) <= WARM_CHANGES).map(|p| {
             let mut prices = p.prices.clone();
             for (j, (&now, &before)) in decisions.iter().zip(&p.decisions).enumerate() {
                 match (now, before) {
@@ -247,7 +262,8 @@ impl<'a> Search<'a> {
             pairs,
             bound,
             prices,
-            assignment,
+            sizes: assignment.sizes().to_vec(),
+            assignment: inst.has_skill_rules().then_some(assignment),
         })
     }
 
@@ -258,7 +274,7 @@ impl<'a> Search<'a> {
     /// bound).
     pub(super) fn branch(&self, node: &Node) -> Option<Branch> {
         let inst = self.instance;
-        let sizes = node.assignment.sizes();
+        let sizes = &node.sizes;
         let task = inst
             .task_ids()
             .filter(|j| node.decisions[j.index()] == Decision::Open)
@@ -280,10 +296,8 @@ impl<'a> Search<'a> {
     /// cheapest robot free to bring that skill there.
     fn skill_branch(&self, node: &Node) -> Option<Branch> {
         let inst = self.instance;
-        if !inst.has_skill_rules() {
-            return None;
-        }
-        let (s, a) = (inst.num_skills(), &node.assignment);
+        let a = node.assignment.as_ref()?; // kept in games with skills only
+        let s = inst.num_skills();
         let held = inst.skills_held(a);
         let (j, _) = inst
             .task_ids()
@@ -328,26 +342,39 @@ impl<'a> Search<'a> {
         }
     }
 
-    /// Rounds the relaxation task by task (staffed where at least half the threshold is
-    /// there, else unstaffed) down to an assignment with no task between 0 and its
-    /// threshold: a good first incumbent.
-    pub(super) fn dive(&mut self, root: &Node) {
+    /// Rounds the relaxation down to an assignment with no task between 0 and its
+    /// threshold, a good first incumbent: every such task at once staffed where at
+    /// least half its threshold is there, else unstaffed (all unstaffed where that
+    /// asks for too many robots), re-solved until none is left or `out_of_time`.
+    pub(super) fn dive(&mut self, root: &Node, out_of_time: &dyn Fn() -> bool) {
         let mut current = root.clone();
-        while let Some(Branch::Task(task)) = self.branch(&current) {
-            let k = self.instance.min_team(TaskId(task as u32));
-            let mut decisions = current.decisions.clone();
-            decisions[task] = if 2 * current.assignment.sizes()[task] >= k {
-                Decision::Staffed
-            } else {
-                Decision::Unstaffed
+        while !out_of_time() {
+            let sizes = current.sizes.clone();
+            let fractional: Vec<TaskId> = self
+                .instance
+                .task_ids()
+                .filter(|&j| current.decisions[j.index()] == Decision::Open)
+                .filter(|&j| sizes[j.index()] > 0 && sizes[j.index()] < self.instance.min_team(j))
+                .collect();
+            if fractional.is_empty() {
+                return;
+            }
+            let rounded = |staff: bool| {
+                let mut decisions = current.decisions.clone();
+                for &j in &fractional {
+                    let half = 2 * sizes[j.index()] >= self.instance.min_team(j);
+                    decisions[j.index()] = if staff && half {
+                        Decision::Staffed
+                    } else {
+                        Decision::Unstaffed
+                    };
+                }
+                decisions
             };
             let pairs = current.pairs.clone();
             let next = self
-                .node(decisions.clone(), pairs.clone(), Some(&current))
-                .or_else(|| {
-                    decisions[task] = Decision::Unstaffed;
-                    self.node(decisions, pairs, Some(&current))
-                });
+                .node(rounded(true), pairs.clone(), Some(&current))
+                .or_else(|| self.node(rounded(false), pairs, Some(&current)));
             match next {
                 Some(next) => current = next,
                 None => return,
