@@ -16,7 +16,9 @@ min(capacity, N)), worth F_j(n) - F_j(n - 1):
 F_j's marginal values decrease, so the counted members are the first ones and a
 staffed coalition of n earns exactly F_j(n). CP-SAT needs integer coefficients: the
 objective is scaled by 1e6 and rounded (its bound is divided back); HiGHS takes it as
-it is. The assignment comes back to afg, which computes its welfare exactly.
+it is. The assignment comes back to afg, which computes its welfare exactly; the bound
+is null where the solver has none (CP-SAT before its first solution, HiGHS before its
+first bound).
 
 Usage: python scripts/teams_milp.py INSTANCES.jsonl OUT.json --solver cpsat|highs
            --time-limit SECONDS [--threads K]
@@ -103,7 +105,7 @@ def cpsat(instance, time_limit, threads):
     return {
         "status": solver.status_name(status).lower(),
         "seconds": seconds,
-        "bound": solver.best_objective_bound / SCALE,
+        "bound": solver.best_objective_bound / SCALE if found else None,
         "tasks": tasks,
     }
 
@@ -167,7 +169,8 @@ def highs(instance, time_limit, threads):
     if info.primal_solution_status == 2:  # feasible
         col = np.array(h.getSolution().col_value[:nx]).reshape(n, m)
         tasks = [int(np.argmax(row)) if row.max() > 0.5 else -1 for row in col]
-    return {"status": status, "seconds": seconds, "bound": info.mip_dual_bound, "tasks": tasks}
+    bound = info.mip_dual_bound if math.isfinite(info.mip_dual_bound) else None
+    return {"status": status, "seconds": seconds, "bound": bound, "tasks": tasks}
 
 
 def main():
@@ -183,7 +186,7 @@ def main():
         instances = [json.loads(line) for line in f if line.strip()]
     results = [solve(inst, args.time_limit, args.threads) for inst in instances]
     with open(args.out, "w") as f:
-        json.dump(results, f)
+        json.dump(results, f, allow_nan=False)
 
 
 if __name__ == "__main__":

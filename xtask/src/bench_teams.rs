@@ -101,7 +101,8 @@ struct Peer {
     status: String,
     /// The welfare of its assignment, computed by afg (`None`: none found).
     welfare: Option<f64>,
-    bound: f64,
+    /// Its proven bound (`None`: none yet).
+    bound: Option<f64>,
     seconds: f64,
 }
 
@@ -213,7 +214,7 @@ fn measure(case: Case, seed: u64, args: &BenchTeamsArgs, dir: &Path) -> Result<R
             ))
         })
         .collect::<Result<Vec<_>>>()?;
-    let best_bound = peers.iter().map(|p| p.bound).fold(afg.bound, f64::min);
+    let best_bound = peers.iter().filter_map(|p| p.bound).fold(afg.bound, f64::min);
     let best_welfare = peers
         .iter()
         .filter_map(|p| p.welfare)
@@ -249,7 +250,7 @@ fn peer(
     struct Solved {
         status: String,
         seconds: f64,
-        bound: f64,
+        bound: Option<f64>,
         tasks: Option<Vec<i64>>,
     }
     let out = file.with_extension(format!("{solver}-{budget}.json"));
