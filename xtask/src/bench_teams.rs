@@ -30,6 +30,16 @@ pub struct BenchTeamsArgs {
     /// Seed of the first instance: `afg gen --robots N --tasks M --min-team N/M,2N/M --seed S`.
     #[arg(long, default_value_t = 54)]
     seed: u64,
+    /// Skill games as well: S binary skills (each robot holds each with probability
+    /// --skill-share), as `afg gen --skills`.
+    #[arg(long, value_name = "S")]
+    skills: Option<usize>,
+    /// With --skills: the probability that a robot holds a skill.
+    #[arg(long, default_value_t = GeneratorKnobs::SKILL_SHARE)]
+    skill_share: f64,
+    /// With --skills: each task requires each skill in an amount uniform in LO..=HI.
+    #[arg(long, value_delimiter = ',', num_args = 1, value_names = ["LO,HI"], default_values_t = [1, 2])]
+    requires: Vec<usize>,
     /// afg's time limit per instance, seconds.
     #[arg(long, default_value_t = 10.0)]
     time_limit: f64,
@@ -74,7 +84,8 @@ struct Row {
     seed: u64,
     afg: Exact,
     peers: Vec<Peer>,
-    /// Each allocator's welfare and seconds; `None` where it found no stable partition.
+    /// Each allocator's welfare and seconds; `None` where it found no stable partition
+    /// or refused the game (skills).
     allocators: Vec<(String, Option<f64>, f64)>,
     /// The lowest proven bound of all exact solvers.
     best_bound: f64,
@@ -148,18 +159,35 @@ pub fn run(args: BenchTeamsArgs) -> Result<()> {
     Ok(())
 }
 
-/// The scarce threshold instance of `case` and `seed`.
-pub fn scarce(case: Case, seed: u64) -> Result<Instance> {
+/// The scarce threshold instance of `case` and `seed`: thresholds uniform in
+/// [N/M, 2N/M], and the skills of `skills` where given.
+pub fn scarce(case: Case, seed: u64, skills: Option<&GeneratorKnobs>) -> Result<Instance> {
     let per_task = (case.robots / case.tasks).max(1);
     let knobs = GeneratorKnobs {
         min_team: Some((per_task, 2 * per_task)),
-        ..GeneratorKnobs::default()
+        ..skills.copied().unwrap_or_default()
     };
     Ok(knobs.config(case.robots, case.tasks, seed)?.generate()?)
 }
 
+/// The skill knobs of `--skills`, `--skill-share` and `--requires`.
+fn skill_knobs(args: &BenchTeamsArgs) -> Result<Option<GeneratorKnobs>> {
+    let Some(count) = args.skills else {
+        return Ok(None);
+    };
+    let &[lo, hi] = args.requires.as_slice() else {
+        bail!("--requires takes two numbers, LO,HI");
+    };
+    Ok(Some(GeneratorKnobs {
+        skills: Some(count),
+        skill_share: Some(args.skill_share),
+        requires: Some((lo, hi)),
+        ..GeneratorKnobs::default()
+    }))
+}
+
 fn measure(case: Case, seed: u64, args: &BenchTeamsArgs, dir: &Path) -> Result<Row> {
-    let inst = scarce(case, seed)?;
+    let inst = scarce(case, seed, skill_knobs(args)?.as_ref())?;
     let file = dir.join(format!(
         "teams_n{}_m{}_seed{seed}.jsonl",
         case.robots, case.tasks
@@ -204,7 +232,7 @@ fn measure(case: Case, seed: u64, args: &BenchTeamsArgs, dir: &Path) -> Result<R
             let start = Instant::now();
             let welfare = match method.allocator(seed).allocate(&inst) {
                 Ok(out) => Some(inst.welfare(&out.assignment)),
-                Err(AllocError::NotConverged { .. }) => None,
+                Err(AllocError::NotConverged { .. } | AllocError::TeamsNotSupported { .. }) => None,
                 Err(e) => return Err(e.into()),
             };
             Ok((
@@ -214,7 +242,10 @@ fn measure(case: Case, seed: u64, args: &BenchTeamsArgs, dir: &Path) -> Result<R
             ))
         })
         .collect::<Result<Vec<_>>>()?;
-    let best_bound = peers.iter().filter_map(|p| p.bound).fold(afg.bound, f64::min);
+    let best_bound = peers
+        .iter()
+        .filter_map(|p| p.bound)
+        .fold(afg.bound, f64::min);
     let best_welfare = peers
         .iter()
         .filter_map(|p| p.welfare)
@@ -314,8 +345,15 @@ fn markdown(rows: &[Row], args: &BenchTeamsArgs) -> String {
         })
         .collect();
     let k = args.instances;
+    let game = match args.skills {
+        Some(count) => format!(
+            "thresholds uniform in [N/M, 2N/M] and {count} skills (each robot holds each with probability {}, each task requires {}..={} of each)",
+            args.skill_share, args.requires[0], args.requires[1]
+        ),
+        None => "thresholds uniform in [N/M, 2N/M]".to_owned(),
+    };
     let mut md = format!(
-        "Exact solvers ({k} scarce instances per size; % of the best proven bound, mean; \
+        "Game: {game}.\n\nExact solvers ({k} scarce instances per size; % of the best proven bound, mean; \
          proven: instances proven optimal; afg with a {}s limit on one core):\n\n| N | M | afg time | afg proven | afg % of bound | afg nodes | afg peak RSS |",
         args.time_limit
     );
@@ -405,7 +443,7 @@ fn allocator_table(cases: &[Vec<&Row>], k: usize) -> String {
                     1e3 * mean(rows, |r| r.allocators[a].2)
                 )
             } else {
-                format!("no stable partition on {}/{k}", rows.len() - settled)
+                format!("refused or unsettled on {}/{k}", rows.len() - settled)
             };
             md += &format!(" {cell} |");
         }

@@ -40,7 +40,7 @@ fn team_files() -> Result<Vec<(PathBuf, String)>> {
     let mut optima = Vec::new();
     for (robots, tasks) in TEAM_SIZES {
         for seed in 0..TEAM_INSTANCES {
-            let inst = crate::bench_teams::scarce(Case { robots, tasks }, seed)?;
+            let inst = crate::bench_teams::scarce(Case { robots, tasks }, seed, None)?;
             let best = TeamOptimum::default().solve(&inst)?;
             optima.push(Certified {
                 robots,
