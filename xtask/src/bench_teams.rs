@@ -345,13 +345,7 @@ fn markdown(rows: &[Row], args: &BenchTeamsArgs) -> String {
         })
         .collect();
     let k = args.instances;
-    let game = match args.skills {
-        Some(count) => format!(
-            "thresholds uniform in [N/M, 2N/M] and {count} skills (each robot holds each with probability {}, each task requires {}..={} of each)",
-            args.skill_share, args.requires[0], args.requires[1]
-        ),
-        None => "thresholds uniform in [N/M, 2N/M]".to_owned(),
-    };
+    let game = game_text(args);
     let mut md = format!(
         "Game: {game}.\n\nExact solvers ({k} scarce instances per size; % of the best proven bound, mean; \
          proven: instances proven optimal; afg with a {}s limit on one core):\n\n| N | M | afg time | afg proven | afg % of bound | afg nodes | afg peak RSS |",
@@ -416,6 +410,17 @@ fn markdown(rows: &[Row], args: &BenchTeamsArgs) -> String {
         md.push('\n');
     }
     md + "\n" + &allocator_table(&cases, k)
+}
+
+/// The game a run measured, in words.
+fn game_text(args: &BenchTeamsArgs) -> String {
+    match args.skills {
+        Some(count) => format!(
+            "thresholds uniform in [N/M, 2N/M] and {count} skills (each robot holds each with probability {}, each task requires {}..={} of each)",
+            args.skill_share, args.requires[0], args.requires[1]
+        ),
+        None => "thresholds uniform in [N/M, 2N/M]".to_owned(),
+    }
 }
 
 /// The allocators' table: each one's welfare as a share of the best proven bound.
