@@ -91,7 +91,8 @@ impl CentralisedDa {
     ///
     /// # Errors
     /// [`AllocError::Game`] if `previous` does not fit `instance`
-    /// ([`PreviousAssignment::carry_over`]).
+    /// ([`PreviousAssignment::carry_over`]), [`AllocError::TeamsNotSupported`] for a
+    /// game with skills.
     ///
     /// # Examples
     /// ```
@@ -112,6 +113,7 @@ impl CentralisedDa {
         instance: &Instance,
         previous: &PreviousAssignment,
     ) -> Result<(Assignment, Assignment), AllocError> {
+        check_game(instance, self, Plays::Counts)?;
         let start = previous.carry_over(instance)?;
         let mut assignment = start.clone();
         self.improve(instance, &mut assignment);
