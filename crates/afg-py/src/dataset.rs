@@ -1,0 +1,72 @@
+//! Instances in and out of Python: reading and writing JSON Lines datasets, and the
+//! generator with every knob of `afg gen`.
+
+use std::path::PathBuf;
+
+use afg_game::{GeneratorKnobs, Instance};
+use pyo3::prelude::*;
+
+use crate::{PyInstance, crate_error};
+
+/// Reads a JSON Lines dataset (or one instance document): a list of instances.
+#[pyfunction]
+fn read_jsonl(path: PathBuf) -> PyResult<Vec<PyInstance>> {
+    let instances = afg_game::io::read_instances(&path).map_err(crate_error)?;
+    Ok(instances.into_iter().map(PyInstance::new_from).collect())
+}
+
+/// Writes instances as a JSON Lines dataset (atomically).
+#[pyfunction]
+fn write_jsonl(path: PathBuf, instances: Vec<PyRef<'_, PyInstance>>) -> PyResult<()> {
+    let insts: Vec<Instance> = instances.iter().map(|i| (*i.inner).clone()).collect();
+    afg_game::fs::write_atomic(&path, afg_game::io::dataset_to_jsonl(&insts).as_bytes())
+        .map_err(crate_error)
+}
+
+/// Draws an instance from the paper's distribution (uniform positions, rewards in
+/// [N/M, 2N/M], eps = max(2, N/M), beta = 1), with the generator's knobs;
+/// `allow_void=True` draws GRAPE's game, where robots may join the void task;
+/// `min_team=(lo, hi)`, `skills=S`, `skill_share=p` and `requires=(lo, hi)` draw the
+/// team games (as `afg gen`'s flags of the same names).
+#[pyfunction]
+#[pyo3(signature = (robots, tasks=5, seed=0, capacity_slack=None, eps=None, beta=1.0, rewards=None, allow_void=false, min_team=None, skills=None, skill_share=None, requires=None))]
+// Python's keyword arguments, one per knob.
+#[allow(clippy::too_many_arguments)]
+fn generate(
+    robots: usize,
+    tasks: usize,
+    seed: u64,
+    capacity_slack: Option<f64>,
+    eps: Option<f64>,
+    beta: f64,
+    rewards: Option<(f64, f64)>,
+    allow_void: bool,
+    min_team: Option<(usize, usize)>,
+    skills: Option<usize>,
+    skill_share: Option<f64>,
+    requires: Option<(usize, usize)>,
+) -> PyResult<PyInstance> {
+    let knobs = GeneratorKnobs {
+        capacity_slack,
+        eps,
+        beta: Some(beta),
+        rewards,
+        allow_void,
+        min_team,
+        skills,
+        skill_share,
+        requires,
+    };
+    knobs
+        .config(robots, tasks, seed)
+        .and_then(|cfg| cfg.generate())
+        .map(PyInstance::new_from)
+        .map_err(crate_error)
+}
+
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(read_jsonl, m)?)?;
+    m.add_function(wrap_pyfunction!(write_jsonl, m)?)?;
+    m.add_function(wrap_pyfunction!(generate, m)?)?;
+    Ok(())
+}
