@@ -1,4 +1,4 @@
-"""The committed team dataset's certified optima against an independent exact solver:
+"""The committed team datasets' certified optima against an independent exact solver:
 HiGHS on the textbook MILP (scripts/teams_milp.py) proves the same optimum."""
 
 from __future__ import annotations
@@ -22,10 +22,11 @@ def milp():
     return module
 
 
-def test_highs_proves_the_committed_optima_of_the_small_team_games() -> None:
+@pytest.mark.parametrize("game", ["thresholds", "skills", "both"])
+def test_highs_proves_the_committed_optima_of_the_small_team_games(game: str) -> None:
     pytest.importorskip("highspy")
-    lines = (ROOT / "datasets" / "teams-thresholds.jsonl").read_text().splitlines()
-    optima = json.loads((ROOT / "datasets" / "teams-thresholds.optima.json").read_text())
+    lines = (ROOT / "datasets" / f"teams-{game}.jsonl").read_text().splitlines()
+    optima = json.loads((ROOT / "datasets" / f"teams-{game}.optima.json").read_text())
     highs = milp().highs
     checked = 0
     for line, optimum in zip(lines, optima):
