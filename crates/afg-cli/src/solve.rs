@@ -305,6 +305,46 @@ mod tests {
         assert!(format!("{err:#}").contains("at least 1"), "{err:#}");
     }
 
+    #[test]
+    fn team_games_get_a_bound_and_a_gap_and_a_time_limit_only_with_opt() {
+        let dir = temp("teams");
+        let file = format!("{dir}/scarce.jsonl");
+        crate::afg(&format!(
+            "gen --robots 40 --tasks 5 --min-team 8,16 --count 2 --out {file}"
+        ))
+        .unwrap();
+        let out = format!("{dir}/opt.jsonl");
+        solve(&format!("--method opt --input {file} --out {out}")).unwrap();
+        let lines = std::fs::read_to_string(&out).unwrap();
+        let instances = afg_game::io::read_dataset(std::path::Path::new(&file)).unwrap();
+        for (line, inst) in lines.lines().zip(&instances) {
+            let a = afg_game::Assignment::from_json(line, inst).unwrap();
+            let best = afg_baseline::TeamOptimum::default().solve(inst).unwrap();
+            assert!((inst.welfare(&a) - best.welfare).abs() < 1e-9);
+        }
+        for (flags, needle) in [
+            (
+                "--method greedy --time-limit 1",
+                "applies to the exact optimum",
+            ),
+            ("--method opt --time-limit=-1", "number of seconds"),
+            ("--method opt --time-limit nan", "number of seconds"),
+        ] {
+            let err = solve(&format!("{flags} --input {file}")).unwrap_err();
+            assert!(format!("{err:#}").contains(needle), "{flags}: {err:#}");
+        }
+        let skills = format!("{dir}/skills.jsonl");
+        crate::afg(&format!(
+            "gen --robots 20 --tasks 4 --skills 2 --out {skills}"
+        ))
+        .unwrap();
+        let err = solve(&format!("--method da --input {skills}")).unwrap_err();
+        assert!(
+            format!("{err:#}").contains("da does not play games with skill requirements"),
+            "{err:#}"
+        );
+    }
+
     /// `--dataset N` reads the committed file under the current directory; the tests
     /// run in the crate's directory, which has none.
     #[test]
