@@ -6,13 +6,14 @@ use std::process::Command;
 use std::str::FromStr;
 use std::time::Duration;
 
+use crate::bench::runs::{check_python, measure_rows, scratch_dir};
 use crate::bench::{clocked, median_of};
 use afg_baseline::{Allocator, Greedy, Nearest, Optimum, verify_optimal};
 use afg_eval::report::duration;
 use afg_game::fs::write_atomic;
 use afg_game::io::{dataset_to_jsonl, read_dataset};
 use afg_game::{Assignment, GeneratorConfig, Instance, TaskId};
-use anyhow::{Context, Result, bail, ensure};
+use anyhow::{Context, Result, bail};
 use clap::Args;
 use serde::Serialize;
 
@@ -116,48 +117,17 @@ struct OrTools {
 
 /// Runs `cargo xtask bench-opt`: the exact optimum against OR-Tools, every solution certified.
 pub fn run(args: BenchOptArgs) -> Result<()> {
-    let scratch = tempfile_dir(args.dir.as_deref())?;
+    let scratch = scratch_dir(args.dir.as_deref(), "bench-opt")?;
     if let Some(python) = &args.python {
-        check_python(python)?;
+        check_python(python, &["ortools", "numpy"])?;
     }
-    let bar = afg_eval::report::progress(args.cases.len() as u64, "bench-opt");
-    let mut rows = Vec::new();
-    for &case in &args.cases {
-        bar.set_message(format!("bench-opt N = {} M = {}", case.robots, case.tasks));
-        let row = measure(case, &args, &scratch)?;
-        if args.json {
-            bar.suspend(|| println!("{}", serde_json::to_string(&row).expect("a row")));
-        }
-        rows.push(row);
-        bar.inc(1);
-    }
-    bar.finish_and_clear();
+    let describe = |c: &Case| format!("N = {} M = {}", c.robots, c.tasks);
+    let rows = measure_rows("bench-opt", &args.cases, args.json, describe, |&case| {
+        measure(case, &args, &scratch)
+    })?;
     if !args.json {
         print!("{}", markdown(&rows, rayon::current_num_threads()));
     }
-    Ok(())
-}
-
-/// The folder for instance files: `dir`, or a fresh one under the system's temp folder.
-fn tempfile_dir(dir: Option<&Path>) -> Result<PathBuf> {
-    let dir = match dir {
-        Some(d) => d.to_path_buf(),
-        None => std::env::temp_dir().join(format!("afg-bench-opt-{}", std::process::id())),
-    };
-    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-    Ok(dir)
-}
-
-fn check_python(python: &Path) -> Result<()> {
-    let ok = Command::new(python)
-        .args(["-c", "import ortools, numpy"])
-        .status()
-        .with_context(|| format!("running {}", python.display()))?;
-    ensure!(
-        ok.success(),
-        "{} cannot import ortools and numpy: install them with `{0} -m pip install ortools numpy`",
-        python.display()
-    );
     Ok(())
 }
 

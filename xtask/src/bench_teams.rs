@@ -15,6 +15,7 @@ use anyhow::{Context, Result, bail, ensure};
 use clap::Args;
 use serde::{Deserialize, Serialize};
 
+use crate::bench::runs::{check_python, measure_rows, scratch_dir};
 use crate::bench_opt::Case;
 
 /// The options of `cargo xtask bench-teams`.
@@ -119,40 +120,25 @@ struct Peer {
 
 /// Runs `cargo xtask bench-teams`.
 pub fn run(args: BenchTeamsArgs) -> Result<()> {
-    let dir = match &args.dir {
-        Some(d) => d.clone(),
-        None => std::env::temp_dir().join(format!("afg-bench-teams-{}", std::process::id())),
-    };
-    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    let dir = scratch_dir(args.dir.as_deref(), "bench-teams")?;
     if let Some(python) = &args.python {
-        let ok = Command::new(python)
-            .args(["-c", "import ortools, highspy, numpy"])
-            .status()
-            .with_context(|| format!("running {}", python.display()))?;
-        ensure!(
-            ok.success(),
-            "{} cannot import ortools, highspy and numpy: install them with `{0} -m pip install ortools highspy numpy`",
-            python.display()
-        );
+        check_python(python, &["ortools", "highspy", "numpy"])?;
     }
-    let total = (args.cases.len() * args.instances) as u64;
-    let bar = afg_eval::report::progress(total, "bench-teams");
-    let mut rows = Vec::new();
-    for &case in &args.cases {
-        for k in 0..args.instances as u64 {
-            bar.set_message(format!(
-                "bench-teams N = {} M = {}",
-                case.robots, case.tasks
-            ));
-            let row = measure(case, args.seed + k, &args, &dir)?;
-            if args.json {
-                bar.suspend(|| println!("{}", serde_json::to_string(&row).expect("a row")));
-            }
-            rows.push(row);
-            bar.inc(1);
-        }
-    }
-    bar.finish_and_clear();
+    let seeds = args.seed..args.seed + args.instances as u64;
+    let runs: Vec<(Case, u64)> = args
+        .cases
+        .iter()
+        .flat_map(|&case| seeds.clone().map(move |seed| (case, seed)))
+        .collect();
+    let describe =
+        |(c, seed): &(Case, u64)| format!("N = {} M = {} seed {seed}", c.robots, c.tasks);
+    let rows = measure_rows(
+        "bench-teams",
+        &runs,
+        args.json,
+        describe,
+        |&(case, seed)| measure(case, seed, &args, &dir),
+    )?;
     if !args.json {
         print!("{}", markdown(&rows, &args));
     }

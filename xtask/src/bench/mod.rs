@@ -9,6 +9,7 @@
 
 pub mod mission_loop;
 pub mod padded_afgnet;
+pub mod runs;
 
 use std::convert::Infallible;
 use std::time::{Duration, Instant};
