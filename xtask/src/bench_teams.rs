@@ -52,6 +52,9 @@ pub struct BenchTeamsArgs {
     /// Run the peers on sizes up to this N only (their models have N · M variables).
     #[arg(long, default_value_t = 1000)]
     peers_up_to: usize,
+    /// Run the allocators on sizes up to this N only (GRAPE DA decentralised grows as N²).
+    #[arg(long, default_value_t = 10_000)]
+    allocators_up_to: usize,
     /// The peers' time budgets, seconds.
     #[arg(long, value_delimiter = ',', default_values_t = [1.0, 60.0])]
     budgets: Vec<f64>,
@@ -86,7 +89,7 @@ struct Row {
     afg: Exact,
     peers: Vec<Peer>,
     /// Each allocator's welfare and seconds; `None` where it found no stable partition
-    /// or refused the game (skills).
+    /// or refused the game (skills); empty above `--allocators-up-to`.
     allocators: Vec<(String, Option<f64>, f64)>,
     /// The lowest proven bound of all exact solvers.
     best_bound: f64,
@@ -214,6 +217,7 @@ fn measure(case: Case, seed: u64, args: &BenchTeamsArgs, dir: &Path) -> Result<R
     }
     let allocators = ALLOCATORS
         .iter()
+        .filter(|_| case.robots <= args.allocators_up_to)
         .map(|&method| {
             let start = Instant::now();
             let welfare = match method.allocator(seed).allocate(&inst) {
@@ -420,7 +424,10 @@ fn allocator_table(cases: &[Vec<&Row>], k: usize) -> String {
     md += "\n|---|---|";
     md += &"---|".repeat(names.len());
     md.push('\n');
-    for rows in cases.iter().filter(|r| !r.is_empty()) {
+    for rows in cases
+        .iter()
+        .filter(|r| !r.is_empty() && !r[0].allocators.is_empty())
+    {
         md += &format!("| {} | {} |", rows[0].robots, rows[0].tasks);
         for a in 0..names.len() {
             let settled = rows.iter().filter(|r| r.allocators[a].1.is_some()).count();

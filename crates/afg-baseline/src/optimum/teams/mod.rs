@@ -95,10 +95,15 @@ impl TeamOptimum {
                 .is_some_and(|limit| start.elapsed() >= limit)
         };
         let mut search = Search::new(instance);
-        let Some(root) = search.node(search.root_decisions(), Vec::new(), None) else {
+        let Some(mut root) = search.node(search.root_decisions(), Vec::new(), None) else {
             unreachable!("the root is feasible: the instance holds every robot")
         };
         search.dive(&root, &out_of_time);
+        if instance.has_skill_rules()
+            && instance.num_robots() * instance.num_tasks() <= node::MAX_PAIRS
+        {
+            root.bound = root.bound.min(search.price_skills(&root, &out_of_time));
+        }
         let mut open = BinaryHeap::from([root]);
         while let Some(node) = open.peek() {
             if search.closes(node.bound) {

@@ -8,6 +8,9 @@ use afg_game::{Assignment, Instance, RobotId, TaskId};
 use super::super::assignment_of;
 use super::super::transport::{self, Column, Slots, Solution};
 
+mod lagrange;
+pub(super) use lagrange::MAX_PAIRS;
+
 /// What a node decides of one task.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum Decision {
@@ -35,6 +38,7 @@ pub(super) struct Node {
     pairs: Vec<Pair>,
     pub(super) bound: f64,
     prices: Vec<f64>,
+    skill_prices: Vec<f64>,
     sizes: Vec<usize>,
     assignment: Option<Assignment>,
 }
@@ -67,10 +71,13 @@ pub(super) enum Branch {
 }
 
 /// The search's data: the instance, the bonus that forces a staffed task's first
-/// members (and, four times over, a fixed robot's place), and the best found so far.
+/// members (and, four times over, a fixed robot's place), the skill prices of the
+/// Lagrangian bound (empty: none), and the best found so far.
 pub(super) struct Search<'a> {
     instance: &'a Instance,
     bonus: f64,
+    skill_prices: Vec<f64>,
+    skill_step: f64,
     best: Assignment,
     best_welfare: f64,
     nodes: u64,
@@ -92,6 +99,8 @@ impl<'a> Search<'a> {
             // More than any other member or move is worth: a staffed task's first k
             // members come before anything else.
             bonus: 2.0 * (max_cost + max_reward) + 1.0,
+            skill_prices: Vec::new(),
+            skill_step: 0.0,
             best: Assignment::unassigned(instance.num_robots(), instance.num_tasks()),
             best_welfare: f64::NEG_INFINITY,
             nodes: 0,
@@ -193,8 +202,10 @@ impl<'a> Search<'a> {
         Some(columns)
     }
 
-    /// Solves a node's relaxation (warm from its parent's prices), offers its
-    /// assignment to the best found, and returns it; `None` if infeasible.
+    /// Solves a node's relaxations (warm from its parent's prices): the Lagrangian one
+    /// where the root priced the skills, then the envelope's; offers their assignments
+    /// to the best found, and returns the node with the lower bound; `None` if
+    /// infeasible or closed by the Lagrangian bound.
     pub(super) fn node(
         &mut self,
         mut decisions: Vec<Decision>,
@@ -223,20 +234,21 @@ impl<'a> Search<'a> {
             }
             prices
         });
-        let fix = 4.0 * self.bonus;
-        let adjust: Vec<(usize, usize, f64)> = pairs
-            .iter()
-            .map(|&(i, j, fixed)| (i.index(), j.index(), if fixed { -fix } else { fix }))
-            .collect();
+        // The Lagrangian bound first: where it closes the node, the envelope's
+        // relaxation (the one branched on) need not be solved.
+        let (skill_bound, skill_prices) = match parent {
+            Some(p) => self.skill_bound(&decisions, &pairs, p)?,
+            None => (f64::INFINITY, Vec::new()),
+        };
+        if self.closes(skill_bound) {
+            return None;
+        }
         let Solution {
             task_of, prices, ..
-        } = transport::solve_columns(inst, &columns, warm.as_deref(), &adjust);
+        } = transport::solve_columns(inst, &columns, warm.as_deref(), &self.adjust(&pairs), &[]);
         self.nodes += 1;
         let assignment = assignment_of(inst, &task_of);
-        if pairs
-            .iter()
-            .any(|&(i, j, fixed)| (assignment.task_of(i) == Some(j)) != fixed)
-        {
+        if !self.keeps(&assignment, &pairs) {
             return None; // no assignment keeps every robot where the node fixed it
         }
         let mut bound = -inst
@@ -252,19 +264,41 @@ impl<'a> Search<'a> {
                 bound -= self.bonus * inst.min_team(j) as f64;
             }
         }
-        let welfare = inst.welfare(&assignment);
-        if welfare > self.best_welfare {
-            self.best_welfare = welfare;
-            self.best = assignment.clone();
-        }
+        self.offer(&assignment);
         Some(Node {
             decisions,
             pairs,
-            bound,
+            bound: bound.min(skill_bound),
+            skill_prices,
             prices,
             sizes: assignment.sizes().to_vec(),
             assignment: inst.has_skill_rules().then_some(assignment),
         })
+    }
+
+    /// The cost changes that fix robots at tasks or keep them out.
+    fn adjust(&self, pairs: &[Pair]) -> Vec<(usize, usize, f64)> {
+        let fix = 4.0 * self.bonus;
+        pairs
+            .iter()
+            .map(|&(i, j, fixed)| (i.index(), j.index(), if fixed { -fix } else { fix }))
+            .collect()
+    }
+
+    /// Whether `assignment` keeps every robot where `pairs` fixed it.
+    fn keeps(&self, assignment: &Assignment, pairs: &[Pair]) -> bool {
+        pairs
+            .iter()
+            .all(|&(i, j, fixed)| (assignment.task_of(i) == Some(j)) == fixed)
+    }
+
+    /// Offers `assignment` to the best found.
+    fn offer(&mut self, assignment: &Assignment) {
+        let welfare = self.instance.welfare(assignment);
+        if welfare > self.best_welfare {
+            self.best_welfare = welfare;
+            self.best = assignment.clone();
+        }
     }
 
     /// Where a node branches: first an open task whose relaxed coalition is between 0

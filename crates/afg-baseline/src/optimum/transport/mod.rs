@@ -32,7 +32,7 @@
 
 use std::cmp::{Ordering, Reverse};
 
-use afg_game::{Instance, Point, ValueFunction};
+use afg_game::{Instance, Point, RobotId, ValueFunction};
 use rayon::prelude::*;
 
 use super::movers::{Movers, NOWHERE};
@@ -82,17 +82,20 @@ pub(super) fn task_columns(inst: &Instance) -> Vec<Column> {
 /// Solves the problem of `inst`'s robots and costs with other `columns` (one per task,
 /// then the void's where the instance allows it) exactly, from `warm` prices (or from
 /// its subsamples' where there are none), each `(robot, column, delta)` of `adjust`
-/// added to that robot's cost there (without subsamples when there are any).
+/// added to that robot's cost there, and each robot's cost at task j lowered by
+/// `Σ_s skill_prices[j S + s] · skills[s]` where `skill_prices` is not empty (both
+/// without subsamples).
 pub(super) fn solve_columns(
     inst: &Instance,
     columns: &[Column],
     warm: Option<&[f64]>,
     adjust: &[(usize, usize, f64)],
+    skill_prices: &[f64],
 ) -> Solution {
     let coarse;
     let warm = match warm {
         Some(prices) => Some(prices),
-        None if adjust.is_empty() => {
+        None if adjust.is_empty() && skill_prices.is_empty() => {
             coarse = coarse_prices(inst, columns, FACTOR);
             coarse.as_deref()
         }
@@ -103,7 +106,34 @@ pub(super) fn solve_columns(
     for &(robot, column, delta) in adjust {
         level.costs[robot * m + column] += delta;
     }
+    if !skill_prices.is_empty() {
+        for i in inst.robot_ids() {
+            let row = &mut level.costs[i.index() * m..][..inst.num_tasks()];
+            for (cost, rebate) in row.iter_mut().zip(skill_rebates(inst, i, skill_prices)) {
+                *cost -= rebate;
+            }
+        }
+    }
     Flow::solved(level, warm).into_solution()
+}
+
+/// What robot i's skills are worth at each task at `skill_prices` (one per task and
+/// skill): `Σ_s skill_prices[j S + s] · skills_i[s]` for every task j.
+pub(super) fn skill_rebates<'a>(
+    inst: &'a Instance,
+    i: RobotId,
+    skill_prices: &'a [f64],
+) -> impl Iterator<Item = f64> + 'a {
+    let skills = inst.skills(i);
+    skill_prices
+        .chunks_exact(inst.num_skills().max(1))
+        .map(move |prices| {
+            prices
+                .iter()
+                .zip(skills)
+                .map(|(&p, &q)| p * f64::from(q))
+                .sum()
+        })
 }
 
 /// The solved residual state of `inst` (from its subsample's prices), to keep, with
@@ -134,16 +164,19 @@ pub(super) enum Column {
     Closed,
 }
 
-/// What a task column's members are worth: a concave value function F, whose first
-/// `flat` members are each worth `F(flat) / flat` (the concave envelope of a team
-/// threshold of `flat`: F earned only from `flat` members on, spread over them), plus
-/// `bonus` each (a large bonus forces them in), or nothing at all (`worthless`: a task
-/// that may not earn). Concave in every case, since `F(k) / k ≥ F(k + 1) − F(k)`.
+/// What a task column's members are worth: a concave value function F less a
+/// `penalty` once it earns, whose first `flat` members are each worth
+/// `(F(flat) − penalty) / flat` (the concave envelope of F earned only from `flat`
+/// members on, spread over them), plus `bonus` each (a large bonus forces them in), or
+/// nothing at all (`worthless`: a task that may not earn). Concave in every case:
+/// without a penalty since `F(k) / k ≥ F(k + 1) − F(k)`, with one by the choice of
+/// `flat` ([`Slots::penalised`]) or the bonus.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Slots {
     value: ValueFunction,
     flat: usize,
     bonus: f64,
+    penalty: f64,
     worthless: bool,
 }
 
@@ -154,6 +187,7 @@ impl Slots {
             value,
             flat: 0,
             bonus: 0.0,
+            penalty: 0.0,
             worthless: false,
         }
     }
@@ -165,8 +199,37 @@ impl Slots {
             value,
             flat: k,
             bonus,
+            penalty: 0.0,
             worthless: false,
         }
+    }
+
+    /// The same slots less `penalty` once the task earns (a staffed task's: its first
+    /// members carry a bonus that keeps them concave).
+    pub(super) fn less(self, penalty: f64) -> Self {
+        Slots { penalty, ..self }
+    }
+
+    /// The concave envelope of `max(0, F(n) − penalty)` earned from `k` members on, at
+    /// most `capacity`, and the size n* at which it meets that function first (its
+    /// first n* members worth `(F(n*) − penalty) / n*` each, n* the best such share in
+    /// `k..=capacity`); worthless, with n* = 0, where F never exceeds the penalty.
+    pub(super) fn penalised(
+        value: ValueFunction,
+        k: usize,
+        penalty: f64,
+        capacity: usize,
+    ) -> (Self, usize) {
+        // (F(n) − penalty) / n rises while n F'(n) − F(n) + penalty > 0, then falls.
+        let share = |n: usize| (value.value(n) - penalty) / n as f64;
+        let mut flat = k;
+        while flat < capacity && share(flat + 1) > share(flat) {
+            flat += 1;
+        }
+        if k > capacity || share(flat) <= 0.0 {
+            return (Slots::worthless(value), 0);
+        }
+        (Slots::envelope(value, flat, 0.0).less(penalty), flat)
     }
 
     /// Members worth nothing.
@@ -182,9 +245,10 @@ impl Slots {
         if self.worthless || n == 0 {
             0.0
         } else if n <= self.flat {
-            n as f64 * (self.value.value(self.flat) / self.flat as f64 + self.bonus)
+            n as f64
+                * ((self.value.value(self.flat) - self.penalty) / self.flat as f64 + self.bonus)
         } else {
-            self.value.value(n) + self.flat as f64 * self.bonus
+            self.value.value(n) - self.penalty + self.flat as f64 * self.bonus
         }
     }
 
@@ -194,7 +258,7 @@ impl Slots {
         if self.worthless {
             0.0
         } else if n <= self.flat {
-            self.value.value(self.flat) / self.flat as f64 + self.bonus
+            (self.value.value(self.flat) - self.penalty) / self.flat as f64 + self.bonus
         } else {
             self.value.marginal(n)
         }

@@ -1,0 +1,331 @@
+//! A second bound for games with skills: the Lagrangian relaxation of "a task earns
+//! only with the skills it requires".
+//!
+//! The envelope relaxation counts a team's value without its skills, which is loose
+//! where skills are scarce. For any prices λ_js ≥ 0 (one per task and skill), every
+//! real assignment satisfies `Σ_{i ∈ team j} skill_is − requires_js · earns_j ≥ 0`, so
+//! adding λ times that to the welfare bounds it from above. The added terms split by
+//! robot (robot i at task j gains `Σ_s λ_js skill_is`, a change of its cost) and by task
+//! (an earning task pays `Λ_j = Σ_s λ_js requires_js`): task j's value becomes
+//! `max(0, F_j(n) − Λ_j)` from its threshold on, whose concave envelope is again a
+//! column of the transport solver ([`Slots::penalised`]). Every λ gives a valid bound;
+//! the root chooses λ by subgradient steps (the shortfall of each skill at each task
+//! in the relaxed optimum), and every node keeps the lower of its two bounds.
+
+use afg_game::Assignment;
+
+use super::super::super::assignment_of;
+use super::super::super::transport::{self, Column, Slots, skill_rebates};
+use super::{Decision, Node, Pair, Search};
+
+/// Subgradient steps at the root at most.
+const ROUNDS: usize = 80;
+/// Subgradient steps at every other node, from the root's prices.
+const NODE_ROUNDS: usize = 4;
+/// Steps without a lower bound before the step size halves.
+const PATIENCE: usize = 5;
+/// Games with more robot-task pairs than this keep the envelope bound alone: a
+/// Lagrangian solve cannot start from a subsample's prices, so it reads every cost at
+/// every step.
+pub(in super::super) const MAX_PAIRS: usize = 1 << 21;
+
+/// A Lagrangian relaxation's optimum: its bound, its assignment, its prices, and how
+/// much of each task's team it holds (y_j: 1 where it earns, a share of the team its
+/// envelope spreads the value over where it is open, 0 where it may not earn).
+struct Relaxed {
+    bound: f64,
+    assignment: Assignment,
+    prices: Vec<f64>,
+    earns: Vec<f64>,
+}
+
+impl Search<'_> {
+    /// Solves the Lagrangian relaxation of a node (its decisions and fixed robots) at
+    /// `lambda` (task-major, one per task and skill), from `warm` prices; `None` where
+    /// it cannot keep the fixed robots.
+    fn relax(
+        &self,
+        decisions: &[Decision],
+        pairs: &[Pair],
+        lambda: &[f64],
+        warm: &[f64],
+    ) -> Option<Relaxed> {
+        let inst = self.instance;
+        let s = inst.num_skills();
+        // A task that may not earn gains nothing from its price: it is left at zero.
+        let mut lambda = lambda.to_vec();
+        let mut flats = vec![0usize; inst.num_tasks()];
+        let mut columns: Vec<Column> = inst
+            .task_ids()
+            .map(|j| {
+                let (value, k) = (inst.value_function(j), inst.min_team(j));
+                let prices = &mut lambda[j.index() * s..][..s];
+                let penalty: f64 = prices
+                    .iter()
+                    .zip(inst.requires(j))
+                    .map(|(&l, &r)| l * f64::from(r))
+                    .sum();
+                let capacity = inst.capacity(j).min(inst.num_robots());
+                let value = match decisions[j.index()] {
+                    Decision::Open => {
+                        let (slots, flat) = Slots::penalised(value, k, penalty, capacity);
+                        flats[j.index()] = flat;
+                        slots
+                    }
+                    Decision::Staffed => Slots::envelope(value, k, self.bonus).less(penalty),
+                    Decision::Unstaffed => {
+                        prices.fill(0.0);
+                        Slots::worthless(value)
+                    }
+                };
+                let capacity = match decisions[j.index()] {
+                    Decision::Unstaffed => self.unstaffed_room(j),
+                    _ => inst.capacity(j),
+                };
+                Column::Task { value, capacity }
+            })
+            .collect();
+        if inst.allows_void() {
+            columns.push(Column::Void);
+        }
+        let solution =
+            transport::solve_columns(inst, &columns, Some(warm), &self.adjust(pairs), &lambda);
+        let assignment = assignment_of(inst, &solution.task_of);
+        if !self.keeps(&assignment, pairs) {
+            return None;
+        }
+        let mut bound = 0.0;
+        for i in inst.robot_ids() {
+            if let Some(j) = assignment.task_of(i) {
+                let rebate = skill_rebates(inst, i, &lambda)
+                    .nth(j.index())
+                    .expect("a rebate per task");
+                bound += rebate - inst.cost(i, j);
+            }
+        }
+        let earns = inst
+            .task_ids()
+            .map(|j| {
+                let Column::Task { value, .. } = columns[j.index()] else {
+                    unreachable!("tasks come first")
+                };
+                let n = assignment.size(j);
+                bound += value.value(n);
+                match decisions[j.index()] {
+                    Decision::Staffed => {
+                        bound -= self.bonus * inst.min_team(j) as f64;
+                        1.0
+                    }
+                    Decision::Open if flats[j.index()] > 0 => {
+                        (n as f64 / flats[j.index()] as f64).min(1.0)
+                    }
+                    _ => 0.0,
+                }
+            })
+            .collect();
+        Some(Relaxed {
+            bound,
+            assignment,
+            prices: solution.prices,
+            earns,
+        })
+    }
+
+    /// A node's Lagrangian bound and its skill prices (infinite and none where the root
+    /// priced no skills): a few subgradient steps from its parent's prices (or the
+    /// root's), the flow solved from the parent's, every relaxed optimum offered to the
+    /// best found; `None` where no assignment keeps the node's fixed robots.
+    pub(super) fn skill_bound(
+        &mut self,
+        decisions: &[Decision],
+        pairs: &[Pair],
+        parent: &Node,
+    ) -> Option<(f64, Vec<f64>)> {
+        if self.skill_prices.is_empty() {
+            return Some((f64::INFINITY, Vec::new()));
+        }
+        let lambda = if parent.skill_prices.is_empty() {
+            self.skill_prices.clone()
+        } else {
+            parent.skill_prices.clone()
+        };
+        let steps = Steps {
+            rounds: NODE_ROUNDS,
+            size: self.skill_step,
+        };
+        let best = self.subgradient(decisions, pairs, lambda, &parent.prices, steps, &|| false)?;
+        Some((best.bound, best.lambda))
+    }
+
+    /// Chooses the skill prices from the root by subgradient steps, keeps those of the
+    /// lowest bound for every node, and returns that bound.
+    pub(in super::super) fn price_skills(
+        &mut self,
+        root: &Node,
+        out_of_time: &dyn Fn() -> bool,
+    ) -> f64 {
+        let lambda = vec![0.0; self.instance.num_tasks() * self.instance.num_skills()];
+        let steps = Steps {
+            rounds: ROUNDS,
+            size: 2.0,
+        };
+        match self.subgradient(
+            &root.decisions,
+            &root.pairs,
+            lambda,
+            &root.prices,
+            steps,
+            out_of_time,
+        ) {
+            Some(best) => {
+                self.skill_prices = best.lambda;
+                self.skill_step = best.step_size;
+                best.bound
+            }
+            None => root.bound,
+        }
+    }
+
+    /// Up to `steps.rounds` subgradient steps on a node's Lagrangian dual from `lambda`:
+    /// Polyak's step towards the best welfare found, its size halved after [`PATIENCE`]
+    /// steps without a lower bound. Every relaxed optimum is offered to the best found;
+    /// returns the lowest bound, its prices and the step size reached (`None`: the node
+    /// is infeasible).
+    fn subgradient(
+        &mut self,
+        decisions: &[Decision],
+        pairs: &[Pair],
+        mut lambda: Vec<f64>,
+        warm: &[f64],
+        steps: Steps,
+        out_of_time: &dyn Fn() -> bool,
+    ) -> Option<Dual> {
+        let inst = self.instance;
+        let s = inst.num_skills();
+        let mut best: Option<Dual> = None;
+        let mut prices = warm.to_vec();
+        let (mut step_size, mut stalled) = (steps.size, 0);
+        for _ in 0..steps.rounds {
+            if out_of_time() || best.as_ref().is_some_and(|b| self.closes(b.bound)) {
+                break;
+            }
+            let relaxed = self.relax(decisions, pairs, &lambda, &prices)?;
+            self.offer(&relaxed.assignment);
+            if best
+                .as_ref()
+                .is_none_or(|b| relaxed.bound < b.bound - 1e-12 * b.bound.abs().max(1.0))
+            {
+                best = Some(Dual {
+                    bound: relaxed.bound,
+                    lambda: lambda.clone(),
+                    step_size,
+                });
+                stalled = 0;
+            } else {
+                stalled += 1;
+                if stalled == PATIENCE {
+                    step_size /= 2.0;
+                    stalled = 0;
+                }
+            }
+            // The subgradient: each required skill held at each task, less what the
+            // task's share of earning asks for.
+            let held = inst.skills_held(&relaxed.assignment);
+            let mut gradient = vec![0.0; lambda.len()];
+            for j in inst.task_ids() {
+                let at = j.index() * s;
+                for (t, &need) in inst.requires(j).iter().enumerate() {
+                    if need > 0 {
+                        gradient[at + t] =
+                            held[at + t] as f64 - f64::from(need) * relaxed.earns[j.index()];
+                    }
+                }
+            }
+            let norm: f64 = gradient.iter().map(|g| g * g).sum();
+            if norm == 0.0 {
+                break; // λ is optimal: the relaxation meets every skill it prices
+            }
+            let step = step_size * (relaxed.bound - self.best_welfare) / norm;
+            for (l, g) in lambda.iter_mut().zip(&gradient) {
+                *l = (*l - step * g).max(0.0);
+            }
+            prices = relaxed.prices;
+        }
+        best
+    }
+}
+
+/// How many subgradient steps, and the first one's size.
+#[derive(Clone, Copy)]
+struct Steps {
+    rounds: usize,
+    size: f64,
+}
+
+/// The best point of a subgradient search: its bound, its skill prices, and the step
+/// size reached.
+struct Dual {
+    bound: f64,
+    lambda: Vec<f64>,
+    step_size: f64,
+}
+
+#[cfg(test)]
+mod tests {
+    use afg_game::{Assignment, GeneratorKnobs, Instance, TaskId};
+    use proptest::prelude::*;
+
+    use super::super::Search;
+
+    /// The best welfare over every assignment (with the void where allowed).
+    fn brute_force(inst: &Instance) -> f64 {
+        let (n, m) = (inst.num_robots(), inst.num_tasks());
+        let choices = m + usize::from(inst.allows_void());
+        let mut best = f64::NEG_INFINITY;
+        for code in 0..choices.pow(n as u32) {
+            let tasks = (0..n)
+                .map(|i| {
+                    let c = code / choices.pow(i as u32) % choices;
+                    (c < m).then_some(TaskId(c as u32))
+                })
+                .collect();
+            if let Ok(a) = Assignment::from_tasks(inst, tasks) {
+                best = best.max(inst.welfare(&a));
+            }
+        }
+        best
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(200))]
+
+        /// Every skill price gives a bound on the optimum, and the root's search lowers
+        /// the envelope's bound without crossing the optimum.
+        #[test]
+        fn every_skill_price_bounds_the_optimum(
+            seed in 0u64..10_000,
+            n in 2usize..=6,
+            m in 1usize..=3,
+            raw in proptest::collection::vec(0.0f64..3.0, 6),
+        ) {
+            let knobs = GeneratorKnobs {
+                min_team: Some((1, 3)),
+                skills: Some(2),
+                skill_share: Some(0.5),
+                requires: Some((0, 2)),
+                ..GeneratorKnobs::default()
+            };
+            let inst = knobs.config(n, m, seed).unwrap().generate().unwrap();
+            let optimum = brute_force(&inst);
+            let tol = 1e-9 * optimum.abs().max(1.0);
+            let mut search = Search::new(&inst);
+            let root = search.node(search.root_decisions(), Vec::new(), None).unwrap();
+            let lambda = &raw[..m * 2];
+            let relaxed = search.relax(&root.decisions, &[], lambda, &root.prices).unwrap();
+            prop_assert!(relaxed.bound >= optimum - tol, "{} < {optimum}", relaxed.bound);
+            let priced = search.price_skills(&root, &|| false);
+            prop_assert!(priced >= optimum - tol, "{priced} < {optimum}");
+            prop_assert!(priced <= root.bound + tol, "{priced} > {}", root.bound);
+        }
+    }
+}
