@@ -413,8 +413,12 @@ fn game_text(args: &BenchTeamsArgs) -> String {
     }
 }
 
-/// The allocators' table: each one's welfare as a share of the best proven bound.
+/// The allocators' table: each one's welfare as a share of the best proven bound
+/// (none where every size is above `--allocators-up-to`).
 fn allocator_table(cases: &[Vec<&Row>], k: usize) -> String {
+    if cases.iter().flatten().all(|r| r.allocators.is_empty()) {
+        return String::new();
+    }
     let mut md =
         "Allocators (% of the best proven bound, mean; time per instance):\n\n| N | M |".to_owned();
     let names: Vec<&str> = ALLOCATORS.iter().map(|m| m.label()).collect();

@@ -23,6 +23,7 @@
 //! robots free to join it earns nothing. Staffed then means earning: the threshold
 //! met and the skills held.
 
+use std::cell::Cell;
 use std::collections::BinaryHeap;
 use std::time::{Duration, Instant};
 
@@ -52,7 +53,9 @@ use node::Search;
 /// ```
 #[derive(Clone, Copy, Debug, Default)]
 pub struct TeamOptimum {
-    /// Stop after this long with the best found and its gap (`None`: until proven).
+    /// Stop within this long with the best found and its gap (`None`: until proven):
+    /// the search starts no step that its longest step so far says would end later
+    /// (the root's relaxation is always solved, however long it takes).
     pub time_limit: Option<Duration>,
 }
 
@@ -89,11 +92,8 @@ impl TeamOptimum {
     /// # Errors
     /// None on a valid instance (the `Result` is the [`Allocator`]'s).
     pub fn solve(&self, instance: &Instance) -> Result<TeamSolution, AllocError> {
-        let start = Instant::now();
-        let out_of_time = || {
-            self.time_limit
-                .is_some_and(|limit| start.elapsed() >= limit)
-        };
+        let deadline = Deadline::new(self.time_limit);
+        let out_of_time = || deadline.near();
         let mut search = Search::new(instance);
         let Some(mut root) = search.node(search.root_decisions(), Vec::new(), None) else {
             unreachable!("the root is feasible: the instance holds every robot")
@@ -158,5 +158,36 @@ impl Allocator for TeamOptimum {
             },
             assignment: solution.assignment,
         })
+    }
+}
+
+/// A time limit that the search checks between steps: it is near when the time spent
+/// plus the longest step between two checks so far (the root's solve before the first
+/// check aside: it always runs) reaches it.
+struct Deadline {
+    limit: Option<Duration>,
+    start: Instant,
+    last: Cell<Option<Instant>>,
+    longest: Cell<Duration>,
+}
+
+impl Deadline {
+    fn new(limit: Option<Duration>) -> Self {
+        Deadline {
+            limit,
+            start: Instant::now(),
+            last: Cell::new(None),
+            longest: Cell::new(Duration::ZERO),
+        }
+    }
+
+    /// Whether the next step would likely end past the limit.
+    fn near(&self) -> bool {
+        let now = Instant::now();
+        if let Some(last) = self.last.replace(Some(now)) {
+            self.longest.set(self.longest.get().max(now - last));
+        }
+        self.limit
+            .is_some_and(|limit| now - self.start + self.longest.get() >= limit)
     }
 }

@@ -12,10 +12,15 @@ order, exactly as in ``afg/Allocation-v0`` (the same engine underneath, step for
 - **reward**: a team reward: every agent receives each step's change in welfare, so each
   agent's return is the final welfare;
 - the episode ends for every agent after the last robot acts; ``infos`` then hold
-  ``tasks``, ``welfare``, ``opt_welfare`` and ``percent_of_opt``.
+  ``tasks``, ``welfare``, ``opt_welfare`` and ``percent_of_opt``;
+- **global state** for centralised critics: ``state()`` is every robot's observation
+  concatenated in index order (the whole (N, M) utility table, flattened), as
+  PettingZoo's MPE environments do; ``state_space`` is its ``Box``.
 
 Keyword arguments as ``afg/Allocation-v0``'s: ``robots``, ``tasks``,
-``capacity_slack``, ``eps``, ``beta``, ``units``, ``allow_void``.
+``capacity_slack``, ``eps``, ``beta``, ``units``, ``allow_void``; and PettingZoo's
+``max_cycles`` (every robot acts once, so any limit ≥ 1 is never reached) and
+``render_mode`` (``None`` only).
 """
 
 from __future__ import annotations
@@ -27,7 +32,9 @@ from gymnasium import spaces
 from pettingzoo import AECEnv
 from pettingzoo.utils import wrappers
 
+from .._errors import RefusedError
 from ..gym import AllocationEnv
+from ._checks import check_max_cycles, check_render_mode
 
 __all__ = ["env", "raw_env"]
 
@@ -53,8 +60,13 @@ class raw_env(AECEnv):  # noqa: N801 (PettingZoo's name)
         beta: float = 1.0,
         units: str = "bounded",
         allow_void: bool = False,
+        max_cycles: Optional[int] = None,
+        render_mode: Optional[str] = None,
     ) -> None:
         super().__init__()
+        check_render_mode(render_mode, self.metadata)
+        self.max_cycles = check_max_cycles(max_cycles)
+        self.render_mode = render_mode
         self._game = AllocationEnv(
             robots=robots, tasks=tasks, capacity_slack=capacity_slack, eps=eps, beta=beta,
             units=units, allow_void=allow_void,
@@ -69,6 +81,7 @@ class raw_env(AECEnv):  # noqa: N801 (PettingZoo's name)
             }
         )
         self._action_space = spaces.Discrete(actions)
+        self.state_space = spaces.Box(-np.inf, np.inf, shape=(robots * tasks,), dtype=np.float32)
         self._obs: Dict[str, Any] = {}
 
     def observation_space(self, agent: str) -> spaces.Space:
@@ -95,6 +108,12 @@ class raw_env(AECEnv):  # noqa: N801 (PettingZoo's name)
             "observation": np.array(self._obs["task_features"][i], dtype=np.float32),
             "action_mask": np.asarray(mask, dtype=np.int8),
         }
+
+    def state(self) -> np.ndarray:
+        """The global state: every robot's observation, concatenated in index order."""
+        if not self._obs:
+            raise RefusedError("call reset() before state()")
+        return np.asarray(self._obs["task_features"], dtype=np.float32).reshape(-1)
 
     def step(self, action: Optional[int]) -> None:
         agent = self.agent_selection

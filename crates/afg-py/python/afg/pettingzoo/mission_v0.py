@@ -21,13 +21,24 @@ runs (exact, event-driven time) to the next epoch:
 - **reward**: a team reward: every agent receives ``Σ r_j`` times the work done on each
   task since the last epoch, so an episode's return is the value of all the work done.
 - **end**: a robot that fails is terminated and leaves; when every task is done all
-  are terminated, at the horizon all are truncated. ``infos`` are empty dicts.
+  are terminated, at the horizon all are truncated, and after ``max_cycles`` steps (if
+  given) all are truncated. ``infos`` are empty dicts.
+- **failed robots kept** (``keep_failed=True``): as SMAC does with dead units, a robot
+  that fails stays an agent until the episode ends, with an all-zero observation and
+  only "keep" allowed (its action changes nothing), so that the set of agents never
+  changes within an episode (what SuperSuit's vector wrappers and parameter sharing
+  need).
+- **global state** for centralised critics (MAPPO, QMIX): ``state()`` is every robot's
+  observation, concatenated in index order (zeros for a robot that failed), as
+  PettingZoo's MPE environments do; ``state_space`` is its ``Box``.
+- **render_mode**: ``None`` only (the animation is drawn by ``afg mission run
+  --animate``).
 
 Keyword arguments: ``robots``, ``tasks`` and ``preset`` ("static", "waves", "poisson",
 "attrition"), every knob of ``afg.Mission.generate`` (``workload``, ``speed``,
 ``arena``, ``horizon``, ``waves``, ``interval``, ``rate``, ``fail_share``,
-``capacity_slack``, ``allow_void``), and ``sensing``, ``comm_radius``,
-``decide_every``.
+``capacity_slack``, ``allow_void``), ``sensing``, ``comm_radius``, ``decide_every``,
+``max_cycles``, ``keep_failed`` and ``render_mode``.
 """
 
 from __future__ import annotations
@@ -40,6 +51,7 @@ from pettingzoo import AECEnv, ParallelEnv
 from pettingzoo.utils import parallel_to_aec, wrappers
 
 from .. import Mission, MissionEnv, RefusedError
+from ._checks import check_max_cycles, check_render_mode
 
 __all__ = ["env", "parallel_env", "raw_env"]
 
@@ -74,8 +86,14 @@ class MissionParallelEnv(ParallelEnv):
         sensing: Optional[float] = None,
         comm_radius: float = 0.25,
         decide_every: Optional[float] = None,
+        max_cycles: Optional[int] = None,
+        keep_failed: bool = False,
+        render_mode: Optional[str] = None,
         **knobs: Any,
     ) -> None:
+        check_render_mode(render_mode, self.metadata)
+        self.max_cycles = check_max_cycles(max_cycles)
+        self.keep_failed = keep_failed
         self._draw = lambda seed: Mission.generate(preset, robots, tasks, seed=seed, **knobs)
         self._perception = dict(sensing=sensing, comm_radius=comm_radius, decide_every=decide_every)
         # Check every knob now: a bad one raises here, not at the first reset.
@@ -91,10 +109,13 @@ class MissionParallelEnv(ParallelEnv):
         )
         self._observation_spaces = {a: observation for a in self.possible_agents}
         self._action_spaces = {a: spaces.Discrete(tasks + 1) for a in self.possible_agents}
+        self.state_space = spaces.Box(-np.inf, np.inf, shape=(robots * length,), dtype=np.float32)
         self._rng = np.random.default_rng()
         self._env: Optional[MissionEnv] = None
+        self._failed: set = set()
+        self._cycles = 0
         self.agents: List[str] = []
-        self.render_mode: Optional[str] = None
+        self.render_mode = render_mode
 
     def observation_space(self, agent: str) -> spaces.Space:
         return self._observation_spaces[agent]
@@ -102,13 +123,28 @@ class MissionParallelEnv(ParallelEnv):
     def action_space(self, agent: str) -> spaces.Space:
         return self._action_spaces[agent]
 
-    def _observe(self, agents: List[str]) -> Dict[str, Dict[str, np.ndarray]]:
+    def _views(self) -> Tuple[np.ndarray, np.ndarray]:
+        """Every robot's observation and mask; a failed robot's all zero, "keep" only."""
         assert self._env is not None
         obs, masks = self._env.observations(), self._env.masks()
+        for i in self._failed:
+            obs[i] = 0.0
+            masks[i] = 0
+            masks[i, -1] = 1
+        return obs, masks
+
+    def _observe(self, agents: List[str]) -> Dict[str, Dict[str, np.ndarray]]:
+        obs, masks = self._views()
         return {
             a: {"observation": obs[self._index[a]], "action_mask": masks[self._index[a]]}
             for a in agents
         }
+
+    def state(self) -> np.ndarray:
+        """The global state: every robot's observation, concatenated in index order."""
+        if self._env is None:
+            raise RefusedError("call reset() before state()")
+        return self._views()[0].reshape(-1)
 
     def reset(
         self, seed: Optional[int] = None, options: Optional[Dict[str, Any]] = None
@@ -117,6 +153,7 @@ class MissionParallelEnv(ParallelEnv):
             self._rng = np.random.default_rng(seed)
         mission = self._draw(int(self._rng.integers(2**63)))
         self._env = MissionEnv(mission, **self._perception)
+        self._failed, self._cycles = set(), 0
         self.agents = [self.possible_agents[i] for i in self._env.agents()]
         return self._observe(self.agents), {a: {} for a in self.agents}
 
@@ -127,14 +164,22 @@ class MissionParallelEnv(ParallelEnv):
             raise RefusedError("call reset() before step()")
         chosen = np.full(len(self.possible_agents), -1, dtype=np.int64)
         for agent, action in actions.items():
-            if agent in self.agents:
+            if agent in self.agents and self._index[agent] not in self._failed:
                 chosen[self._index[agent]] = int(action)
         acting = self.agents
         reward, failed, terminated, truncated = self._env.step(chosen)
-        gone = {self.possible_agents[i] for i in failed}
-        self.agents = [self.possible_agents[i] for i in self._env.agents()]
+        self._cycles += 1
+        truncated = truncated or (self.max_cycles is not None and self._cycles >= self.max_cycles)
+        ended = terminated or truncated
+        if self.keep_failed:
+            self._failed.update(failed)
+            gone = set()
+            self.agents = [] if ended else acting
+        else:
+            gone = {self.possible_agents[i] for i in failed}
+            self.agents = [] if ended else [self.possible_agents[i] for i in self._env.agents()]
         observations = self._observe(acting)
         rewards = {a: reward for a in acting}
         terminations = {a: terminated or a in gone for a in acting}
-        truncations = {a: truncated and a not in gone for a in acting}
+        truncations = {a: truncated and not terminated and a not in gone for a in acting}
         return observations, rewards, terminations, truncations, {a: {} for a in acting}

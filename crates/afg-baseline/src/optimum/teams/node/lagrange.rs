@@ -164,6 +164,9 @@ impl Search<'_> {
         root: &Node,
         out_of_time: &dyn Fn() -> bool,
     ) -> f64 {
+        if self.closes(root.bound) {
+            return root.bound; // the dive's answer is proven already
+        }
         let lambda = vec![0.0; self.instance.num_tasks() * self.instance.num_skills()];
         let steps = Steps {
             rounds: ROUNDS,
