@@ -337,8 +337,9 @@ fn markdown(rows: &[Row], args: &BenchTeamsArgs) -> String {
     let k = args.instances;
     let game = game_text(args);
     let mut md = format!(
-        "Game: {game}.\n\nExact solvers ({k} scarce instances per size; % of the best proven bound, mean; \
+        "Game: {game}.\n\nExact solvers ({k} scarce instance{} per size; % of the best proven bound, mean; \
          proven: instances proven optimal; afg with a {}s limit on one core):\n\n| N | M | afg time | afg proven | afg % of bound | afg nodes | afg peak RSS |",
+        if k == 1 { "" } else { "s" },
         args.time_limit
     );
     let peer_names: Vec<(String, f64)> = rows
