@@ -163,7 +163,8 @@ pub enum AllocError {
     /// The instance is a team game (thresholds or skills) that this method does not
     /// play: its answer would count values the game does not pay.
     #[error(
-        "{method} does not play games with {rules}: {reason}; `opt` solves them exactly, and `greedy`, `nearest`, `random` and `blind` play them"
+        "{method} does not play games with {rules}: {reason}; `opt` solves them exactly, and {} play them",
+        team_players(.rules)
     )]
     TeamsNotSupported {
         /// The method's name.
@@ -270,6 +271,16 @@ pub fn check_game(
         rules,
         reason,
     })
+}
+
+/// The other built-in methods that play games with `rules` ("skill requirements" or
+/// "team thresholds"), for [`AllocError::TeamsNotSupported`]'s message.
+fn team_players(rules: &str) -> &'static str {
+    if rules == "skill requirements" {
+        "`nearest`, `random` and `blind`"
+    } else {
+        "`greedy`, the DA family, `nearest`, `random` and `blind`"
+    }
 }
 
 /// The built-in methods, by command-line name.

@@ -40,23 +40,8 @@ pub struct GenArgs {
     /// brings ("allow_void": true in each instance).
     #[arg(long)]
     allow_void: bool,
-    /// Team thresholds: each task earns nothing until its coalition has at least
-    /// `min_team` robots, drawn uniformly from LO..=HI (default: 1, the paper's game),
-    /// e.g. `--min-team 1,5`.
-    #[arg(long, value_delimiter = ',', num_args = 1, value_names = ["LO,HI"])]
-    min_team: Option<Vec<usize>>,
-    /// Skills: S skills, each robot holding each one with probability --skill-share;
-    /// a task earns nothing until its coalition holds what it requires of each
-    /// (default: no skills).
-    #[arg(long, value_name = "S")]
-    skills: Option<usize>,
-    /// The probability that a robot holds a skill (with --skills; default 0.5).
-    #[arg(long, value_name = "P")]
-    skill_share: Option<f64>,
-    /// Each task requires each skill in an amount drawn uniformly from LO..=HI (with
-    /// --skills; default 1,2).
-    #[arg(long, value_delimiter = ',', num_args = 1, value_names = ["LO,HI"])]
-    requires: Option<Vec<usize>>,
+    #[command(flatten)]
+    teams: TeamArgs,
     /// Output JSON Lines file (one instance per line, generator parameters inside).
     #[arg(long)]
     out: PathBuf,
@@ -73,10 +58,10 @@ pub fn generate(args: &GenArgs) -> Result<Vec<Instance>> {
         beta: args.beta,
         rewards: pair("--rewards", args.rewards.as_deref())?,
         allow_void: args.allow_void,
-        min_team: pair("--min-team", args.min_team.as_deref())?,
-        skills: args.skills,
-        skill_share: args.skill_share,
-        requires: pair("--requires", args.requires.as_deref())?,
+        min_team: args.teams.min_team()?,
+        skills: args.teams.skills,
+        skill_share: args.teams.skill_share,
+        requires: args.teams.requires()?,
     };
     (0..args.count as u64)
         .map(|i| {
@@ -84,6 +69,40 @@ pub fn generate(args: &GenArgs) -> Result<Vec<Instance>> {
             Ok(knobs.config(args.robots, args.tasks, seed)?.generate()?)
         })
         .collect()
+}
+
+/// The team game's knobs, as `afg gen` and `afg mission gen` take them.
+#[derive(Args)]
+pub struct TeamArgs {
+    /// Team thresholds: each task earns nothing (does no work, in a mission) until its
+    /// coalition has at least `min_team` robots, drawn uniformly from LO..=HI (default:
+    /// 1, the paper's game), e.g. `--min-team 1,5`.
+    #[arg(long, value_delimiter = ',', num_args = 1, value_names = ["LO,HI"])]
+    min_team: Option<Vec<usize>>,
+    /// Skills: S skills, each robot holding each one with probability --skill-share;
+    /// a task earns nothing until its coalition holds what it requires of each
+    /// (default: no skills).
+    #[arg(long, value_name = "S")]
+    pub skills: Option<usize>,
+    /// The probability that a robot holds a skill (with --skills; default 0.5).
+    #[arg(long, value_name = "P")]
+    pub skill_share: Option<f64>,
+    /// Each task requires each skill in an amount drawn uniformly from LO..=HI (with
+    /// --skills; default 1,2).
+    #[arg(long, value_delimiter = ',', num_args = 1, value_names = ["LO,HI"])]
+    requires: Option<Vec<usize>>,
+}
+
+impl TeamArgs {
+    /// `--min-team LO,HI`.
+    pub fn min_team(&self) -> Result<Option<(usize, usize)>> {
+        pair("--min-team", self.min_team.as_deref())
+    }
+
+    /// `--requires LO,HI`.
+    pub fn requires(&self) -> Result<Option<(usize, usize)>> {
+        pair("--requires", self.requires.as_deref())
+    }
 }
 
 /// A `LO,HI` flag's two values.

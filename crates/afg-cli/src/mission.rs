@@ -74,6 +74,8 @@ pub struct GenArgs {
     /// Robots may idle (the void task) when no task is worth their trip.
     #[arg(long)]
     allow_void: bool,
+    #[command(flatten)]
+    teams: crate::generate::TeamArgs,
     /// The mission file to write (JSON).
     #[arg(long)]
     out: PathBuf,
@@ -246,6 +248,10 @@ fn generate(args: &GenArgs) -> Result<()> {
         fail_share: args.fail_share,
         capacity_slack: args.capacity_slack,
         allow_void: args.allow_void,
+        min_team: args.teams.min_team()?,
+        skills: args.teams.skills,
+        skill_share: args.teams.skill_share,
+        requires: args.teams.requires()?,
     };
     let config = knobs.config(args.preset, args.robots, args.tasks, args.seed);
     let mission = config.generate()?;
@@ -343,6 +349,12 @@ fn print_metrics(name: &str, path: &Path, run: &MissionRun) {
     );
     println!("  distance            {:.3}", m.distance);
     println!("  reassignments       {}", m.reassignments);
+    if let Some(w) = &m.waiting {
+        println!(
+            "  waiting             {:.3} robot-time units at tasks whose team was incomplete",
+            w.total
+        );
+    }
     println!(
         "  decisions           {}   (compute {:.3} ms mean, {:.3} ms max, {:.3} ms in all)",
         m.decisions,

@@ -2,7 +2,7 @@
 //! (unit square, rewards N/K to 2N/K, eps = max(2, N/K), β = 1), with workloads,
 //! arrival times and failures.
 
-use afg_game::{GeneratorConfig, Point};
+use afg_game::{CountRange, GeneratorConfig, GeneratorKnobs, Point, SkillDraw};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -81,6 +81,13 @@ pub struct MissionConfig {
     /// and the others idle); `None`: unbounded.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub capacity_slack: Option<f64>,
+    /// Task thresholds (`min_team`) uniform in this range, as the instance generator
+    /// draws them; `None`: every task done by one robot.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min_team: Option<CountRange>,
+    /// Robot skills and task requirements, as the instance generator draws them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub skills: Option<SkillDraw>,
 }
 
 /// The knobs of a drawn mission besides its preset, size and seed, as every front end
@@ -121,6 +128,16 @@ pub struct MissionKnobs {
     pub capacity_slack: Option<f64>,
     /// Robots may idle (the void task) when no task is worth their trip.
     pub allow_void: bool,
+    /// Task thresholds uniform in `[lo, hi]` (`None`: 1).
+    pub min_team: Option<(usize, usize)>,
+    /// S skills (`None`: no skills), each robot holding each with probability
+    /// `skill_share` (default [`GeneratorKnobs::SKILL_SHARE`]), each task requiring
+    /// each in an amount uniform in `requires` (default [`GeneratorKnobs::REQUIRES`]).
+    pub skills: Option<usize>,
+    /// See `skills`.
+    pub skill_share: Option<f64>,
+    /// See `skills`.
+    pub requires: Option<(usize, usize)>,
 }
 
 impl Default for MissionKnobs {
@@ -136,6 +153,10 @@ impl Default for MissionKnobs {
             fail_share: 0.3,
             capacity_slack: None,
             allow_void: false,
+            min_team: None,
+            skills: None,
+            skill_share: None,
+            requires: None,
         }
     }
 }
@@ -160,6 +181,19 @@ impl MissionKnobs {
             fail_share: self.fail_share,
             allow_void: self.allow_void,
             capacity_slack: self.capacity_slack,
+            min_team: self.min_team.map(|(min, max)| CountRange { min, max }),
+            // A share or requirements without skills stay, as S = 0, for the check.
+            skills: (self.skills.is_some_and(|s| s > 0)
+                || self.skill_share.is_some()
+                || self.requires.is_some())
+            .then(|| SkillDraw {
+                count: self.skills.unwrap_or(0),
+                share: self.skill_share.unwrap_or(GeneratorKnobs::SKILL_SHARE),
+                requires: {
+                    let (min, max) = self.requires.unwrap_or(GeneratorKnobs::REQUIRES);
+                    CountRange { min, max }
+                },
+            }),
         }
     }
 }
@@ -192,29 +226,35 @@ impl MissionConfig {
         if let Some(slack) = self.capacity_slack {
             paper = paper.with_capacity_slack(slack);
         }
+        paper.min_team = self.min_team;
+        paper.skills = self.skills;
         let game = paper.generate()?;
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed ^ 0x6d69_7373_696f_6e00);
         let scale = |p: Point| Point::new(self.arena * p.x, self.arena * p.y);
         let robots = game
-            .robots()
-            .iter()
-            .map(|&p| RobotSpec {
-                position: scale(p),
+            .robot_ids()
+            .map(|i| RobotSpec {
+                position: scale(game.robots()[i.index()]),
                 speed: self.speed,
+                skills: game.skills(i).to_vec(),
             })
             .collect();
         let appears = self.arrival_times(&mut rng);
         let tasks = game
-            .tasks()
-            .iter()
+            .task_ids()
             .zip(appears)
-            .map(|(t, appears)| TaskSpec {
-                position: scale(t.position),
-                reward: t.reward,
-                eps: t.eps,
-                capacity: t.capacity,
-                workload: rng.random_range(self.workload_min..=self.workload_max),
-                appears,
+            .map(|(j, appears)| {
+                let t = game.task(j);
+                TaskSpec {
+                    position: scale(t.position),
+                    reward: t.reward,
+                    eps: t.eps,
+                    capacity: t.capacity,
+                    workload: rng.random_range(self.workload_min..=self.workload_max),
+                    appears,
+                    min_team: game.min_team(j),
+                    requires: game.requires(j).to_vec(),
+                }
             })
             .collect();
         let failures = if self.preset == Preset::Attrition {
@@ -292,6 +332,12 @@ impl MissionConfig {
         }
         if !(0.0..=1.0).contains(&self.fail_share) {
             return bad("the share of robots that fail must be in [0, 1]");
+        }
+        if self.min_team.is_some_and(|r| r.min == 0) {
+            return bad("thresholds (min_team) must be at least 1");
+        }
+        if self.skills.is_some_and(|d| d.count == 0) {
+            return bad("a skill share or requirements need skills (a number of skills S ≥ 1)");
         }
         Ok(())
     }

@@ -46,7 +46,7 @@ pub use plan::{MissionMethod, MissionPlan, Planner, RadioKnobs, Recording, Swarm
 pub use sim::{
     Decentralised, EnvStep, Frame, Latency, Metrics, MissionEnv, MissionRun, Perception,
     ROBOT_FEATURES, Replan, RunOptions, SwarmMetrics, TASK_FEATURES, TimelinePoint, TraceEvent,
-    simulate, simulate_with, work_rate,
+    Waiting, simulate, simulate_with, work_rate,
 };
 
 use afg_baseline::AllocError;

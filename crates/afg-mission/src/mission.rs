@@ -12,8 +12,8 @@ pub const MISSION_FORMAT: &str = "afg-mission";
 /// The format version this build reads and writes.
 pub const MISSION_VERSION: u32 = 1;
 
-/// A robot: where it starts and how fast it moves.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+/// A robot: where it starts, how fast it moves, and the skills it carries.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RobotSpec {
     /// Start position.
@@ -21,15 +21,19 @@ pub struct RobotSpec {
     /// Arena units per time unit (default 1).
     #[serde(default = "one")]
     pub speed: f64,
+    /// How much of each skill it holds (empty: no skills in this mission).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub skills: Vec<u32>,
 }
 
 fn one() -> f64 {
     1.0
 }
 
-/// A task: the game's task (as in an instance), when it appears, and how much work it
-/// takes.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+/// A task: the game's task (as in an instance), when it appears, how much work it
+/// takes, and the team it needs: work advances only while the robots present number
+/// at least `min_team` and hold the skills it `requires`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TaskSpec {
     /// Location.
@@ -46,6 +50,20 @@ pub struct TaskSpec {
     /// When it appears (time units from the start).
     #[serde(default)]
     pub appears: f64,
+    /// The fewest robots that do its work (default 1).
+    #[serde(default = "one_robot", skip_serializing_if = "is_one")]
+    pub min_team: usize,
+    /// How much of each skill its robots must hold together (empty: none).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub requires: Vec<u32>,
+}
+
+fn one_robot() -> usize {
+    1
+}
+
+fn is_one(n: &usize) -> bool {
+    *n == 1
 }
 
 impl TaskSpec {
@@ -166,7 +184,8 @@ impl Mission {
     }
 
     /// Checks every field: a finite positive horizon and speeds, finite positions,
-    /// valid tasks (reward, eps ≥ φ, capacity ≥ 1), finite positive workloads, tasks
+    /// valid tasks (reward, eps ≥ φ, capacity ≥ 1, min_team ≥ 1, a `requires` of as
+    /// many skills as every robot lists), finite positive workloads, tasks
     /// appearing in `[0, horizon)`, failures of existing robots within the horizon
     /// (returning later), β finite and ≥ 0, at least one robot and one task.
     ///
@@ -197,32 +216,15 @@ impl Mission {
                 ));
             }
         }
+        let skills = self.num_skills();
+        if let Some(i) = self.robots.iter().position(|r| r.skills.len() != skills) {
+            return bad(format!(
+                "robot {i} holds {} skills, but robot 0 holds {skills}: every robot lists the same skills",
+                self.robots[i].skills.len()
+            ));
+        }
         for (j, t) in self.tasks.iter().enumerate() {
-            let task = t.task();
-            if !task.position.is_finite() {
-                return bad(format!("task {j} has a non-finite position"));
-            }
-            if !(task.reward.is_finite() && task.reward >= 0.0) {
-                return bad(format!("task {j} has reward {}", task.reward));
-            }
-            if !(task.eps.is_finite() && task.eps >= GOLDEN_RATIO) {
-                return bad(format!("task {j} has eps {}, below φ ≈ 1.618", task.eps));
-            }
-            if task.capacity == Some(0) {
-                return bad(format!("task {j} has capacity 0"));
-            }
-            if !(t.workload.is_finite() && t.workload > 0.0) {
-                return bad(format!(
-                    "task {j} has workload {}: it must be finite and > 0",
-                    t.workload
-                ));
-            }
-            if !(t.appears.is_finite() && (0.0..self.horizon).contains(&t.appears)) {
-                return bad(format!(
-                    "task {j} appears at {}, outside the mission [0, {})",
-                    t.appears, self.horizon
-                ));
-            }
+            self.check_task(j, t, skills)?;
         }
         for f in &self.failures {
             if f.robot >= self.robots.len() {
@@ -248,6 +250,58 @@ impl Mission {
             }
         }
         Ok(())
+    }
+
+    /// Checks task j (`t`) of a mission whose robots list `skills` skills.
+    fn check_task(&self, j: usize, t: &TaskSpec, skills: usize) -> Result<(), MissionError> {
+        let bad = |what: String| Err(MissionError::Invalid(what));
+        let task = t.task();
+        if !task.position.is_finite() {
+            return bad(format!("task {j} has a non-finite position"));
+        }
+        if !(task.reward.is_finite() && task.reward >= 0.0) {
+            return bad(format!("task {j} has reward {}", task.reward));
+        }
+        if !(task.eps.is_finite() && task.eps >= GOLDEN_RATIO) {
+            return bad(format!("task {j} has eps {}, below φ ≈ 1.618", task.eps));
+        }
+        if task.capacity == Some(0) {
+            return bad(format!("task {j} has capacity 0"));
+        }
+        if !(t.workload.is_finite() && t.workload > 0.0) {
+            return bad(format!(
+                "task {j} has workload {}: it must be finite and > 0",
+                t.workload
+            ));
+        }
+        if t.min_team == 0 {
+            return bad(format!("task {j} has min_team 0: it must be at least 1"));
+        }
+        if !t.requires.is_empty() && t.requires.len() != skills {
+            return bad(format!(
+                "task {j} requires {} skills, but the robots hold {skills}",
+                t.requires.len()
+            ));
+        }
+        if !(t.appears.is_finite() && (0.0..self.horizon).contains(&t.appears)) {
+            return bad(format!(
+                "task {j} appears at {}, outside the mission [0, {})",
+                t.appears, self.horizon
+            ));
+        }
+        Ok(())
+    }
+
+    /// The number of skills the robots carry (0: none).
+    pub fn num_skills(&self) -> usize {
+        self.robots.first().map_or(0, |r| r.skills.len())
+    }
+
+    /// Whether any task needs a team of more than one robot or skills.
+    pub fn has_teams(&self) -> bool {
+        self.tasks
+            .iter()
+            .any(|t| t.min_team > 1 || t.requires.iter().any(|&r| r > 0))
     }
 
     /// Records the generator settings.

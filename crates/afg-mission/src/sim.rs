@@ -25,22 +25,42 @@ pub fn work_rate(n: usize, eps: f64) -> f64 {
     }
 }
 
-/// The paper's game of `robots` (where they are) and `tasks` of `mission`: GRAPE's game
-/// where the mission allows idling, or where the tasks cannot hold every robot (the
-/// extra robots then idle).
+/// The game of the robots `alive` (at `positions`) and the tasks `open` of `mission`:
+/// the paper's, or GRAPE's where the mission allows idling or where the tasks cannot
+/// hold every robot (the extra robots then idle); with the tasks' thresholds and
+/// skills where the mission has any.
 fn mission_game(
     mission: &Mission,
-    robots: Vec<Point>,
-    tasks: Vec<Task>,
+    alive: &[usize],
+    positions: Vec<Point>,
+    open: &[usize],
 ) -> Result<Instance, MissionError> {
+    let tasks: Vec<Task> = open.iter().map(|&j| mission.tasks[j].task()).collect();
     let room = (tasks.iter())
         .map(|t| t.capacity.unwrap_or(usize::MAX))
         .fold(0usize, usize::saturating_add);
-    Ok(if mission.allow_void || room < robots.len() {
-        Instance::with_void(robots, tasks, mission.beta)?
+    let game = if mission.allow_void || room < positions.len() {
+        Instance::with_void(positions, tasks, mission.beta)?
     } else {
-        Instance::new(robots, tasks, mission.beta)?
-    })
+        Instance::new(positions, tasks, mission.beta)?
+    };
+    if !mission.has_teams() {
+        return Ok(game);
+    }
+    let s = mission.num_skills();
+    let min_team = open.iter().map(|&j| mission.tasks[j].min_team).collect();
+    let skills: Vec<Vec<u32>> = alive
+        .iter()
+        .map(|&i| mission.robots[i].skills.clone())
+        .collect();
+    let requires: Vec<Vec<u32>> = open
+        .iter()
+        .map(|&j| match &mission.tasks[j].requires {
+            r if r.is_empty() => vec![0; s],
+            r => r.clone(),
+        })
+        .collect();
+    Ok(game.with_teams(min_team, &skills, &requires)?)
 }
 
 /// A robot's state.
@@ -152,6 +172,11 @@ struct Sim<'m, 'a> {
     now: f64,
     robots: Vec<Robot>,
     tasks: Vec<TaskState>,
+    /// The skills the robots present at each task hold together (task-major, S each).
+    held: Vec<u64>,
+    /// Robot-time spent at each task while its team was incomplete (missions with
+    /// teams).
+    waiting: Vec<f64>,
     /// Time-ordered scheduled events: (time, kind order, what).
     scheduled: Vec<(f64, Scheduled)>,
     next_scheduled: usize,
@@ -223,6 +248,10 @@ impl<'m, 'a> Sim<'m, 'a> {
             }
         }
         scheduled.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let (m, held) = (
+            mission.tasks.len(),
+            mission.tasks.len() * mission.num_skills(),
+        );
         Sim {
             mission,
             replan,
@@ -230,6 +259,8 @@ impl<'m, 'a> Sim<'m, 'a> {
             now: 0.0,
             robots,
             tasks,
+            held: vec![0; held],
+            waiting: vec![0.0; m],
             scheduled,
             next_scheduled: 0,
             next_tick: options.replan_every,
@@ -392,8 +423,8 @@ impl<'m, 'a> Sim<'m, 'a> {
             next = next.min(due.time);
         }
         for (j, t) in self.tasks.iter().enumerate() {
-            if t.open && t.present > 0 {
-                let rate = work_rate(t.present, self.mission.tasks[j].eps);
+            let rate = self.rate(j);
+            if t.open && rate > 0.0 {
                 next = next.min(self.now + t.remaining / rate);
             }
         }
@@ -423,6 +454,6 @@ pub use env::{EnvStep, MissionEnv, Perception, ROBOT_FEATURES, TASK_FEATURES};
 use motion::Arrival;
 pub(crate) use options::check_options;
 pub use options::{Latency, Replan, RunOptions};
-pub use outcome::{Frame, Metrics, MissionRun, TimelinePoint, TraceEvent};
+pub use outcome::{Frame, Metrics, MissionRun, TimelinePoint, TraceEvent, Waiting};
 use swarm::SwarmState;
 pub use swarm::{Decentralised, SwarmMetrics};

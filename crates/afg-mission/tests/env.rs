@@ -119,7 +119,7 @@ fn a_steps_reward_is_the_reward_rate_times_the_time() {
         let mut mission = MissionConfig::new(Preset::Static, robots, 1, 4)
             .generate()
             .unwrap();
-        let task = mission.tasks[0];
+        let task = mission.tasks[0].clone();
         for robot in &mut mission.robots {
             robot.position = task.position;
         }

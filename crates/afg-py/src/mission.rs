@@ -55,7 +55,7 @@ impl PyMission {
     /// knob as `afg mission gen` has it, under the same name; a knob left at None
     /// takes its default (`afg.mission_defaults()["generate"]`).
     #[staticmethod]
-    #[pyo3(signature = (preset, robots, tasks, seed=0, workload=None, speed=None, arena=None, horizon=None, waves=None, interval=None, rate=None, fail_share=None, capacity_slack=None, allow_void=false))]
+    #[pyo3(signature = (preset, robots, tasks, seed=0, workload=None, speed=None, arena=None, horizon=None, waves=None, interval=None, rate=None, fail_share=None, capacity_slack=None, allow_void=false, min_team=None, skills=None, skill_share=None, requires=None))]
     // Python's keyword arguments, one per knob.
     #[allow(clippy::too_many_arguments)]
     fn generate(
@@ -73,6 +73,10 @@ impl PyMission {
         fail_share: Option<f64>,
         capacity_slack: Option<f64>,
         allow_void: bool,
+        min_team: Option<(usize, usize)>,
+        skills: Option<usize>,
+        skill_share: Option<f64>,
+        requires: Option<(usize, usize)>,
     ) -> PyResult<Self> {
         let d = MissionKnobs::default();
         let knobs = MissionKnobs {
@@ -86,6 +90,10 @@ impl PyMission {
             fail_share: fail_share.unwrap_or(d.fail_share),
             capacity_slack,
             allow_void,
+            min_team,
+            skills,
+            skill_share,
+            requires,
         };
         let config = knobs.config(crate::named::<Preset>(preset)?, robots, tasks, seed);
         Ok(PyMission {
@@ -264,7 +272,8 @@ fn metrics_dict<'py>(py: Python<'py>, m: &Metrics) -> PyResult<Bound<'py, PyDict
     object_dict(py, &value)
 }
 
-/// A JSON object of numbers, nulls and such objects (the metrics) as a dict.
+/// A JSON object of numbers, nulls, lists of numbers (numpy arrays) and such objects
+/// (the metrics) as a dict.
 fn object_dict<'py>(py: Python<'py>, value: &serde_json::Value) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     for (k, v) in value.as_object().expect("metrics are an object") {
@@ -273,6 +282,11 @@ fn object_dict<'py>(py: Python<'py>, value: &serde_json::Value) -> PyResult<Boun
             serde_json::Value::Number(x) if x.is_u64() => d.set_item(k, x.as_u64())?,
             serde_json::Value::Number(x) => d.set_item(k, x.as_f64())?,
             serde_json::Value::Object(_) => d.set_item(k, object_dict(py, v)?)?,
+            serde_json::Value::Array(items) => {
+                let numbers: Vec<f64> =
+                    items.iter().filter_map(serde_json::Value::as_f64).collect();
+                d.set_item(k, PyArray1::from_vec(py, numbers))?;
+            }
             other => d.set_item(k, other.to_string())?,
         }
     }
@@ -399,6 +413,10 @@ pub(crate) fn mission_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     generate.set_item("rate", drawn.rate)?;
     generate.set_item("fail_share", drawn.fail_share)?;
     generate.set_item("capacity_slack", drawn.capacity_slack)?;
+    generate.set_item("min_team", drawn.min_team)?;
+    generate.set_item("skills", drawn.skills)?;
+    generate.set_item("skill_share", drawn.skill_share)?;
+    generate.set_item("requires", drawn.requires)?;
     let d = PyDict::new(py);
     d.set_item("run", run)?;
     d.set_item("generate", generate)?;

@@ -65,3 +65,21 @@ def test_bad_team_input_and_refusals_are_clear_errors() -> None:
     skills = afg.generate(20, 4, seed=2, skills=2)
     with pytest.raises(afg.InvalidInputError, match="does not play games with skill requirements"):
         afg.solve(skills, method="da")
+
+
+def test_team_missions_wait_for_their_teams_and_refuse_what_cannot_play_them() -> None:
+    mission = afg.Mission.generate("waves", robots=40, tasks=8, seed=3, min_team=(2, 5))
+    assert mission.to_json() == afg.Mission.generate("waves", robots=40, tasks=8, seed=3, min_team=(2, 5)).to_json()
+    assert '"min_team"' in mission.to_json()
+    metrics = afg.run_mission(mission, method="opt").metrics
+    waiting = metrics["waiting"]
+    assert isinstance(waiting["by_task"], np.ndarray) and waiting["by_task"].shape == (8,)
+    assert waiting["total"] == pytest.approx(waiting["by_task"].sum()) and waiting["total"] >= 0.0
+    # A mission without teams has no waiting metric.
+    assert "waiting" not in afg.run_mission(afg.Mission.generate("waves", 40, 8, seed=3)).metrics
+    skilled = afg.Mission.generate("waves", robots=40, tasks=8, seed=3, min_team=(2, 4), skills=2, requires=(0, 1))
+    for method in ("greedy", "grape"):
+        with pytest.raises(afg.AfgError, match="does not play games with skill requirements"):
+            afg.run_mission(skilled, method=method)
+    with pytest.raises(afg.InvalidInputError, match="need skills"):
+        afg.Mission.generate("waves", robots=10, tasks=3, requires=(1, 2))

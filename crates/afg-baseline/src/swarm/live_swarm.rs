@@ -82,6 +82,7 @@ impl LiveSwarm {
     /// (`None`: all hear of every task at once).
     ///
     /// # Errors
+    /// [`AllocError::TeamsNotSupported`] for a team game;
     /// [`AllocError::InvalidParameter`] for a network with its own failures (a mission
     /// has its own), a sensing radius that is not positive, an auction increment that
     /// is not, or a network knob out of range; [`AllocError::Graph`] if the graph
@@ -93,6 +94,7 @@ impl LiveSwarm {
         sensing: Option<f64>,
         seed: u64,
     ) -> Result<Self, AllocError> {
+        super::refuse_teams(method, &game)?;
         let bad = |what: &str| Err(AllocError::InvalidParameter(what.into()));
         if network.failure.is_some() {
             return bad(

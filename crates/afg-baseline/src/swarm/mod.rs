@@ -298,21 +298,7 @@ impl Swarm {
         instance: &Instance,
         on_round: impl FnMut(u64),
     ) -> Result<SwarmReport, AllocError> {
-        if instance.has_teams() {
-            return Err(AllocError::TeamsNotSupported {
-                method: match self.method {
-                    SwarmMethod::Grape { .. } => "grape",
-                    SwarmMethod::Auction { .. } => "auction",
-                }
-                .into(),
-                rules: if instance.has_skill_rules() {
-                    "skill requirements"
-                } else {
-                    "team thresholds"
-                },
-                reason: "the radio swarms bid and move for the concave game",
-            });
-        }
+        refuse_teams(self.method, instance)?;
         let limit = self.round_limit(instance.num_robots());
         let (outcome, wall_time) = timed(|| match self.method {
             SwarmMethod::Grape { preference } => {
@@ -392,4 +378,24 @@ pub(crate) fn partition_of(tasks: &[Option<TaskId>], m: usize) -> Assignment {
         assignment.set(RobotId(i as u32), task);
     }
     assignment
+}
+
+/// Refuses a team game: the radio swarms bid and move for the concave game.
+fn refuse_teams(method: SwarmMethod, instance: &Instance) -> Result<(), AllocError> {
+    if !instance.has_teams() {
+        return Ok(());
+    }
+    Err(AllocError::TeamsNotSupported {
+        method: match method {
+            SwarmMethod::Grape { .. } => "grape",
+            SwarmMethod::Auction { .. } => "auction",
+        }
+        .into(),
+        rules: if instance.has_skill_rules() {
+            "skill requirements"
+        } else {
+            "team thresholds"
+        },
+        reason: "the radio swarms bid and move for the concave game",
+    })
 }

@@ -3,7 +3,7 @@
 use std::collections::HashMap;
 use std::time::Instant;
 
-use afg_baseline::{CentralisedDa, Optimum};
+use afg_baseline::{CentralisedDa, Optimum, Plays, check_game};
 use afg_game::{Assignment, Instance, RobotId, TaskId};
 
 use super::{Latency, Pending, Replan, Sim, TraceEvent, mission_game};
@@ -125,9 +125,8 @@ impl Sim<'_, '_> {
     /// `open`: GRAPE's game where the mission allows idling, or where the open tasks
     /// cannot hold every robot (the extra robots then idle).
     fn game(&self, alive: &[usize], open: &[usize]) -> Result<Instance, MissionError> {
-        let robots = alive.iter().map(|&i| self.position(i)).collect();
-        let tasks = open.iter().map(|&j| self.mission.tasks[j].task()).collect();
-        mission_game(&self.mission, robots, tasks)
+        let positions = alive.iter().map(|&i| self.position(i)).collect();
+        mission_game(&self.mission, alive, positions, open)
     }
 
     /// The assignment of `game` by the replanning rule.
@@ -146,6 +145,8 @@ impl Sim<'_, '_> {
             Replan::Scratch(allocator) => Ok(allocator.allocate(game)?.assignment),
             Replan::Warm { first, .. } if !self.decided => Ok(first.allocate(game)?.assignment),
             Replan::Warm { preference, .. } => {
+                let da = CentralisedDa::new(preference);
+                check_game(game, &da, Plays::Counts)?;
                 let mut a = Assignment::unassigned(game.num_robots(), game.num_tasks());
                 for (k, place) in places.iter().enumerate() {
                     let robot = RobotId(k as u32);
@@ -155,13 +156,18 @@ impl Sim<'_, '_> {
                         a.set(robot, Some(task));
                     }
                 }
-                CentralisedDa::new(preference).improve(game, &mut a);
+                da.improve(game, &mut a);
                 Ok(a)
             }
             Replan::Decentralised(_) => Err(MissionError::Invalid(
                 "a decentralised method makes no central decision".into(),
             )),
             Replan::WarmOpt => {
+                if game.has_teams() {
+                    return Err(MissionError::Invalid(
+                        "the warm optimum (--warm) reuses a flow's prices, which a team game has not: run opt without --warm".into(),
+                    ));
+                }
                 let (a, prices) = if self.decided {
                     let start: Vec<f64> = open
                         .iter()

@@ -1,7 +1,9 @@
 //! What a run records as it goes (frames, the trace, the timeline, the work done) and
 //! the metrics of a finished run.
 
-use super::{Frame, Metrics, MissionRun, Sim, SwarmState, TimelinePoint, TraceEvent, work_rate};
+use super::{
+    Frame, Metrics, MissionRun, Sim, SwarmState, TimelinePoint, TraceEvent, Waiting, work_rate,
+};
 
 impl Sim<'_, '_> {
     /// The run's metrics, timeline and trace.
@@ -67,6 +69,10 @@ impl Sim<'_, '_> {
             work_done,
             work_value,
             swarm: self.swarm.as_ref().map(SwarmState::metrics),
+            waiting: self.mission.has_teams().then(|| Waiting {
+                total: self.waiting.iter().sum(),
+                by_task: self.waiting.clone(),
+            }),
         };
         MissionRun {
             metrics,
@@ -130,13 +136,58 @@ impl Sim<'_, '_> {
     /// positions follow from their legs).
     pub(super) fn advance(&mut self, to: f64) {
         let dt = to - self.now;
-        for (j, t) in self.tasks.iter_mut().enumerate() {
-            if t.open && t.present > 0 {
+        for j in 0..self.tasks.len() {
+            let t = self.tasks[j];
+            if !t.open || t.present == 0 {
+                continue;
+            }
+            if self.team_complete(j) {
                 let rate = work_rate(t.present, self.mission.tasks[j].eps);
-                t.remaining = (t.remaining - rate * dt).max(0.0);
+                self.tasks[j].remaining = (t.remaining - rate * dt).max(0.0);
+            } else {
+                self.waiting[j] += t.present as f64 * dt;
             }
         }
         self.now = to;
+    }
+
+    /// Whether the robots present at task j meet its threshold and hold its skills.
+    pub(super) fn team_complete(&self, j: usize) -> bool {
+        let spec = &self.mission.tasks[j];
+        let s = self.mission.num_skills();
+        self.tasks[j].present >= spec.min_team
+            && spec
+                .requires
+                .iter()
+                .zip(&self.held[j * s..][..s])
+                .all(|(&need, &have)| have >= u64::from(need))
+    }
+
+    /// Task j's work rate now: its present coalition's, once its team is complete.
+    pub(super) fn rate(&self, j: usize) -> f64 {
+        if self.team_complete(j) {
+            work_rate(self.tasks[j].present, self.mission.tasks[j].eps)
+        } else {
+            0.0
+        }
+    }
+
+    /// Robot i arrives at task j (`joins`) or leaves it: the count and skills present.
+    pub(super) fn present(&mut self, i: usize, j: usize, joins: bool) {
+        let s = self.mission.num_skills();
+        let skills = &self.mission.robots[i].skills;
+        let held = &mut self.held[j * s..][..s];
+        if joins {
+            self.tasks[j].present += 1;
+            held.iter_mut()
+                .zip(skills)
+                .for_each(|(h, &q)| *h += u64::from(q));
+        } else {
+            self.tasks[j].present -= 1;
+            held.iter_mut()
+                .zip(skills)
+                .for_each(|(h, &q)| *h -= u64::from(q));
+        }
     }
 
     pub(super) fn log(&mut self, event: TraceEvent) {

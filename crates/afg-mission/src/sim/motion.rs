@@ -56,7 +56,7 @@ impl Sim<'_, '_> {
                 self.robots[i].from = target;
                 self.robots[i].since = self.now;
                 self.robots[i].there = true;
-                self.tasks[j].present += 1;
+                self.present(i, j, true);
                 self.log(TraceEvent::Arrival {
                     time: self.now,
                     robot: i,
@@ -107,7 +107,7 @@ impl Sim<'_, '_> {
         let r = self.robots[i];
         if let Some(j) = r.task {
             if r.there {
-                self.tasks[j].present -= 1;
+                self.present(i, j, false);
             } else if r.alive {
                 self.distance += r.from.distance(here);
             }

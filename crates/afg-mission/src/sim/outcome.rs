@@ -118,6 +118,19 @@ pub struct Metrics {
     /// round counts as a decision).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub swarm: Option<SwarmMetrics>,
+    /// In a mission with teams: the robot-time spent at tasks whose team was
+    /// incomplete (robots that arrived first, waiting for the rest).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub waiting: Option<Waiting>,
+}
+
+/// Robot-time spent waiting at tasks whose team was incomplete.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Waiting {
+    /// Over every task.
+    pub total: f64,
+    /// Per task, in mission order.
+    pub by_task: Vec<f64>,
 }
 
 /// A finished run: its metrics, its timeline, and (if asked) every event.

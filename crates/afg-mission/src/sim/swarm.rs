@@ -100,9 +100,10 @@ impl SwarmState {
                 "the rounds per time unit must be finite and positive".into(),
             ));
         }
-        let robots = mission.robots.iter().map(|r| r.position).collect();
-        let tasks = mission.tasks.iter().map(|t| t.task()).collect();
-        let game = mission_game(mission, robots, tasks)?;
+        let robots: Vec<usize> = (0..mission.robots.len()).collect();
+        let tasks: Vec<usize> = (0..mission.tasks.len()).collect();
+        let positions = mission.robots.iter().map(|r| r.position).collect();
+        let game = mission_game(mission, &robots, positions, &tasks)?;
         let live = LiveSwarm::new(
             game,
             config.method,

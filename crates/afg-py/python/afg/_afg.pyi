@@ -215,6 +215,10 @@ class Mission:
         fail_share: Optional[float] = None,
         capacity_slack: Optional[float] = None,
         allow_void: bool = False,
+        min_team: Optional[Tuple[int, int]] = None,
+        skills: Optional[int] = None,
+        skill_share: Optional[float] = None,
+        requires: Optional[Tuple[int, int]] = None,
     ) -> "Mission":
         """Draws a mission with every knob of ``afg mission gen``; a knob left at None
         takes its default (``mission_defaults()["generate"]``).

@@ -1,0 +1,195 @@
+//! Missions whose tasks need teams: work advances only while the robots present meet
+//! the task's threshold and skills; the robots that arrive first wait, and the waiting
+//! is measured. Hand-computed cases, the file format, the generator and the refusals.
+
+use afg_baseline::{Greedy, Optimum};
+use afg_game::Point;
+use afg_mission::{
+    Failure, Mission, MissionConfig, MissionError, Preset, Replan, RobotSpec, RunOptions, TaskSpec,
+    simulate, work_rate,
+};
+
+fn robot(x: f64, skills: Vec<u32>) -> RobotSpec {
+    RobotSpec {
+        position: Point::new(x, 0.0),
+        speed: 1.0,
+        skills,
+    }
+}
+
+/// One task at x = 1 of workload `w` (reward 1, eps 2).
+fn task(w: f64, min_team: usize, requires: Vec<u32>) -> TaskSpec {
+    TaskSpec {
+        position: Point::new(1.0, 0.0),
+        reward: 1.0,
+        eps: 2.0,
+        capacity: None,
+        workload: w,
+        appears: 0.0,
+        min_team,
+        requires,
+    }
+}
+
+fn close(a: f64, b: f64) -> bool {
+    (a - b).abs() < 1e-9 * b.abs().max(1.0)
+}
+
+#[test]
+fn two_robots_needed_the_work_starts_when_the_second_arrives() {
+    // Robot 0 reaches the task at t = 1, robot 1 at t = 3; the task needs both. From
+    // t = 3 the pair works at log2(3) per time unit: done at 3 + 3 / log2(3). Robot 0
+    // waited 2 time units.
+    let mission = Mission::new(
+        1.0,
+        false,
+        50.0,
+        vec![robot(0.0, vec![]), robot(4.0, vec![])],
+        vec![task(3.0, 2, vec![])],
+        vec![],
+    )
+    .unwrap();
+    for replan in [Replan::Scratch(&Optimum), Replan::Scratch(&Greedy)] {
+        let run = simulate(&mission, replan, RunOptions::default()).unwrap();
+        let done = 3.0 + 3.0 / work_rate(2, 2.0);
+        assert!(
+            close(run.metrics.makespan.unwrap(), done),
+            "{:?}",
+            run.metrics.makespan
+        );
+        let waiting = run.metrics.waiting.expect("a mission with teams");
+        assert!(close(waiting.total, 2.0), "{}", waiting.total);
+        assert_eq!(waiting.by_task.len(), 1);
+    }
+}
+
+#[test]
+fn a_skill_nobody_present_holds_stops_the_work() {
+    // One robot is enough, but only robot 1 (arriving at t = 3) holds the skill.
+    let mission = Mission::new(
+        1.0,
+        false,
+        50.0,
+        vec![robot(0.0, vec![0]), robot(4.0, vec![1])],
+        vec![task(3.0, 1, vec![1])],
+        vec![],
+    )
+    .unwrap();
+    let run = simulate(&mission, Replan::Scratch(&Optimum), RunOptions::default()).unwrap();
+    assert!(close(
+        run.metrics.makespan.unwrap(),
+        3.0 + 3.0 / work_rate(2, 2.0)
+    ));
+    assert!(close(run.metrics.waiting.unwrap().total, 2.0));
+}
+
+#[test]
+fn a_team_that_falls_below_its_threshold_stops_until_staffed_again() {
+    // Both robots start at the task (x = 1); robot 1 fails at t = 1 and is back at
+    // t = 2. Work: log2(3) per unit on [0, 1], none on [1, 2] (robot 0 waits), then
+    // log2(3) again: done at 1 + W / log2(3).
+    let w = 10.0;
+    let failures = vec![Failure {
+        robot: 1,
+        time: 1.0,
+        returns: Some(2.0),
+    }];
+    let mission = Mission::new(
+        1.0,
+        false,
+        50.0,
+        vec![robot(1.0, vec![]), robot(1.0, vec![])],
+        vec![task(w, 2, vec![])],
+        failures,
+    )
+    .unwrap();
+    let run = simulate(&mission, Replan::Scratch(&Optimum), RunOptions::default()).unwrap();
+    assert!(close(
+        run.metrics.makespan.unwrap(),
+        1.0 + w / work_rate(2, 2.0)
+    ));
+    assert!(close(run.metrics.waiting.unwrap().total, 1.0));
+}
+
+#[test]
+fn team_fields_round_trip_and_bad_ones_are_refused() {
+    let mut config = MissionConfig::new(Preset::Waves, 30, 6, 4);
+    config.min_team = Some(afg_game::CountRange { min: 2, max: 4 });
+    let mission = config.generate().unwrap();
+    assert!(mission.has_teams());
+    assert!(mission.tasks.iter().all(|t| (2..=4).contains(&t.min_team)));
+    let text = mission.to_json();
+    assert_eq!(Mission::from_json(&text).unwrap(), mission);
+    assert!(text.contains("\"min_team\""));
+    // A mission without teams writes none of the fields.
+    let plain = MissionConfig::new(Preset::Waves, 30, 6, 4)
+        .generate()
+        .unwrap();
+    assert!(!plain.has_teams());
+    assert!(!plain.to_json().contains("min_team"));
+    let run = simulate(&plain, Replan::Scratch(&Greedy), RunOptions::default()).unwrap();
+    assert!(run.metrics.waiting.is_none());
+
+    let one = |robots: Vec<RobotSpec>, tasks: Vec<TaskSpec>| {
+        Mission::new(1.0, false, 10.0, robots, tasks, vec![]).unwrap_err()
+    };
+    let message = |e: MissionError| e.to_string();
+    assert!(
+        message(one(vec![robot(0.0, vec![])], vec![task(1.0, 0, vec![])])).contains("min_team 0")
+    );
+    assert!(
+        message(one(
+            vec![robot(0.0, vec![1]), robot(0.0, vec![])],
+            vec![task(1.0, 1, vec![])]
+        ))
+        .contains("robot 1 holds 0 skills")
+    );
+    assert!(
+        message(one(
+            vec![robot(0.0, vec![1])],
+            vec![task(1.0, 1, vec![1, 1])]
+        ))
+        .contains("requires 2 skills")
+    );
+    let text = plain
+        .to_json()
+        .replace("\"workload\"", "\"min_team\":1.5,\"workload\"");
+    assert!(Mission::from_json(&text).is_err());
+}
+
+#[test]
+fn generated_team_missions_repeat_and_refuse_what_cannot_play_them() {
+    let mut config = MissionConfig::new(Preset::Waves, 40, 8, 9);
+    config.min_team = Some(afg_game::CountRange { min: 2, max: 5 });
+    config.skills = Some(afg_game::SkillDraw {
+        count: 2,
+        share: 0.5,
+        requires: afg_game::CountRange { min: 0, max: 1 },
+    });
+    let mission = config.generate().unwrap();
+    assert_eq!(mission, config.generate().unwrap());
+    assert!(mission.robots.iter().all(|r| r.skills.len() == 2));
+    let run = simulate(&mission, Replan::Scratch(&Optimum), RunOptions::default()).unwrap();
+    let again = simulate(&mission, Replan::Scratch(&Optimum), RunOptions::default()).unwrap();
+    assert_eq!(run.timeline, again.timeline); // the same run (compute times aside)
+    assert_eq!(run.metrics.waiting, again.metrics.waiting);
+    assert!(run.metrics.waiting.is_some());
+    // Greedy counts robots, not skills: it refuses in one line.
+    let refused = simulate(&mission, Replan::Scratch(&Greedy), RunOptions::default()).unwrap_err();
+    assert!(refused.to_string().contains("skill"), "{refused}");
+    // The warm optimum reuses a flow's prices: refused on any team game.
+    let refused = simulate(&mission, Replan::WarmOpt, RunOptions::default()).unwrap_err();
+    assert!(refused.to_string().contains("without --warm"), "{refused}");
+    config.skills = Some(afg_game::SkillDraw {
+        count: 0,
+        share: 0.5,
+        requires: afg_game::CountRange { min: 1, max: 1 },
+    });
+    assert!(
+        config
+            .generate()
+            .unwrap_err()
+            .to_string()
+            .contains("need skills")
+    );
+}
