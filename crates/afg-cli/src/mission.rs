@@ -106,6 +106,11 @@ pub struct LoopArgs {
     /// (balanced score, in the game's welfare units).
     #[arg(long, value_name = "THETA")]
     hysteresis: Option<f64>,
+    /// The exact optimum's time limit per decision, seconds (opt without --warm): each
+    /// decision takes the best found, its certified gap in the trace and the metrics'
+    /// largest gap.
+    #[arg(long, value_name = "SECS")]
+    time_limit: Option<f64>,
     /// Seed of the random method, and of GRAPE's draws and the radio's (grape).
     #[arg(long, default_value_t = MissionPlan::default().seed)]
     seed: u64,
@@ -158,6 +163,7 @@ impl LoopArgs {
             latency,
             commit: self.commit,
             hysteresis: self.hysteresis,
+            time_limit: self.time_limit,
         })
     }
 }
@@ -349,6 +355,12 @@ fn print_metrics(name: &str, path: &Path, run: &MissionRun) {
     );
     println!("  distance            {:.3}", m.distance);
     println!("  reassignments       {}", m.reassignments);
+    if let Some(gap) = m.gap_max {
+        println!(
+            "  largest gap         {:.4} %   (the exact solver's, over its decisions)",
+            100.0 * gap
+        );
+    }
     if let Some(w) = &m.waiting {
         println!(
             "  waiting             {:.3} robot-time units at tasks whose team was incomplete",

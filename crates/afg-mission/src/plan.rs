@@ -4,8 +4,9 @@
 //! their flags or keyword arguments onto a plan.
 
 use std::fmt::Write as _;
+use std::time::Duration;
 
-use afg_baseline::{Allocator, Method, Network, SwarmMethod};
+use afg_baseline::{Allocator, Method, Network, SwarmMethod, TeamOptimum};
 use afg_game::Preference;
 use afg_graph::GraphKind;
 
@@ -255,6 +256,9 @@ pub struct MissionPlan {
     /// Hysteresis: a travelling robot switches task only for a gain above this
     /// (central only).
     pub hysteresis: Option<f64>,
+    /// The exact optimum's time limit per decision, seconds (`opt` from scratch only):
+    /// each decision takes the best found and records its certified gap.
+    pub time_limit: Option<f64>,
 }
 
 impl Default for MissionPlan {
@@ -269,6 +273,7 @@ impl Default for MissionPlan {
             latency: Latency::None,
             commit: false,
             hysteresis: None,
+            time_limit: None,
         }
     }
 }
@@ -292,7 +297,28 @@ impl MissionPlan {
     pub fn planner(&self) -> Result<Planner, MissionError> {
         let decider = match self.method {
             MissionMethod::Central(method) => {
-                let allocator = method.allocator(self.seed);
+                let allocator: Box<dyn Allocator> = match self.time_limit {
+                    None => method.allocator(self.seed),
+                    Some(seconds) if method == Method::Opt && !self.warm => {
+                        let limit = Duration::try_from_secs_f64(seconds)
+                            .ok()
+                            .filter(|d| !d.is_zero())
+                            .ok_or_else(|| {
+                                MissionError::Invalid(format!(
+                                    "the time limit must be finite and positive (got {seconds})"
+                                ))
+                            })?;
+                        Box::new(TeamOptimum {
+                            time_limit: Some(limit),
+                        })
+                    }
+                    Some(_) => {
+                        return Err(MissionError::Invalid(
+                            "a time limit is for the exact optimum (method opt, without --warm)"
+                                .into(),
+                        ));
+                    }
+                };
                 return self.central(allocator, Some(method));
             }
             MissionMethod::Grape => SwarmMethod::Grape {
@@ -328,6 +354,11 @@ impl MissionPlan {
     /// # Errors
     /// As [`MissionPlan::planner`] for a central method.
     pub fn planner_with(&self, allocator: Box<dyn Allocator>) -> Result<Planner, MissionError> {
+        if self.time_limit.is_some() {
+            return Err(MissionError::Invalid(
+                "a time limit is for the exact optimum (method opt), not a model".into(),
+            ));
+        }
         self.central(allocator, None)
     }
 
@@ -374,6 +405,7 @@ impl MissionPlan {
             (self.latency != Latency::None, "latency"),
             (self.commit, "commit"),
             (self.hysteresis.is_some(), "hysteresis"),
+            (self.time_limit.is_some(), "time-limit"),
         ]
         .into_iter()
         .filter_map(|(set, name)| set.then_some(name))

@@ -94,6 +94,7 @@ struct Pending {
     /// Robot index → task (mission indices).
     tasks: Vec<(usize, Option<usize>)>,
     compute_s: f64,
+    gap: Option<f64>,
 }
 
 /// Relative tolerance under which an arrival or completion counts as reached.
@@ -177,6 +178,8 @@ struct Sim<'m, 'a> {
     /// Robot-time spent at each task while its team was incomplete (missions with
     /// teams).
     waiting: Vec<f64>,
+    /// The exact team solver's certified gap at each of its decisions.
+    gaps: Vec<f64>,
     /// Time-ordered scheduled events: (time, kind order, what).
     scheduled: Vec<(f64, Scheduled)>,
     next_scheduled: usize,
@@ -261,6 +264,7 @@ impl<'m, 'a> Sim<'m, 'a> {
             tasks,
             held: vec![0; held],
             waiting: vec![0.0; m],
+            gaps: Vec::new(),
             scheduled,
             next_scheduled: 0,
             next_tick: options.replan_every,

@@ -403,8 +403,8 @@ proptest! {
         let again = simulate(&mission, replan, options).unwrap();
         let strip = |r: &MissionRun| -> Vec<TraceEvent> {
             r.trace.iter().cloned().map(|e| match e {
-                TraceEvent::Decision { time, asked, tasks, positions, .. } =>
-                    TraceEvent::Decision { time, asked, tasks, positions, compute_s: 0.0 },
+                TraceEvent::Decision { time, asked, tasks, positions, gap, .. } =>
+                    TraceEvent::Decision { time, asked, tasks, positions, compute_s: 0.0, gap },
                 e => e,
             }).collect()
         };

@@ -193,3 +193,81 @@ fn generated_team_missions_repeat_and_refuse_what_cannot_play_them() {
             .contains("need skills")
     );
 }
+
+#[test]
+fn the_exact_solver_in_the_loop_records_its_gap_per_decision() {
+    use afg_mission::{MissionMethod, MissionPlan, Recording, TraceEvent};
+    let mut config = MissionConfig::new(Preset::Static, 60, 6, 5);
+    config.min_team = Some(afg_game::CountRange { min: 10, max: 20 });
+    let mission = config.generate().unwrap();
+    let plan = MissionPlan {
+        time_limit: Some(5.0),
+        ..MissionPlan::default()
+    };
+    let recording = Recording {
+        trace: true,
+        frame_every: None,
+    };
+    let run = plan
+        .planner()
+        .unwrap()
+        .run(&mission, recording, |_| {})
+        .unwrap();
+    let gaps: Vec<f64> = run
+        .trace
+        .iter()
+        .filter_map(|e| match e {
+            TraceEvent::Decision { gap, .. } => Some(gap.expect("opt reports its gap")),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(gaps.len() as u64, run.metrics.decisions);
+    // Small games: every decision proven within the limit.
+    assert_eq!(run.metrics.gap_max, Some(0.0));
+    assert!(gaps.iter().all(|&g| g == 0.0));
+    // A limit of a nanosecond stops each decision at its root's relaxation (always
+    // solved): the first decision of this scarce game is not proven there.
+    let rushed = MissionPlan {
+        time_limit: Some(1e-9),
+        ..MissionPlan::default()
+    };
+    let run = rushed
+        .planner()
+        .unwrap()
+        .run(&mission, recording, |_| {})
+        .unwrap();
+    assert!(
+        run.metrics.gap_max.unwrap() > 0.0,
+        "{:?}",
+        run.metrics.gap_max
+    );
+    let refused = |plan: MissionPlan| plan.planner().err().unwrap().to_string();
+    let greedy = MissionMethod::Central(afg_baseline::Method::Greedy);
+    for plan in [
+        MissionPlan {
+            time_limit: Some(1.0),
+            method: greedy,
+            ..MissionPlan::default()
+        },
+        MissionPlan {
+            time_limit: Some(1.0),
+            warm: true,
+            ..MissionPlan::default()
+        },
+    ] {
+        assert!(refused(plan).contains("for the exact optimum"));
+    }
+    for seconds in [0.0, -1.0, f64::NAN] {
+        let plan = MissionPlan {
+            time_limit: Some(seconds),
+            ..MissionPlan::default()
+        };
+        assert!(refused(plan).contains("finite and positive"));
+    }
+    let grape = MissionPlan {
+        time_limit: Some(1.0),
+        method: MissionMethod::Grape,
+        ..MissionPlan::default()
+    };
+    assert!(refused(grape).contains("time-limit is for central decisions"));
+}

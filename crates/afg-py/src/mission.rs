@@ -300,7 +300,9 @@ fn object_dict<'py>(py: Python<'py>, value: &serde_json::Value) -> PyResult<Boun
 /// `latency=D` makes each decision take D time units, `latency_factor=F` the
 /// allocator's measured compute time times F; `commit=True` keeps robots at work until
 /// their task is done, `hysteresis=THETA` lets a travelling robot switch only for a
-/// gain above THETA; `trace=True` keeps every decision.
+/// gain above THETA; `time_limit=SECS` stops the exact optimum at each decision with
+/// the best found (its gaps in the metrics' `gap_max`); `trace=True` keeps every
+/// decision.
 ///
 /// `method="grape"` (or `"auction"`) has the robots run GRAPE (or the auction)
 /// themselves over the radio: `rounds_per_time` rounds per time unit, GRAPE's
@@ -312,7 +314,7 @@ fn object_dict<'py>(py: Python<'py>, value: &serde_json::Value) -> PyResult<Boun
 /// response times). A swarm knob left at None takes its default
 /// (`afg.mission_defaults()`); one set with a central method is refused.
 #[pyfunction]
-#[pyo3(signature = (mission, method=None, model=None, warm=false, replan=None, latency=None, latency_factor=None, commit=false, hysteresis=None, seed=0, trace=false, rounds_per_time=None, loss=None, sensing=None, preference=None, epsilon=None, radius=None, knn=None, burst=None, delay=None, activation=None))]
+#[pyo3(signature = (mission, method=None, model=None, warm=false, replan=None, latency=None, latency_factor=None, commit=false, hysteresis=None, time_limit=None, seed=0, trace=false, rounds_per_time=None, loss=None, sensing=None, preference=None, epsilon=None, radius=None, knn=None, burst=None, delay=None, activation=None))]
 // Python's keyword arguments, one per option.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run_mission(
@@ -326,6 +328,7 @@ pub(crate) fn run_mission(
     latency_factor: Option<f64>,
     commit: bool,
     hysteresis: Option<f64>,
+    time_limit: Option<f64>,
     seed: u64,
     trace: bool,
     rounds_per_time: Option<f64>,
@@ -370,6 +373,7 @@ pub(crate) fn run_mission(
         latency,
         commit,
         hysteresis,
+        time_limit,
     };
     let planner = planner(&plan, model.as_deref()).map_err(crate::crate_error)?;
     let inner = Arc::clone(&mission.inner);

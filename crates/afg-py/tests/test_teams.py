@@ -75,6 +75,9 @@ def test_team_missions_wait_for_their_teams_and_refuse_what_cannot_play_them() -
     waiting = metrics["waiting"]
     assert isinstance(waiting["by_task"], np.ndarray) and waiting["by_task"].shape == (8,)
     assert waiting["total"] == pytest.approx(waiting["by_task"].sum()) and waiting["total"] >= 0.0
+    assert afg.run_mission(mission, method="opt", time_limit=5.0).metrics["gap_max"] == 0.0
+    with pytest.raises(afg.InvalidInputError, match="for the exact optimum"):
+        afg.run_mission(mission, method="greedy", time_limit=1.0)
     # A mission without teams has no waiting metric.
     assert "waiting" not in afg.run_mission(afg.Mission.generate("waves", 40, 8, seed=3)).metrics
     skilled = afg.Mission.generate("waves", robots=40, tasks=8, seed=3, min_team=(2, 4), skills=2, requires=(0, 1))

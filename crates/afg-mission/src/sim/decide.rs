@@ -25,7 +25,7 @@ impl Sim<'_, '_> {
         let game = self.game(&alive, &open)?;
         let places = self.places(&alive, &open);
         let start = Instant::now();
-        let mut assignment = self.plan(&game, &open, &places).map_err(|e| match e {
+        let (mut assignment, gap) = self.plan(&game, &open, &places).map_err(|e| match e {
             MissionError::Alloc(source) => MissionError::Decision {
                 time: self.now,
                 robots: alive.len(),
@@ -39,6 +39,7 @@ impl Sim<'_, '_> {
         self.decisions += 1;
         self.pairs += (alive.len() * open.len()) as u64;
         self.compute.push(compute_s);
+        self.gaps.extend(gap);
         let tasks = alive
             .iter()
             .zip(assignment.tasks())
@@ -54,6 +55,7 @@ impl Sim<'_, '_> {
             asked: self.now,
             tasks,
             compute_s,
+            gap,
         });
         self.decided = true;
         if delay == 0.0 {
@@ -129,21 +131,30 @@ impl Sim<'_, '_> {
         mission_game(&self.mission, alive, positions, open)
     }
 
-    /// The assignment of `game` by the replanning rule.
+    /// The assignment of `game` by the replanning rule, and the certified gap of an
+    /// allocator that reports a bound (the exact team solver).
     fn plan(
         &mut self,
         game: &Instance,
         open: &[usize],
         places: &[Option<(TaskId, bool)>],
-    ) -> Result<Assignment, MissionError> {
+    ) -> Result<(Assignment, Option<f64>), MissionError> {
         let Some(replan) = self.replan else {
             return Err(MissionError::Invalid(
                 "decisions are made by the environment's agents".into(),
             ));
         };
         match replan {
-            Replan::Scratch(allocator) => Ok(allocator.allocate(game)?.assignment),
-            Replan::Warm { first, .. } if !self.decided => Ok(first.allocate(game)?.assignment),
+            Replan::Scratch(allocator) => {
+                let out = allocator.allocate(game)?;
+                let welfare = game.welfare(&out.assignment);
+                let gap = (out.stats.bound)
+                    .map(|bound| (bound - welfare).max(0.0) / welfare.abs().max(1e-12));
+                Ok((out.assignment, gap))
+            }
+            Replan::Warm { first, .. } if !self.decided => {
+                Ok((first.allocate(game)?.assignment, None))
+            }
             Replan::Warm { preference, .. } => {
                 let da = CentralisedDa::new(preference);
                 check_game(game, &da, Plays::Counts)?;
@@ -157,7 +168,7 @@ impl Sim<'_, '_> {
                     }
                 }
                 da.improve(game, &mut a);
-                Ok(a)
+                Ok((a, None))
             }
             Replan::Decentralised(_) => Err(MissionError::Invalid(
                 "a decentralised method makes no central decision".into(),
@@ -182,7 +193,7 @@ impl Sim<'_, '_> {
                     Optimum.with_prices(game)
                 };
                 self.prices = open.iter().copied().zip(prices).collect();
-                Ok(a)
+                Ok((a, None))
             }
         }
     }
@@ -203,11 +214,12 @@ impl Sim<'_, '_> {
                 None => {}
             }
         }
-        self.log_decision(p.asked, p.compute_s);
+        self.log_decision(p.asked, p.compute_s, p.gap);
     }
 
-    /// Logs where every robot is heading now, decided at `asked` in `compute_s`.
-    pub(super) fn log_decision(&mut self, asked: f64, compute_s: f64) {
+    /// Logs where every robot is heading now, decided at `asked` in `compute_s` (with
+    /// the exact solver's `gap`, if it decided).
+    pub(super) fn log_decision(&mut self, asked: f64, compute_s: f64, gap: Option<f64>) {
         if !self.options.trace {
             return;
         }
@@ -226,6 +238,7 @@ impl Sim<'_, '_> {
             tasks,
             positions,
             compute_s,
+            gap,
         });
     }
 }

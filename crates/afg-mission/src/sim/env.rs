@@ -247,7 +247,7 @@ impl MissionEnv {
                 self.sim.send(i, a);
             }
         }
-        self.sim.log_decision(self.sim.now, 0.0);
+        self.sim.log_decision(self.sim.now, 0.0, None);
         self.sim.decisions += 1;
         let alive: Vec<bool> = self.sim.robots.iter().map(|r| r.alive).collect();
         let going_on = self.sim.move_on() && self.run_to_epoch()? && !self.sim.over();

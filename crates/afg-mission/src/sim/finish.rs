@@ -69,6 +69,7 @@ impl Sim<'_, '_> {
             work_done,
             work_value,
             swarm: self.swarm.as_ref().map(SwarmState::metrics),
+            gap_max: self.gaps.iter().copied().reduce(f64::max),
             waiting: self.mission.has_teams().then(|| Waiting {
                 total: self.waiting.iter().sum(),
                 by_task: self.waiting.clone(),

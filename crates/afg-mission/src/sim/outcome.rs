@@ -57,6 +57,10 @@ pub enum TraceEvent {
         positions: Vec<[f64; 2]>,
         /// The allocator's compute time (seconds).
         compute_s: f64,
+        /// The exact team solver's certified gap at this decision (0: proven optimal;
+        /// above 0 where its time limit stopped it); `None` for other allocators.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        gap: Option<f64>,
     },
 }
 
@@ -122,6 +126,10 @@ pub struct Metrics {
     /// incomplete (robots that arrived first, waiting for the rest).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub waiting: Option<Waiting>,
+    /// The exact team solver in the loop: the largest certified gap of its decisions
+    /// (0 when every one was proven optimal; above 0 where its time limit stopped it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gap_max: Option<f64>,
 }
 
 /// Robot-time spent waiting at tasks whose team was incomplete.

@@ -197,7 +197,7 @@ impl Sim<'_, '_> {
             }
         }
         if moved {
-            self.log_decision(self.now, compute_s);
+            self.log_decision(self.now, compute_s, None);
         }
         Ok(())
     }

@@ -285,6 +285,7 @@ def run_mission(
     latency_factor: Optional[float] = None,
     commit: bool = False,
     hysteresis: Optional[float] = None,
+    time_limit: Optional[float] = None,
     seed: int = 0,
     trace: bool = False,
     rounds_per_time: Optional[float] = None,
