@@ -5,7 +5,7 @@ mod common;
 
 use std::time::Duration;
 
-use afg_baseline::{AllocError, Allocator, Method, Optimum, TeamOptimum};
+use afg_baseline::{AllocError, Allocator, Method, Optimum, TeamOptimum, TeamSolution};
 use afg_game::{Assignment, CountRange, GeneratorConfig, Instance, Point, Task, TaskId};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -22,6 +22,27 @@ fn with_thresholds(rng: &mut ChaCha8Rng, inst: Instance) -> Instance {
     inst.with_teams(min_team, &[], &[]).unwrap()
 }
 
+/// The solver's answer is the brute-force optimum `brute`, proven: its welfare, its
+/// assignment's and its bound.
+fn assert_proves(inst: &Instance, best: &TeamSolution, brute: f64, case: usize) {
+    let tol = 1e-9 * brute.abs().max(1.0);
+    assert!(best.proven && best.gap() == 0.0, "case {case}");
+    assert!(
+        (best.welfare - brute).abs() < tol,
+        "case {case}: {} vs {brute}",
+        best.welfare
+    );
+    assert!(
+        (inst.welfare(&best.assignment) - brute).abs() < tol,
+        "case {case}"
+    );
+    assert!(
+        (best.bound - brute).abs() < tol,
+        "case {case}: bound {}",
+        best.bound
+    );
+}
+
 #[test]
 fn the_team_optimum_equals_brute_force_on_small_instances() {
     let mut rng = ChaCha8Rng::seed_from_u64(54);
@@ -35,21 +56,7 @@ fn the_team_optimum_equals_brute_force_on_small_instances() {
         let best = TeamOptimum::default().solve(&inst).unwrap();
         let brute = brute_force(&inst);
         let tol = 1e-9 * brute.abs().max(1.0);
-        assert!(best.proven && best.gap() == 0.0, "case {case}");
-        assert!(
-            (best.welfare - brute).abs() < tol,
-            "case {case}: {} vs {brute}",
-            best.welfare
-        );
-        assert!(
-            (inst.welfare(&best.assignment) - brute).abs() < tol,
-            "case {case}"
-        );
-        assert!(
-            (best.bound - brute).abs() < tol,
-            "case {case}: bound {}",
-            best.bound
-        );
+        assert_proves(&inst, &best, brute, case);
         inst.check(&best.assignment).unwrap();
         // `opt` solves team games with the same search.
         let opt = Optimum.allocate(&inst).unwrap().assignment;
@@ -88,23 +95,7 @@ fn the_skill_optimum_equals_brute_force_on_small_instances() {
         };
         let inst = with_skills(&mut rng, plain, case);
         let best = TeamOptimum::default().solve(&inst).unwrap();
-        let brute = brute_force(&inst);
-        let tol = 1e-9 * brute.abs().max(1.0);
-        assert!(best.proven, "case {case}");
-        assert!(
-            (best.welfare - brute).abs() < tol,
-            "case {case}: {} vs {brute}",
-            best.welfare
-        );
-        assert!(
-            (inst.welfare(&best.assignment) - brute).abs() < tol,
-            "case {case}"
-        );
-        assert!(
-            (best.bound - brute).abs() < tol,
-            "case {case}: bound {}",
-            best.bound
-        );
+        assert_proves(&inst, &best, brute_force(&inst), case);
         pair_branches += usize::from(best.nodes > 3);
     }
     // Many searches went past the root and its dive.

@@ -392,8 +392,10 @@ pub fn mission_svg(
 
 /// A self-contained HTML page that animates a mission run's frames (no server, no
 /// network: the frames and a few lines of JavaScript are in the page): robots coloured
-/// by their task (grey: none; a red cross: failed), tasks as squares sized by the work
-/// left, with a play button and a time slider.
+/// by their task (grey: none; a red cross: failed; a ring: waiting for the rest of its
+/// team), tasks as squares sized by the work left with their coalition's size (over
+/// the team they need, where it is more than one), with a play button and a time
+/// slider.
 ///
 /// # Errors
 /// [`EvalError::Figure`] if the run has no frames.
@@ -432,10 +434,12 @@ pub fn mission_html(
         .iter()
         .map(|t| [t.position.x, t.position.y])
         .collect();
+    let min_team: Vec<usize> = mission.tasks.iter().map(|t| t.min_team).collect();
     let data = serde_json::json!({
         "title": title,
         "bounds": [lo, hi],
         "tasks": tasks,
+        "min_team": min_team,
         "frames": run.frames,
     });
     let escaped = serde_json::to_string(&data)

@@ -61,6 +61,22 @@ fn two_robots_needed_the_work_starts_when_the_second_arrives() {
         assert!(close(waiting.total, 2.0), "{}", waiting.total);
         assert_eq!(waiting.by_task.len(), 1);
     }
+    // The animation's frames mark robot 0 waiting between t = 1 and t = 3 only.
+    let options = RunOptions {
+        frame_every: Some(0.5),
+        ..RunOptions::default()
+    };
+    let run = simulate(&mission, Replan::Scratch(&Optimum), options).unwrap();
+    let at_an_event = |t: f64| close(t, 1.0) || close(t, 3.0);
+    assert!(run.frames.iter().any(|f| f.time > 1.0 && f.time < 3.0));
+    for f in run.frames.iter().filter(|f| !at_an_event(f.time)) {
+        let expected: &[u32] = if f.time > 1.0 && f.time < 3.0 {
+            &[0]
+        } else {
+            &[]
+        };
+        assert_eq!(f.waiting, expected, "at {}", f.time);
+    }
 }
 
 #[test]
@@ -270,4 +286,33 @@ fn the_exact_solver_in_the_loop_records_its_gap_per_decision() {
         ..MissionPlan::default()
     };
     assert!(refused(grape).contains("time-limit is for central decisions"));
+}
+
+#[test]
+fn grape_over_the_radio_plays_thresholds_and_the_auction_refuses_them() {
+    use afg_mission::{MissionMethod, MissionPlan, Recording};
+    let mut config = MissionConfig::new(Preset::Waves, 30, 6, 2);
+    config.min_team = Some(afg_game::CountRange { min: 2, max: 4 });
+    let mission = config.generate().unwrap();
+    let plan = |method| MissionPlan {
+        method,
+        ..MissionPlan::default()
+    };
+    let run = plan(MissionMethod::Grape)
+        .planner()
+        .unwrap()
+        .run(&mission, Recording::default(), |_| {})
+        .unwrap();
+    assert!(run.metrics.waiting.is_some() && run.metrics.swarm.is_some());
+    let refused = plan(MissionMethod::Auction)
+        .planner()
+        .unwrap()
+        .run(&mission, Recording::default(), |_| {})
+        .unwrap_err();
+    assert!(
+        refused
+            .to_string()
+            .contains("auction does not play games with team thresholds"),
+        "{refused}"
+    );
 }

@@ -380,22 +380,27 @@ pub(crate) fn partition_of(tasks: &[Option<TaskId>], m: usize) -> Assignment {
     assignment
 }
 
-/// Refuses a team game: the radio swarms bid and move for the concave game.
+/// Refuses a team game the swarm does not play: GRAPE's robots judge a move by the
+/// coalitions' sizes they hear of (the threshold game's values, as GRAPE DA does), not
+/// by the skills the coalitions hold; the auction's bids are a concave game's prices.
 fn refuse_teams(method: SwarmMethod, instance: &Instance) -> Result<(), AllocError> {
-    if !instance.has_teams() {
-        return Ok(());
-    }
-    Err(AllocError::TeamsNotSupported {
-        method: match method {
-            SwarmMethod::Grape { .. } => "grape",
-            SwarmMethod::Auction { .. } => "auction",
+    let (method, reason) = match method {
+        SwarmMethod::Grape { .. } if instance.has_skill_rules() => (
+            "grape",
+            "its robots hear of a coalition's size, not of the skills it holds",
+        ),
+        SwarmMethod::Auction { .. } if instance.has_teams() => {
+            ("auction", "its bids are the prices of the concave game")
         }
-        .into(),
+        _ => return Ok(()),
+    };
+    Err(AllocError::TeamsNotSupported {
+        method: method.into(),
         rules: if instance.has_skill_rules() {
             "skill requirements"
         } else {
             "team thresholds"
         },
-        reason: "the radio swarms bid and move for the concave game",
+        reason,
     })
 }

@@ -125,11 +125,19 @@ impl Sim<'_, '_> {
                 }
             })
             .collect();
+        let waiting = (0..self.robots.len())
+            .filter(|&i| {
+                let r = &self.robots[i];
+                r.alive && r.there && r.task.is_some_and(|j| !self.team_complete(j))
+            })
+            .map(|i| i as u32)
+            .collect();
         Frame {
             time: self.now,
             positions,
             tasks,
             left,
+            waiting,
         }
     }
 

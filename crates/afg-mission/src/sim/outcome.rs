@@ -165,6 +165,9 @@ pub struct Frame {
     pub tasks: Vec<i32>,
     /// Every task's work left as a share of its workload (−1: not yet appeared; 0: done).
     pub left: Vec<f32>,
+    /// The robots waiting at a task whose team is incomplete (missions with teams).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub waiting: Vec<u32>,
 }
 
 impl MissionRun {
