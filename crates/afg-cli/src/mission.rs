@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use afg_eval::figures::{mission_html, mission_svg};
-use afg_eval::mission::{compare, planner, swarm_table, table};
+use afg_eval::mission::{compare, planner, swarm_table, table, teams_table};
 use afg_game::fs::{write_atomic, write_atomic_making_dirs};
 use afg_game::{Named, Preference};
 use afg_mission::{
@@ -458,6 +458,9 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
         print!("{}", table(&rows));
         if let Some(swarms) = swarm_table(&rows) {
             println!("\nOver the radio:\n\n{swarms}");
+        }
+        if let Some(teams) = teams_table(&rows) {
+            println!("\nTeams:\n\n{teams}");
         }
     }
     Ok(())

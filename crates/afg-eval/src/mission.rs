@@ -198,3 +198,49 @@ pub fn swarm_table(rows: &[CompareRow]) -> Option<String> {
     }
     any.then_some(out)
 }
+
+/// The Markdown table of what missions with teams add (the robot-time spent waiting
+/// for a team, and the exact solver's largest gap where it decided; means over the
+/// missions), or `None` if no mission has teams.
+///
+/// # Examples
+/// ```
+/// use afg_baseline::Method;
+/// use afg_eval::mission::{compare, teams_table};
+/// use afg_mission::{MissionConfig, MissionMethod, MissionPlan, Preset};
+/// let mut config = MissionConfig::new(Preset::Waves, 20, 4, 1);
+/// config.min_team = Some(afg_game::CountRange { min: 2, max: 4 });
+/// let missions = vec![config.generate()?];
+/// let plan = |method| MissionPlan { method, ..MissionPlan::default() };
+/// let planners = [plan(MissionMethod::Central(Method::Opt)).planner()?];
+/// let rows: Vec<_> = compare(&missions, &planners, Default::default(), || {})?
+///     .into_iter().map(|(row, _)| row).collect();
+/// assert!(teams_table(&rows).expect("a mission with teams").contains("| opt | "));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn teams_table(rows: &[CompareRow]) -> Option<String> {
+    let mut out = String::from(
+        "| method | robot-time waiting for a team | exact solver's largest gap |\n|---|---|---|\n",
+    );
+    let mut any = false;
+    for row in rows {
+        let waiting: Vec<f64> = (row.missions.iter())
+            .filter_map(|m| m.waiting.as_ref().map(|w| w.total))
+            .collect();
+        if waiting.is_empty() {
+            continue;
+        }
+        any = true;
+        let gap = (row.missions.iter())
+            .filter_map(|m| m.gap_max)
+            .reduce(f64::max)
+            .map_or("—".into(), |g| format!("{:.4} %", 100.0 * g));
+        let _ = writeln!(
+            out,
+            "| {} | {:.3} | {gap} |",
+            row.method,
+            waiting.iter().sum::<f64>() / waiting.len() as f64
+        );
+    }
+    any.then_some(out)
+}
