@@ -10,7 +10,8 @@
 //! `max(0, F_j(n) − Λ_j)` from its threshold on, whose concave envelope is again a
 //! column of the transport solver ([`Slots::penalised`]). Every λ gives a valid bound;
 //! the root chooses λ by subgradient steps (the shortfall of each skill at each task
-//! in the relaxed optimum), and every node keeps the lower of its two bounds.
+//! in the relaxed optimum), every other node takes a few more from its parent's λ,
+//! and every node keeps the lower of its two bounds.
 
 use afg_game::Assignment;
 
@@ -20,7 +21,7 @@ use super::{Decision, Node, Pair, Search};
 
 /// Subgradient steps at the root at most.
 const ROUNDS: usize = 80;
-/// Subgradient steps at every other node, from the root's prices.
+/// Subgradient steps at every other node, from its parent's skill prices.
 const NODE_ROUNDS: usize = 4;
 /// Steps without a lower bound before the step size halves.
 const PATIENCE: usize = 5;
