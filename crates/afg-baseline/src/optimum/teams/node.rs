@@ -184,14 +184,11 @@ impl<'a> Search<'a> {
         let mut columns: Vec<Column> = inst
             .task_ids()
             .map(|j| {
-                let (value, k) = (inst.value_function(j), inst.min_team(j));
-                let (value, capacity) = match decisions[j.index()] {
-                    Decision::Open => (Slots::envelope(value, k, 0.0), inst.capacity(j)),
-                    Decision::Staffed => (Slots::envelope(value, k, self.bonus), inst.capacity(j)),
-                    Decision::Unstaffed => (Slots::worthless(value), self.unstaffed_room(j)),
-                };
-                room = room.saturating_add(capacity);
-                Column::Task { value, capacity }
+                let (column, _) = self.task_column(j, decisions[j.index()], 0.0);
+                if let Column::Task { capacity, .. } = column {
+                    room = room.saturating_add(capacity);
+                }
+                column
             })
             .collect();
         if inst.allows_void() {
@@ -200,6 +197,29 @@ impl<'a> Search<'a> {
             return None;
         }
         Some(columns)
+    }
+
+    /// Task j's column under `decision`, its value less `penalty` once it earns (the
+    /// Lagrangian price of its skills; 0 for the envelope), and the size over which an
+    /// open task's envelope spreads its value (0 where it may not earn).
+    fn task_column(&self, j: TaskId, decision: Decision, penalty: f64) -> (Column, usize) {
+        let inst = self.instance;
+        let (value, k) = (inst.value_function(j), inst.min_team(j));
+        let capacity = inst.capacity(j);
+        let (value, capacity, flat) = match decision {
+            Decision::Open => {
+                let (slots, flat) =
+                    Slots::penalised(value, k, penalty, capacity.min(inst.num_robots()));
+                (slots, capacity, flat)
+            }
+            Decision::Staffed => (
+                Slots::envelope(value, k, self.bonus).less(penalty),
+                capacity,
+                k,
+            ),
+            Decision::Unstaffed => (Slots::worthless(value), self.unstaffed_room(j), 0),
+        };
+        (Column::Task { value, capacity }, flat)
     }
 
     /// Solves a node's relaxations (warm from its parent's prices): the Lagrangian one

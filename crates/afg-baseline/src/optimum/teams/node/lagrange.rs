@@ -8,7 +8,7 @@
 //! robot (robot i at task j gains `Σ_s λ_js skill_is`, a change of its cost) and by task
 //! (an earning task pays `Λ_j = Σ_s λ_js requires_js`): task j's value becomes
 //! `max(0, F_j(n) − Λ_j)` from its threshold on, whose concave envelope is again a
-//! column of the transport solver ([`Slots::penalised`]). Every λ gives a valid bound;
+//! column of the transport solver (`Slots::penalised`). Every λ gives a valid bound;
 //! the root chooses λ by subgradient steps (the shortfall of each skill at each task
 //! in the relaxed optimum), every other node takes a few more from its parent's λ,
 //! and every node keeps the lower of its two bounds.
@@ -16,7 +16,7 @@
 use afg_game::Assignment;
 
 use super::super::super::assignment_of;
-use super::super::super::transport::{self, Column, Slots, skill_rebates};
+use super::super::super::transport::{self, Column, skill_rebates};
 use super::{Decision, Node, Pair, Search};
 
 /// Subgradient steps at the root at most.
@@ -59,31 +59,18 @@ impl Search<'_> {
         let mut columns: Vec<Column> = inst
             .task_ids()
             .map(|j| {
-                let (value, k) = (inst.value_function(j), inst.min_team(j));
                 let prices = &mut lambda[j.index() * s..][..s];
+                if decisions[j.index()] == Decision::Unstaffed {
+                    prices.fill(0.0);
+                }
                 let penalty: f64 = prices
                     .iter()
                     .zip(inst.requires(j))
                     .map(|(&l, &r)| l * f64::from(r))
                     .sum();
-                let capacity = inst.capacity(j).min(inst.num_robots());
-                let value = match decisions[j.index()] {
-                    Decision::Open => {
-                        let (slots, flat) = Slots::penalised(value, k, penalty, capacity);
-                        flats[j.index()] = flat;
-                        slots
-                    }
-                    Decision::Staffed => Slots::envelope(value, k, self.bonus).less(penalty),
-                    Decision::Unstaffed => {
-                        prices.fill(0.0);
-                        Slots::worthless(value)
-                    }
-                };
-                let capacity = match decisions[j.index()] {
-                    Decision::Unstaffed => self.unstaffed_room(j),
-                    _ => inst.capacity(j),
-                };
-                Column::Task { value, capacity }
+                let (column, flat) = self.task_column(j, decisions[j.index()], penalty);
+                flats[j.index()] = flat;
+                column
             })
             .collect();
         if inst.allows_void() {
