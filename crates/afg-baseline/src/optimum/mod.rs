@@ -93,7 +93,9 @@ impl Optimum {
         Ok(augmenting::solved(instance, partial.clone(), None).assignment)
     }
 
-    /// The optimum with its task prices π, which prove it ([`verify_optimal`]): every
+    /// The optimum of the paper's concave game with its task prices π, which prove it
+    /// ([`verify_optimal`]; a team game's thresholds and skills are not read: prices
+    /// prove only a flow, and [`TeamOptimum`] solves those games): every
     /// robot's task minimises `β d(i, j) − π_j` over all tasks, and every task's price
     /// lies between the marginal values of its last member and of one more,
     /// `F_j(n_j + 1) − F_j(n_j) ≤ π_j ≤ F_j(n_j) − F_j(n_j − 1)` (LP duality for the

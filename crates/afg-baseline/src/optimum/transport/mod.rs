@@ -32,13 +32,15 @@
 
 use std::cmp::{Ordering, Reverse};
 
-use afg_game::{Instance, Point, RobotId, ValueFunction};
+use afg_game::{Instance, Point, RobotId};
 use rayon::prelude::*;
 
 use super::movers::{Movers, NOWHERE};
 
+mod columns;
 mod levels;
 mod search;
+pub(in crate::optimum) use columns::{Column, Slots};
 use levels::{Level, cheapest, coarse_prices, sink};
 
 /// Each coarser level keeps every `FACTOR`-th robot of the level above.
@@ -151,118 +153,6 @@ pub(super) fn solved(inst: &Instance, spare: usize) -> Flow {
 /// where the instance allows it; any common offset), without subsample levels.
 pub(super) fn solve_from(inst: &Instance, prices: &[f64]) -> Solution {
     Flow::solved(Level::new(inst, &task_columns(inst), 1, 0), Some(prices)).into_solution()
-}
-
-/// What a column of the problem is.
-#[derive(Clone, Copy)]
-pub(super) enum Column {
-    /// A task: its slots' values and its capacity (in robots of the instance).
-    Task { value: Slots, capacity: usize },
-    /// The void task: cost 0, every member worth 0, room for all.
-    Void,
-    /// No task (one that was removed): no room.
-    Closed,
-}
-
-/// What a task column's members are worth: a concave value function F less a
-/// `penalty` once it earns, whose first `flat` members are each worth
-/// `(F(flat) − penalty) / flat` (the concave envelope of F earned only from `flat`
-/// members on, spread over them), plus `bonus` each (a large bonus forces them in), or
-/// nothing at all (`worthless`: a task that may not earn). Concave in every case:
-/// without a penalty since `F(k) / k ≥ F(k + 1) − F(k)`, with one by the choice of
-/// `flat` ([`Slots::penalised`]) or the bonus.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct Slots {
-    value: ValueFunction,
-    flat: usize,
-    bonus: f64,
-    penalty: f64,
-    worthless: bool,
-}
-
-impl Slots {
-    /// F's own marginal values.
-    pub(super) fn concave(value: ValueFunction) -> Self {
-        Slots {
-            value,
-            flat: 0,
-            bonus: 0.0,
-            penalty: 0.0,
-            worthless: false,
-        }
-    }
-
-    /// The envelope of F earned from `k` members on, with `bonus` on each of the first
-    /// `k`.
-    pub(super) fn envelope(value: ValueFunction, k: usize, bonus: f64) -> Self {
-        Slots {
-            value,
-            flat: k,
-            bonus,
-            penalty: 0.0,
-            worthless: false,
-        }
-    }
-
-    /// The same slots less `penalty` once the task earns (a staffed task's: its first
-    /// members carry a bonus that keeps them concave).
-    pub(super) fn less(self, penalty: f64) -> Self {
-        Slots { penalty, ..self }
-    }
-
-    /// The concave envelope of `max(0, F(n) − penalty)` earned from `k` members on, at
-    /// most `capacity`, and the size n* at which it meets that function first (its
-    /// first n* members worth `(F(n*) − penalty) / n*` each, n* the best such share in
-    /// `k..=capacity`); worthless, with n* = 0, where F never exceeds the penalty.
-    pub(super) fn penalised(
-        value: ValueFunction,
-        k: usize,
-        penalty: f64,
-        capacity: usize,
-    ) -> (Self, usize) {
-        // (F(n) − penalty) / n rises while n F'(n) − F(n) + penalty > 0, then falls.
-        let share = |n: usize| (value.value(n) - penalty) / n as f64;
-        let mut flat = k;
-        while flat < capacity && share(flat + 1) > share(flat) {
-            flat += 1;
-        }
-        if k > capacity || share(flat) <= 0.0 {
-            return (Slots::worthless(value), 0);
-        }
-        (Slots::envelope(value, flat, 0.0).less(penalty), flat)
-    }
-
-    /// Members worth nothing.
-    pub(super) fn worthless(value: ValueFunction) -> Self {
-        Slots {
-            worthless: true,
-            ..Slots::concave(value)
-        }
-    }
-
-    /// What the first n members are worth together.
-    pub(super) fn value(&self, n: usize) -> f64 {
-        if self.worthless || n == 0 {
-            0.0
-        } else if n <= self.flat {
-            n as f64
-                * ((self.value.value(self.flat) - self.penalty) / self.flat as f64 + self.bonus)
-        } else {
-            self.value.value(n) - self.penalty + self.flat as f64 * self.bonus
-        }
-    }
-
-    /// What the n-th member (n ≥ 1) is worth.
-    #[inline]
-    pub(super) fn marginal(&self, n: usize) -> f64 {
-        if self.worthless {
-            0.0
-        } else if n <= self.flat {
-            (self.value.value(self.flat) - self.penalty) / self.flat as f64 + self.bonus
-        } else {
-            self.value.marginal(n)
-        }
-    }
 }
 
 /// The residual state of one level: where every robot is, the count each column sends
