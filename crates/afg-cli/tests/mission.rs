@@ -182,3 +182,50 @@ fn the_animation_ends_on_the_final_state_and_shows_coalition_sizes() {
     assert!(html.contains("sizes[j]") && html.contains("\"replay\""));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn team_knobs_out_of_range_are_refused_and_nothing_is_written() {
+    let (dir, _) = mission_dir("team-knobs");
+    let out_path = dir.join("teams.json");
+    let out = out_path.to_str().unwrap();
+    let generate = |knobs: &[&str]| {
+        let base = [
+            "mission", "gen", "--preset", "waves", "--robots", "12", "--tasks", "4",
+        ];
+        afg(&[&base[..], knobs, &["--out", out]].concat())
+    };
+    for (knobs, needle) in [
+        (&["--requires", "1,2"][..], "need skills"),
+        (&["--skill-share", "0.5"], "need skills"),
+        (&["--min-team", "0,2"], "min_team"),
+        (&["--min-team", "3"], "--min-team takes two numbers"),
+    ] {
+        refused(&generate(knobs), needle);
+        assert!(!out_path.exists(), "{knobs:?} wrote {out}");
+    }
+    // A team mission runs; a time limit that is not a positive number, or one given to
+    // a method other than opt, is refused.
+    let made = generate(&["--min-team", "2,3"]);
+    assert_eq!(made.status.code(), Some(0), "{}", stderr(&made));
+    let run = |extra: &[&str]| afg(&[&["mission", "run", "--mission", out][..], extra].concat());
+    let ran = run(&["--method", "opt", "--time-limit", "5"]);
+    assert_eq!(ran.status.code(), Some(0), "{}", stderr(&ran));
+    let text = String::from_utf8_lossy(&ran.stdout);
+    assert!(
+        text.contains("waiting") && text.contains("largest gap"),
+        "{text}"
+    );
+    refused(
+        &run(&["--method", "opt", "--time-limit", "0"]),
+        "finite and positive",
+    );
+    refused(
+        &run(&["--method", "greedy", "--time-limit", "1"]),
+        "for the exact optimum",
+    );
+    refused(
+        &run(&["--method", "auction"]),
+        "auction does not play games with team thresholds",
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
