@@ -3,7 +3,6 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::str::FromStr;
 use std::time::Duration;
 
 use crate::bench::runs::{check_python, measure_rows, scratch_dir};
@@ -49,32 +48,7 @@ pub struct BenchOptArgs {
 }
 
 /// One size of a benchmark, written `NxM`.
-#[derive(Clone, Copy, Debug, Serialize)]
-pub struct Case {
-    /// Robots N.
-    pub robots: usize,
-    /// Tasks M.
-    pub tasks: usize,
-}
-
-impl FromStr for Case {
-    type Err = String;
-
-    fn from_str(text: &str) -> Result<Self, String> {
-        let (n, m) = text
-            .split_once('x')
-            .ok_or_else(|| format!("`{text}`: write a size as NxM, e.g. 1000x5"))?;
-        let count = |s: &str| match s.parse::<usize>() {
-            Ok(0) => Err(format!("`{text}`: must be at least 1")),
-            Ok(k) => Ok(k),
-            Err(e) => Err(format!("`{text}`: {e}")),
-        };
-        Ok(Case {
-            robots: count(n)?,
-            tasks: count(m)?,
-        })
-    }
-}
+pub type Case = afg_game::GameSize;
 
 /// What one case measured; times are medians over the repeats.
 #[derive(Serialize)]

@@ -71,7 +71,7 @@ pub struct BenchTeamsArgs {
 
 /// The allocators that play the threshold game (the auction and the learned models
 /// refuse it; see docs/teams.md).
-const ALLOCATORS: [Method; 6] = [
+pub(crate) const ALLOCATORS: [Method; 6] = [
     Method::Greedy,
     Method::Nearest,
     Method::Da,
@@ -110,15 +110,15 @@ struct Exact {
 
 /// What a peer did at one budget.
 #[derive(Serialize)]
-struct Peer {
+pub(crate) struct Peer {
     solver: String,
     budget: f64,
     status: String,
     /// The welfare of its assignment, computed by afg (`None`: none found).
-    welfare: Option<f64>,
+    pub(crate) welfare: Option<f64>,
     /// Its proven bound (`None`: none yet).
     bound: Option<f64>,
-    seconds: f64,
+    pub(crate) seconds: f64,
 }
 
 /// Runs `cargo xtask bench-teams`.
@@ -151,9 +151,8 @@ pub fn run(args: BenchTeamsArgs) -> Result<()> {
 /// The scarce threshold instance of `case` and `seed`: thresholds uniform in
 /// [N/M, 2N/M], and the skills of `skills` where given.
 pub fn scarce(case: Case, seed: u64, skills: Option<&GeneratorKnobs>) -> Result<Instance> {
-    let per_task = (case.robots / case.tasks).max(1);
     let knobs = GeneratorKnobs {
-        min_team: Some((per_task, 2 * per_task)),
+        min_team: Some(case.scarce_thresholds()),
         ..skills.copied().unwrap_or_default()
     };
     Ok(knobs.config(case.robots, case.tasks, seed)?.generate()?)
@@ -259,7 +258,7 @@ fn measure(case: Case, seed: u64, args: &BenchTeamsArgs, dir: &Path) -> Result<R
 }
 
 /// Runs `scripts/teams_milp.py` with `solver` at `budget` seconds on `file`.
-fn peer(
+pub(crate) fn peer(
     python: &Path,
     solver: &str,
     budget: f64,

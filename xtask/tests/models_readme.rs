@@ -39,9 +39,13 @@ fn is_change(word: &str) -> bool {
         || numbered("lr", rate)
 }
 
-/// Whether a run's directory name reads `{model}[_{change}…]_n{N}`.
+/// Whether a run's directory name reads `{model}[_{change}…]_n{N}`, or
+/// `staffing_teams[_{change}…]` (trained on several sizes at once).
 fn follows_the_grammar(name: &str) -> bool {
     let words: Vec<&str> = name.split('_').collect();
+    if let ["staffing", "teams", changes @ ..] = words.as_slice() {
+        return changes.iter().all(|w| is_change(w));
+    }
     let changes = match words.as_slice() {
         ["price", rest @ ..] => rest,
         ["afgnet" | "s2v", "dqn" | "ddqn" | "qstar", rest @ ..] => rest,
@@ -64,6 +68,8 @@ fn the_grammar_takes_the_readme_names_and_refuses_the_old_ones() {
         "s2v_ddqn_lr3e-4_n60",
         "price_dagger_n60",
         "afgnet_ddqn_optshape_warm60_n100",
+        "staffing_teams",
+        "staffing_teams_seed1",
     ] {
         assert!(follows_the_grammar(name), "{name}");
     }
@@ -75,6 +81,8 @@ fn the_grammar_takes_the_readme_names_and_refuses_the_old_ones() {
         "afgnet_ddqn_warm_n100",
         "afgnet_ddqn",
         "gnn_ddqn_n60",
+        "staffing_n60",
+        "staffing_teams_big",
     ] {
         assert!(!follows_the_grammar(name), "{name}");
     }

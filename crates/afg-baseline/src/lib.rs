@@ -36,7 +36,8 @@ use thiserror::Error;
 
 pub use dynamics::{CentralisedDa, DecentralisedDa, DecentralisedRun};
 pub use optimum::{
-    Certificate, IncrementalOptimum, Optimum, TeamOptimum, TeamSolution, verify_optimal,
+    Certificate, IncrementalOptimum, Optimum, TeamOptimum, TeamRelaxation, TeamSolution,
+    verify_optimal,
 };
 pub use simple::{Blind, Greedy, Nearest, RandomAllocator};
 pub use swarm::{

@@ -283,3 +283,51 @@ fn welfare_counts_a_coalition_only_when_its_team_is_complete() {
         assert!((inst.welfare(&a) - by_hand).abs() < 1e-9);
     }
 }
+
+/// Placing a staffing is exact: over every set of tasks S, `staff(S)` is an
+/// assignment whose tasks of S hold their thresholds and the others do not, worth
+/// what it says; the best of them is the brute-force optimum (so the optimum's own
+/// staffing is placed at its welfare). The root relaxation bounds the optimum, and a
+/// dive (with any rounding) ends at or below it.
+#[test]
+fn placing_a_staffing_is_exact_and_the_relaxation_bounds_it() {
+    let mut rng = ChaCha8Rng::seed_from_u64(77);
+    for case in 0..120 {
+        let plain = if case % 3 == 2 {
+            small_void_instance(&mut rng, case)
+        } else {
+            small_instance(&mut rng, case)
+        };
+        let inst = with_thresholds(&mut rng, plain);
+        let brute = brute_force(&inst);
+        let tol = 1e-9 * brute.abs().max(1.0);
+        let m = inst.num_tasks();
+        let mut best = f64::NEG_INFINITY;
+        for set in 0..1u32 << m {
+            let staffed: Vec<bool> = (0..m).map(|j| set >> j & 1 == 1).collect();
+            let Some((a, welfare)) = TeamOptimum::staff(&inst, &staffed) else {
+                continue;
+            };
+            inst.check(&a).unwrap();
+            assert!((inst.welfare(&a) - welfare).abs() < tol, "case {case}");
+            for j in inst.task_ids() {
+                let full = a.size(j) >= inst.min_team(j);
+                assert_eq!(full, staffed[j.index()], "case {case} set {set:b} task {j}");
+            }
+            best = best.max(welfare);
+        }
+        assert!((best - brute).abs() < tol, "case {case}: {best} vs {brute}");
+        assert!(
+            TeamOptimum::relax(&inst).bound >= brute - tol,
+            "case {case}"
+        );
+        let coin = rng.random::<u64>();
+        let (dived, welfare) = TeamOptimum::dive(&inst, |_, fractional| {
+            fractional
+                .iter()
+                .map(|j| (coin >> (j.index() % 64)) & 1 == 1)
+                .collect()
+        });
+        assert!((inst.welfare(&dived) - welfare).abs() < tol && welfare <= brute + tol);
+    }
+}

@@ -12,6 +12,7 @@
 //! | `afg mission` | missions over time: draw one, run allocators in the loop, compare them | [`mission`] |
 //! | `afg train` | a Q network by DQN or Double DQN, resumable | [`train`] |
 //! | `afg train-price` | the price model (ours) | [`price`] |
+//! | `afg train-staffing` | the staffing model (ours), team games | [`staffing`] |
 //! | `afg plot-curves`, `afg training-report` | training runs as an SVG or a Markdown table | [`curves`] |
 //! | `afg migrate` | run directories of an older afg brought to the current format | [`migrate`] |
 //!
@@ -36,6 +37,7 @@ pub mod realloc;
 pub mod score;
 pub mod settings;
 pub mod solve;
+pub mod staffing;
 pub mod swarm;
 pub mod train;
 
@@ -74,6 +76,8 @@ pub enum Command {
     Train(train::TrainArgs),
     /// Train the price-structured model (ours) by regression on the exact Q* (DAgger).
     TrainPrice(price::PriceArgs),
+    /// Train the staffing model (ours) for team games on the staffing of certified optima.
+    TrainStaffing(staffing::StaffingArgs),
     /// Draw validation curves of training runs as an SVG (Fig. 1 style).
     PlotCurves(curves::PlotArgs),
     /// Summarise finished training runs against the classical methods (Markdown).
@@ -96,6 +100,7 @@ impl Command {
             Command::Mission(command) => mission::run(command),
             Command::Train(args) => train::run(args, "afg train"),
             Command::TrainPrice(args) => price::run(args),
+            Command::TrainStaffing(args) => staffing::run(args),
             Command::PlotCurves(args) => curves::run_plot(args),
             Command::TrainingReport(args) => curves::run_report(args),
             Command::Migrate(args) => migrate::run(args),

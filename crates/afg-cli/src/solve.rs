@@ -86,6 +86,9 @@ fn with_flags(error: LearnError) -> anyhow::Error {
         OptionConflict::BlockWithOneShot => "drop --one-shot or --block",
         OptionConflict::OneShotOnQNetwork => "drop --one-shot",
         OptionConflict::BlockWithExactBurn => "drop --block or --exact-burn",
+        OptionConflict::OptionOnStaffingModel => {
+            "drop --block, --repair, --one-shot and --exact-burn"
+        }
     };
     anyhow::anyhow!("{conflict}: {fix}")
 }

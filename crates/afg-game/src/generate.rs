@@ -340,3 +340,64 @@ impl GeneratorConfig {
         instance.with_teams(min_team, &skills, &requires)
     }
 }
+
+/// A game's size, N robots and M tasks, written `NxM` (`100x10`) on command lines.
+///
+/// # Examples
+/// ```
+/// use afg_game::GameSize;
+/// let size: GameSize = "300x20".parse()?;
+/// assert_eq!((size.robots, size.tasks), (300, 20));
+/// assert_eq!(size.to_string(), "300x20");
+/// assert!("300".parse::<GameSize>().is_err() && "0x5".parse::<GameSize>().is_err());
+/// # Ok::<(), String>(())
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GameSize {
+    /// Robots N.
+    pub robots: usize,
+    /// Tasks M.
+    pub tasks: usize,
+}
+
+impl GameSize {
+    /// The thresholds of a scarce team game of this size, uniform in [N/M, 2N/M]: they
+    /// add up to about 1.5 N, so not every task can be staffed (the team games'
+    /// benchmarks and the staffing model's training games).
+    ///
+    /// # Examples
+    /// ```
+    /// let size = afg_game::GameSize { robots: 100, tasks: 10 };
+    /// assert_eq!(size.scarce_thresholds(), (10, 20));
+    /// ```
+    pub fn scarce_thresholds(self) -> (usize, usize) {
+        let per_task = (self.robots / self.tasks).max(1);
+        (per_task, 2 * per_task)
+    }
+}
+
+impl std::str::FromStr for GameSize {
+    type Err = String;
+
+    fn from_str(text: &str) -> Result<Self, String> {
+        let (n, m) = text
+            .split_once('x')
+            .ok_or_else(|| format!("`{text}`: write a size as NxM, e.g. 1000x5"))?;
+        let count = |s: &str| match s.parse::<usize>() {
+            Ok(0) => Err(format!("`{text}`: must be at least 1")),
+            Ok(k) => Ok(k),
+            Err(e) => Err(format!("`{text}`: {e}")),
+        };
+        Ok(GameSize {
+            robots: count(n)?,
+            tasks: count(m)?,
+        })
+    }
+}
+
+impl std::fmt::Display for GameSize {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}x{}", self.robots, self.tasks)
+    }
+}

@@ -39,7 +39,7 @@ mod teams;
 
 pub use assignment::Assignment;
 pub use error::GameError;
-pub use generate::{CountRange, GeneratorConfig, GeneratorKnobs, SkillDraw};
+pub use generate::{CountRange, GameSize, GeneratorConfig, GeneratorKnobs, SkillDraw};
 pub use ids::{RobotId, TaskId};
 pub use instance::{GOLDEN_RATIO, Instance, MAX_VALUE, Point, Task, ValueFunction};
 pub use named::Named;

@@ -12,7 +12,7 @@ mod units;
 
 pub use batch::GraphBatch;
 pub use neighbours::{GraphKind, RobotGraph};
-pub use price_features::{PriceState, TASK_FEATURES, task_inputs};
+pub use price_features::{PriceState, TASK_FEATURES, rows_with_mean, task_inputs};
 pub use state::{AllocationState, StateParts, join_gain, write_task_column};
 pub use units::{MIN_BETA_UNIT, Units, VALUE_CAP, feature_scale};
 

@@ -274,18 +274,38 @@ impl<'a> PriceState<'a> {
 /// # Panics
 /// If the lengths are not `M · TASK_FEATURES` and `2 M · TASK_FEATURES`.
 pub fn task_inputs(features: &[f32], out: &mut [f32]) {
-    let k = TASK_FEATURES;
-    let m = features.len() / k;
+    rows_with_mean(features, TASK_FEATURES, out);
+}
+
+/// Each row of `width` features (`[M, width]`), then the mean of every row, side by
+/// side into `out` (`[M, 2 · width]`): a task's input to a network shared by every
+/// task ([`task_inputs`] for the price features; the staffing model's too).
+///
+/// # Examples
+/// ```
+/// let mut out = vec![0.0; 8];
+/// afg_graph::rows_with_mean(&[1.0, 2.0, 3.0, 4.0], 2, &mut out);
+/// assert_eq!(out, [1.0, 2.0, 2.0, 3.0, 3.0, 4.0, 2.0, 3.0]);
+/// ```
+///
+/// # Panics
+/// If `width` is 0 or the lengths are not `M · width` and `2 M · width`.
+pub fn rows_with_mean(features: &[f32], width: usize, out: &mut [f32]) {
+    assert!(width > 0 && features.len().is_multiple_of(width));
     assert_eq!(out.len(), 2 * features.len());
-    let mut mean = [0.0f32; TASK_FEATURES];
-    for row in features.chunks_exact(k) {
+    let m = features.len() / width;
+    let mut mean = vec![0.0f32; width];
+    for row in features.chunks_exact(width) {
         for (s, &x) in mean.iter_mut().zip(row) {
             *s += x / m as f32;
         }
     }
-    for (row, input) in features.chunks_exact(k).zip(out.chunks_exact_mut(2 * k)) {
-        input[..k].copy_from_slice(row);
-        input[k..].copy_from_slice(&mean);
+    for (row, input) in features
+        .chunks_exact(width)
+        .zip(out.chunks_exact_mut(2 * width))
+    {
+        input[..width].copy_from_slice(row);
+        input[width..].copy_from_slice(&mean);
     }
 }
 

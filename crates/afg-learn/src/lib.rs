@@ -15,6 +15,7 @@
 //! | [`policy`] | a trained network as an allocator (`LearnedPolicy`), rollouts, regret against Q* |
 //! | [`fast`] | the trained network exported to faer for fast exact rollouts (`FastPolicy`) |
 //! | [`price`] | the price model (ours): `PriceNet`, `PriceTrainer`, `PricePolicy` |
+//! | [`staffing`] | the staffing model for team games (ours): `StaffingTrainer`, `StaffingPolicy`, `knapsack` |
 
 mod afgnet;
 mod dense;
@@ -34,6 +35,7 @@ mod regret;
 mod rollout;
 mod run_dir;
 mod s2v;
+pub mod staffing;
 mod targets;
 mod tensors;
 pub mod train;

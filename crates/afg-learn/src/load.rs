@@ -10,6 +10,7 @@ use crate::manifest::ModelKind;
 use crate::policy::LearnedPolicy;
 use crate::price::{PriceMode, PriceModel, PricePolicy};
 use crate::run_dir::RunDir;
+use crate::staffing::{StaffingModel, StaffingPolicy};
 
 /// How the model of a directory is run ([`load_model`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -32,6 +33,9 @@ pub enum OptionConflict {
     /// Repair or the exact Burn rollout asked of a price model.
     #[error("repair and the exact Burn rollout apply to Q networks, not price models")]
     QNetworkOptionOnPriceModel,
+    /// Any option with a staffing model (it has none).
+    #[error("block, repair, one-shot and the exact Burn rollout do not apply to a staffing model")]
+    OptionOnStaffingModel,
     /// A block size with the one-shot mode.
     #[error("a block size applies to the sequential mode, not the one-shot one")]
     BlockWithOneShot,
@@ -44,7 +48,7 @@ pub enum OptionConflict {
 }
 
 /// The trained model in run directory `dir` as an allocator, whatever its kind
-/// ([`RunDir::kind`]: a Q network or a price model).
+/// ([`RunDir::kind`]: a Q network, a price model or a staffing model).
 ///
 /// # Errors
 /// [`LearnError::ModelOptions`] for options that do not apply to the model found, and
@@ -65,7 +69,15 @@ pub fn load_model(dir: &Path, options: ModelOptions) -> Result<Box<dyn Allocator
         path: dir.display().to_string(),
         source: Box::new(source),
     };
-    if RunDir::new(dir).kind().map_err(loading)? == ModelKind::PriceModel {
+    let kind = RunDir::new(dir).kind().map_err(loading)?;
+    if kind == ModelKind::StaffingModel {
+        if options != ModelOptions::default() {
+            return bad(OptionConflict::OptionOnStaffingModel);
+        }
+        let policy = StaffingPolicy::load(&dir.join(StaffingModel::FILE_NAME)).map_err(loading)?;
+        return Ok(Box::new(policy));
+    }
+    if kind == ModelKind::PriceModel {
         let price = dir.join(PriceModel::FILE_NAME);
         if options.repair || options.exact_burn {
             return bad(OptionConflict::QNetworkOptionOnPriceModel);

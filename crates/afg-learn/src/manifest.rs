@@ -52,6 +52,9 @@ pub enum ModelKind {
     QNetwork,
     /// The price model (ours): `price.json` (settings and weights), `log.jsonl` of rounds.
     PriceModel,
+    /// The staffing model (ours): `staffing.json` (settings and weights), `log.jsonl` of
+    /// epochs, `labels.jsonl` of labelled games.
+    StaffingModel,
 }
 
 /// What a run trained and how it ended, by kind of model.
@@ -72,6 +75,13 @@ pub enum RunRecord {
         /// The last round.
         last_round: Option<crate::price::PriceRound>,
     },
+    /// The staffing model.
+    StaffingModel {
+        /// Epochs.
+        epochs: usize,
+        /// The last epoch.
+        last_epoch: Option<crate::staffing::StaffingEpoch>,
+    },
 }
 
 impl RunManifest {
@@ -81,6 +91,7 @@ impl RunManifest {
         let weights = match record {
             RunRecord::QNetwork { .. } => RunDir::WEIGHT_FILES.to_vec(),
             RunRecord::PriceModel { .. } => vec![crate::price::PriceModel::FILE_NAME],
+            RunRecord::StaffingModel { .. } => vec![crate::staffing::StaffingModel::FILE_NAME],
         };
         RunManifest {
             version: crate::format::RUN_FORMAT_VERSION,
@@ -98,6 +109,7 @@ impl RunManifest {
         match self.record {
             RunRecord::QNetwork { .. } => ModelKind::QNetwork,
             RunRecord::PriceModel { .. } => ModelKind::PriceModel,
+            RunRecord::StaffingModel { .. } => ModelKind::StaffingModel,
         }
     }
 }

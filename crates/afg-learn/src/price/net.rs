@@ -147,7 +147,13 @@ impl PriceMlp {
     /// Whether the layer shapes are those of a price network of width `hidden`
     /// (checked when a file is loaded).
     pub fn has_shape(&self, hidden: usize) -> bool {
-        let shapes = [(PRICE_INPUTS, hidden), (hidden, hidden), (hidden, 1)];
+        self.has_layers(PRICE_INPUTS, hidden)
+    }
+
+    /// Whether the layers are `inputs → hidden → hidden → 1` with finite weights: the
+    /// shape of any network of this form (the staffing model's too).
+    pub(crate) fn has_layers(&self, inputs: usize, hidden: usize) -> bool {
+        let shapes = [(inputs, hidden), (hidden, hidden), (hidden, 1)];
         self.layers.iter().zip(shapes).all(|(d, (i, o))| {
             d.inputs == i
                 && d.outputs == o
@@ -155,6 +161,22 @@ impl PriceMlp {
                 && d.bias.len() == o
                 && d.weight.iter().chain(&d.bias).all(|w| w.is_finite())
         })
+    }
+
+    /// The network's output for each row of `inputs` (`[R, inputs]`) into `out` (`[R]`),
+    /// with ReLU after each hidden layer.
+    pub(crate) fn forward_rows(&self, inputs: &[f32], out: &mut [f32]) {
+        let h = self.hidden();
+        let (mut a, mut b) = (vec![0.0; h], vec![0.0; h]);
+        let [first, hidden, output] = &self.layers;
+        task_mlp(
+            [first, hidden, output],
+            inputs,
+            None,
+            Activation::Relu,
+            (&mut a, &mut b),
+            out,
+        );
     }
 
     /// The price of every task from [`super::PriceState::features`] (`[M, TASK_FEATURES]`)

@@ -27,12 +27,12 @@ use std::cell::Cell;
 use std::collections::BinaryHeap;
 use std::time::{Duration, Instant};
 
-use afg_game::{Assignment, Instance};
+use afg_game::{Assignment, Instance, TaskId};
 
 use crate::{AllocError, AllocStats, Allocation, Allocator, timed};
 
 mod node;
-use node::Search;
+use node::{Decision, Search};
 
 /// The exact optimum of a game with team thresholds (or the paper's game), with a
 /// proven upper bound: branch and bound over which tasks are staffed (see the module
@@ -98,7 +98,10 @@ impl TeamOptimum {
         let Some(mut root) = search.node(search.root_decisions(), Vec::new(), None) else {
             unreachable!("the root is feasible: the instance holds every robot")
         };
-        search.dive(&root, &out_of_time);
+        let m = instance.num_tasks();
+        search.dive(&root, &out_of_time, &mut |node, fractional| {
+            Self::half_rounding(instance, &node.relaxation(m), fractional)
+        });
         if instance.has_skill_rules()
             && instance.num_robots() * instance.num_tasks() <= node::MAX_PAIRS
         {
@@ -136,6 +139,147 @@ impl TeamOptimum {
             assignment: best,
             nodes,
         })
+    }
+}
+
+/// The root of [`TeamOptimum`]'s search: every task's value replaced by its concave
+/// envelope (module docs), solved exactly. What a rounding — hand-written or learned —
+/// reads to decide which tasks to staff.
+#[derive(Clone, Debug)]
+pub struct TeamRelaxation {
+    /// Each task's coalition size in the relaxed optimum (between 0 and its threshold:
+    /// a fraction of a team).
+    pub sizes: Vec<usize>,
+    /// Each task's price in the relaxed optimum: a robot joins the task where the price
+    /// less its cost is highest (the transport solver's dual, one per task).
+    pub prices: Vec<f64>,
+    /// The relaxation's welfare: an upper bound on every assignment's.
+    pub bound: f64,
+}
+
+impl TeamOptimum {
+    /// The root relaxation of `instance` (one transport solve).
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::TeamOptimum;
+    /// use afg_game::GeneratorConfig;
+    /// let mut cfg = GeneratorConfig::paper(30, 5, 1);
+    /// cfg.min_team = Some(afg_game::CountRange { min: 6, max: 12 });
+    /// let inst = cfg.generate()?;
+    /// let root = TeamOptimum::relax(&inst);
+    /// assert_eq!(root.sizes.iter().sum::<usize>(), 30);
+    /// assert!(root.bound >= TeamOptimum::default().solve(&inst)?.welfare - 1e-9);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn relax(instance: &Instance) -> TeamRelaxation {
+        let mut search = Search::new(instance);
+        let Some(root) = search.node(search.root_decisions(), Vec::new(), None) else {
+            unreachable!("the root is feasible: the instance holds every robot")
+        };
+        root.relaxation(instance.num_tasks())
+    }
+
+    /// `opt`'s rounding in its dive: each of the `fractional` tasks staffed where the
+    /// relaxation `root` holds at least half its threshold.
+    pub fn half_rounding(
+        instance: &Instance,
+        root: &TeamRelaxation,
+        fractional: &[TaskId],
+    ) -> Vec<bool> {
+        fractional
+            .iter()
+            .map(|&j| 2 * root.sizes[j.index()] >= instance.min_team(j))
+            .collect()
+    }
+
+    /// A dive from the root relaxation ([`TeamOptimum::relax`]) to an assignment, with
+    /// the rounding `round`: at each step it is given the relaxation of the current
+    /// decisions and the tasks still undecided that it leaves between 0 and their
+    /// threshold, and says of each whether to staff it; the others stay open, the
+    /// decisions are re-solved (warm) and the dive goes on until no task is left
+    /// between. Where its choice asks for more robots than there are, all of them are
+    /// left unstaffed. The best assignment met on the way and its welfare. `opt`'s own
+    /// first answer is this dive with [`TeamOptimum::half_rounding`].
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::TeamOptimum;
+    /// use afg_game::GeneratorConfig;
+    /// let mut cfg = GeneratorConfig::paper(40, 5, 3);
+    /// cfg.min_team = Some(afg_game::CountRange { min: 8, max: 16 });
+    /// let inst = cfg.generate()?;
+    /// let (dived, welfare) = TeamOptimum::dive(&inst, |root, fractional| {
+    ///     TeamOptimum::half_rounding(&inst, root, fractional)
+    /// });
+    /// assert_eq!(inst.welfare(&dived), welfare);
+    /// assert!(welfare <= TeamOptimum::default().solve(&inst)?.welfare + 1e-9);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn dive(
+        instance: &Instance,
+        mut round: impl FnMut(&TeamRelaxation, &[TaskId]) -> Vec<bool>,
+    ) -> (Assignment, f64) {
+        let mut search = Search::new(instance);
+        let Some(root) = search.node(search.root_decisions(), Vec::new(), None) else {
+            unreachable!("the root is feasible: the instance holds every robot")
+        };
+        let m = instance.num_tasks();
+        search.dive(&root, &|| false, &mut |node, fractional| {
+            round(&node.relaxation(m), fractional)
+        });
+        let (best, welfare, _) = search.into_best();
+        (best, welfare)
+    }
+
+    /// The best assignment in which the tasks of `staffed` (one flag per task) hold
+    /// their thresholds and the others earn nothing — one transport solve, exact for
+    /// that choice in a game without skills (with skills, a staffed task whose team
+    /// lacks a skill earns nothing) — and its welfare; `None` where no assignment
+    /// staffs them all (their thresholds add up to more than N, a task no team can
+    /// staff, too little room for the rest).
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::TeamOptimum;
+    /// use afg_game::GeneratorConfig;
+    /// let mut cfg = GeneratorConfig::paper(30, 5, 1);
+    /// cfg.min_team = Some(afg_game::CountRange { min: 6, max: 12 });
+    /// let inst = cfg.generate()?;
+    /// let best = TeamOptimum::default().solve(&inst)?;
+    /// let staffed: Vec<bool> =
+    ///     inst.task_ids().map(|j| best.assignment.size(j) >= inst.min_team(j)).collect();
+    /// let (_, welfare) = TeamOptimum::staff(&inst, &staffed).expect("the optimum's staffing");
+    /// assert!((welfare - best.welfare).abs() < 1e-9);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    ///
+    /// # Panics
+    /// If `staffed` does not hold one flag per task.
+    pub fn staff(instance: &Instance, staffed: &[bool]) -> Option<(Assignment, f64)> {
+        assert_eq!(staffed.len(), instance.num_tasks(), "one flag per task");
+        let mut search = Search::new(instance);
+        let root = search.root_decisions();
+        if root
+            .iter()
+            .zip(staffed)
+            .any(|(&d, &staff)| staff && d == Decision::Unstaffed)
+        {
+            return None; // a task no team can staff
+        }
+        let decisions = staffed
+            .iter()
+            .map(|&staff| {
+                if staff {
+                    Decision::Staffed
+                } else {
+                    Decision::Unstaffed
+                }
+            })
+            .collect();
+        search.node(decisions, Vec::new(), None)?;
+        let (best, welfare, _) = search.into_best();
+        Some((best, welfare))
     }
 }
 

@@ -39,7 +39,7 @@ pub(super) struct Node {
     pub(super) bound: f64,
     prices: Vec<f64>,
     skill_prices: Vec<f64>,
-    sizes: Vec<usize>,
+    pub(super) sizes: Vec<usize>,
     assignment: Option<Assignment>,
 }
 
@@ -57,6 +57,18 @@ impl PartialOrd for Node {
 impl Ord for Node {
     fn cmp(&self, other: &Self) -> Ordering {
         self.bound.total_cmp(&other.bound)
+    }
+}
+
+impl Node {
+    /// What a rounding reads of the node: its relaxed coalitions, prices (the `m`
+    /// tasks') and bound.
+    pub(super) fn relaxation(&self, m: usize) -> super::TeamRelaxation {
+        super::TeamRelaxation {
+            sizes: self.sizes.clone(),
+            prices: self.prices[..m].to_vec(),
+            bound: self.bound,
+        }
     }
 }
 
@@ -397,13 +409,18 @@ impl<'a> Search<'a> {
     }
 
     /// Rounds the relaxation down to an assignment with no task between 0 and its
-    /// threshold, a good first incumbent: every such task at once staffed where at
-    /// least half its threshold is there, else unstaffed (all unstaffed where that
-    /// asks for too many robots), re-solved until none is left or `out_of_time`.
-    pub(super) fn dive(&mut self, root: &Node, out_of_time: &dyn Fn() -> bool) {
+    /// threshold, a good first incumbent: `round` decides every such task of a node at
+    /// once (staffed or not; all unstaffed where its choice asks for too many robots),
+    /// and the node is re-solved until none is left or `out_of_time`.
+    pub(super) fn dive(
+        &mut self,
+        root: &Node,
+        out_of_time: &dyn Fn() -> bool,
+        round: &mut dyn FnMut(&Node, &[TaskId]) -> Vec<bool>,
+    ) {
         let mut current = root.clone();
         while !out_of_time() {
-            let sizes = current.sizes.clone();
+            let sizes = &current.sizes;
             let fractional: Vec<TaskId> = self
                 .instance
                 .task_ids()
@@ -413,11 +430,11 @@ impl<'a> Search<'a> {
             if fractional.is_empty() {
                 return;
             }
-            let rounded = |staff: bool| {
+            let staff = round(&current, &fractional);
+            let rounded = |keep: bool| {
                 let mut decisions = current.decisions.clone();
-                for &j in &fractional {
-                    let half = 2 * sizes[j.index()] >= self.instance.min_team(j);
-                    decisions[j.index()] = if staff && half {
+                for (&j, &staff) in fractional.iter().zip(&staff) {
+                    decisions[j.index()] = if keep && staff {
                         Decision::Staffed
                     } else {
                         Decision::Unstaffed

@@ -1,0 +1,118 @@
+//! `afg train-staffing`: the staffing model (ours) for the team threshold game, trained
+//! on the staffing of certified optima.
+
+use std::path::PathBuf;
+
+use afg_game::GameSize;
+use afg_learn::staffing::{StaffingModel, StaffingTrainConfig, StaffingTrainer};
+use anyhow::{Result, bail};
+use clap::Args;
+use serde::Serialize;
+
+/// `afg train-staffing`: the staffing model's training settings and run directory.
+#[derive(Args, Serialize)]
+pub struct StaffingArgs {
+    /// Sizes of the training games as NxM (thresholds uniform in [N/M, 2N/M]).
+    #[arg(long, value_delimiter = ',')]
+    #[serde(serialize_with = "joined")]
+    sizes: Vec<GameSize>,
+    /// Training games per size.
+    #[arg(long)]
+    games: Option<usize>,
+    /// Validation games per size (other seeds).
+    #[arg(long)]
+    validation_games: Option<usize>,
+    /// The exact solver's time limit per game, seconds.
+    #[arg(long)]
+    label_time_limit: Option<f64>,
+    /// Passes over the labelled games.
+    #[arg(long)]
+    epochs: Option<usize>,
+    /// Games per Adam step.
+    #[arg(long)]
+    batch: Option<usize>,
+    /// Adam learning rate at the start (falls linearly to a tenth).
+    #[arg(long)]
+    lr: Option<f64>,
+    /// The structured loss's margin per task (in units of k / (N/M)).
+    #[arg(long)]
+    margin: Option<f64>,
+    /// Width of the two hidden layers.
+    #[arg(long)]
+    hidden: Option<usize>,
+    /// Seed of everything random in the run.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Run directory: labels.jsonl (the labelled games; a stopped run resumes from it),
+    /// log.jsonl (one line per epoch), staffing.json (weights and settings),
+    /// manifest.json. An existing model is not overwritten unless --force is given.
+    #[arg(long)]
+    out: PathBuf,
+    /// Replace an existing model in --out.
+    #[arg(long)]
+    #[serde(skip)]
+    force: bool,
+}
+
+/// `--sizes` as written: `100x10,300x20` (nothing where none was given).
+fn joined<S: serde::Serializer>(sizes: &[GameSize], out: S) -> Result<S::Ok, S::Error> {
+    if sizes.is_empty() {
+        return out.serialize_none();
+    }
+    let text: Vec<String> = sizes.iter().map(GameSize::to_string).collect();
+    out.serialize_str(&text.join(","))
+}
+
+/// Trains a staffing model into its run directory.
+///
+/// # Errors
+/// Bad settings, a directory that already holds a model (or another run's labels), or a
+/// failed write.
+pub fn run(args: StaffingArgs) -> Result<()> {
+    let model_path = args.out.join(StaffingModel::FILE_NAME);
+    if model_path.exists() && !args.force {
+        bail!(
+            "{} exists; pass --force to replace it",
+            model_path.display()
+        );
+    }
+    let mut config = StaffingTrainConfig::new(args.seed);
+    if !args.sizes.is_empty() {
+        config.sizes.clone_from(&args.sizes);
+    }
+    crate::set_given!(config;
+        games = args.games,
+        validation_games = args.validation_games,
+        label_time_limit = args.label_time_limit,
+        epochs = args.epochs,
+        batch = args.batch,
+        lr = args.lr,
+        margin = args.margin,
+        network.hidden = args.hidden,
+    );
+    let trainer = StaffingTrainer::new(config)?;
+    let games = (trainer.config().games * trainer.config().sizes.len()) as u64;
+    let bar = afg_eval::report::progress(games, "label games");
+    let command = format!(
+        "afg train-staffing {}",
+        crate::command_args(&args).join(" ")
+    );
+    let epochs = std::cell::Cell::new(false);
+    let manifest = trainer.run_in(
+        &args.out,
+        command,
+        |_| bar.inc(1),
+        |epoch| {
+            if !epochs.replace(true) {
+                bar.finish_and_clear();
+            }
+            println!(
+                "epoch {:>3}  loss {:.4}  staffed as the label {:.1} %  validation {:.2} % of OPT",
+                epoch.epoch, epoch.loss, epoch.agree, epoch.percent_of_opt
+            );
+        },
+    )?;
+    let seconds = manifest.wall_time_s.unwrap_or_default();
+    println!("wrote {} ({seconds:.0} s)", model_path.display());
+    Ok(())
+}

@@ -1,0 +1,531 @@
+//! Training the staffing model: label generated team games with the staffing of the
+//! best assignment found (proven optimal where the time limit allows), then fit the
+//! network so that the knapsack over its worths picks that staffing (Adam on the
+//! structured hinge loss, [`StaffingTrainer::epoch`]).
+//!
+//! The labelling (one exact solve per game) is the long part; it is kept in the run
+//! directory ([`LABELS_FILE_NAME`], one game per line, written as it goes), so a run
+//! stopped while labelling continues where it stopped. The fitting that follows is
+//! seeded and takes seconds to minutes: a rerun repeats it and ends with the same
+//! weights.
+
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use afg_baseline::TeamOptimum;
+use afg_game::{GameSize, GeneratorKnobs, Instance};
+use burn::optim::adaptor::OptimizerAdaptor;
+use burn::optim::{Adam, AdamConfig, GradientsParams, Optimizer};
+use burn::tensor::{Tensor, TensorData};
+use rand::SeedableRng;
+use rand::seq::SliceRandom;
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use super::features::{MARGIN, SIZE, STAFF_FEATURES, STAFF_INPUTS, staffing_inputs};
+use super::{StaffingModel, knapsack, staff_by_values, staffing_features, values_of};
+use crate::price::{PriceMlp, PriceNet, PriceNetConfig};
+use crate::train::training_instance_seed;
+use crate::{LearnError, TrainBackend};
+
+/// The file of a run's labelled games, one [`LabelledGame`] per line.
+pub const LABELS_FILE_NAME: &str = "labels.jsonl";
+
+/// The file name of a staffing run's log, one JSON [`StaffingEpoch`] per line.
+pub const LOG_FILE_NAME: &str = "log.jsonl";
+
+/// Every setting of a staffing training run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StaffingTrainConfig {
+    /// The sizes of the training games; each game's thresholds are uniform in
+    /// [N/M, 2N/M] (scarce: they add up to about 1.5 N).
+    pub sizes: Vec<GameSize>,
+    /// Training games per size.
+    pub games: usize,
+    /// Validation games per size (other seeds).
+    pub validation_games: usize,
+    /// The exact solver's time limit per game, seconds (a game it does not prove is
+    /// labelled with the best it found).
+    pub label_time_limit: f64,
+    /// The network and its initialisation seed.
+    pub network: PriceNetConfig,
+    /// Passes over every labelled game.
+    pub epochs: usize,
+    /// Games per Adam step.
+    pub batch: usize,
+    /// Adam learning rate at the start; it falls linearly to a tenth over the run.
+    pub lr: f64,
+    /// The structured loss's margin per task, in units of its worth's slope k_j / share.
+    pub margin: f64,
+    /// Seed of everything random in the run.
+    pub seed: u64,
+}
+
+impl StaffingTrainConfig {
+    /// The defaults (docs/teams.md): games of 100 robots and 10 tasks, 300 and 20, 600
+    /// and 30, 600 of each; width 64; 60 epochs of 16 games per step, lr 1e-3.
+    pub fn new(seed: u64) -> Self {
+        StaffingTrainConfig {
+            sizes: [(100, 10), (300, 20), (600, 30)]
+                .map(|(robots, tasks)| GameSize { robots, tasks })
+                .to_vec(),
+            games: 600,
+            validation_games: 20,
+            label_time_limit: 10.0,
+            network: PriceNetConfig { hidden: 64, seed },
+            epochs: 60,
+            batch: 16,
+            lr: 1e-3,
+            margin: 0.1,
+            seed,
+        }
+    }
+
+    fn validate(&self) -> Result<(), LearnError> {
+        let bad = |what: &str| Err(LearnError::InvalidConfig(what.to_string()));
+        if self.sizes.is_empty() || self.sizes.iter().any(|s| s.robots == 0 || s.tasks == 0) {
+            return bad("give at least one size, with N and M at least 1");
+        }
+        if self.games == 0 || self.validation_games == 0 || self.epochs == 0 || self.batch == 0 {
+            return bad("games, validation games, epochs and batch must be at least 1");
+        }
+        if self.network.hidden == 0 {
+            return bad("the width must be at least 1");
+        }
+        if !(self.lr.is_finite() && self.lr > 0.0) {
+            return bad("the learning rate must be positive and finite");
+        }
+        if !(self.margin.is_finite() && self.margin >= 0.0) {
+            return bad("the margin must be finite and not negative");
+        }
+        if !(self.label_time_limit.is_finite() && self.label_time_limit > 0.0) {
+            return bad("the label time limit must be positive and finite");
+        }
+        Ok(())
+    }
+}
+
+/// The scarce team game of `size` and `seed`: thresholds uniform in [N/M, 2N/M] (as
+/// `afg gen --robots N --tasks M --min-team N/M,2N/M --seed S`).
+///
+/// # Errors
+/// Errors of the generator.
+pub fn scarce_game(size: GameSize, seed: u64) -> Result<Instance, LearnError> {
+    let knobs = GeneratorKnobs {
+        min_team: Some(size.scarce_thresholds()),
+        ..GeneratorKnobs::default()
+    };
+    Ok(knobs.config(size.robots, size.tasks, seed)?.generate()?)
+}
+
+/// One labelled game: its seed and size, every task's features and label (1: staffed
+/// in the best assignment found), and that assignment's welfare.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LabelledGame {
+    /// The generator seed.
+    pub seed: u64,
+    /// Its size.
+    pub size: GameSize,
+    /// `[M, STAFF_FEATURES]`.
+    pub features: Vec<f32>,
+    /// `[M]`, 0 or 1.
+    pub labels: Vec<f32>,
+    /// `[M]`, each task's threshold.
+    pub thresholds: Vec<usize>,
+    /// The welfare of the labelling assignment.
+    pub welfare: f64,
+    /// Whether it is proven optimal.
+    pub proven: bool,
+}
+
+pub(crate) fn label(
+    size: GameSize,
+    seed: u64,
+    limit: Duration,
+) -> Result<LabelledGame, LearnError> {
+    let inst = scarce_game(size, seed)?;
+    let best = TeamOptimum {
+        time_limit: Some(limit),
+    }
+    .solve(&inst)
+    .map_err(|e| LearnError::InvalidConfig(e.to_string()))?;
+    let labels = inst
+        .task_ids()
+        .map(|j| f32::from(u8::from(best.assignment.size(j) >= inst.min_team(j))))
+        .collect();
+    Ok(LabelledGame {
+        seed,
+        size,
+        features: staffing_features(&inst, &TeamOptimum::relax(&inst)),
+        labels,
+        thresholds: inst.task_ids().map(|j| inst.min_team(j)).collect(),
+        welfare: best.welfare,
+        proven: best.proven,
+    })
+}
+
+/// What one epoch did.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StaffingEpoch {
+    /// Epochs done.
+    pub epoch: usize,
+    /// Mean cross-entropy of its steps.
+    pub loss: f64,
+    /// Share of the validation games' tasks that the knapsack staffs as the label
+    /// does, %.
+    pub agree: f64,
+    /// Mean welfare of the validation games' placements, % of their optimum.
+    pub percent_of_opt: f64,
+}
+
+type Optim = OptimizerAdaptor<Adam, PriceNet<TrainBackend>, TrainBackend>;
+
+/// A staffing training run (see the module docs).
+///
+/// # Examples
+/// ```
+/// use afg_learn::staffing::{StaffingTrainConfig, StaffingTrainer};
+/// let mut config = StaffingTrainConfig::new(0);
+/// config.sizes.truncate(1);
+/// (config.games, config.validation_games, config.epochs) = (4, 2, 2);
+/// let mut trainer = StaffingTrainer::new(config)?;
+/// trainer.label(None, |_| ())?;
+/// let first = trainer.epoch()?;
+/// assert_eq!(first.epoch, 1);
+/// # Ok::<(), afg_learn::LearnError>(())
+/// ```
+pub struct StaffingTrainer {
+    config: StaffingTrainConfig,
+    net: PriceNet<TrainBackend>,
+    optim: Optim,
+    rng: ChaCha8Rng,
+    epoch: usize,
+    training: Vec<LabelledGame>,
+    validation: Vec<(Instance, LabelledGame)>,
+}
+
+impl StaffingTrainer {
+    /// A fresh run (nothing labelled yet).
+    ///
+    /// # Errors
+    /// [`LearnError::InvalidConfig`] for a setting out of range.
+    pub fn new(config: StaffingTrainConfig) -> Result<Self, LearnError> {
+        config.validate()?;
+        let mut rng = ChaCha8Rng::seed_from_u64(config.network.seed);
+        Ok(StaffingTrainer {
+            net: PriceNet::seeded(
+                &mut rng,
+                STAFF_INPUTS,
+                config.network.hidden,
+                &Default::default(),
+            ),
+            optim: AdamConfig::new().init(),
+            rng: ChaCha8Rng::seed_from_u64(config.seed),
+            epoch: 0,
+            training: Vec::new(),
+            validation: Vec::new(),
+            config,
+        })
+    }
+
+    /// The settings.
+    pub fn config(&self) -> &StaffingTrainConfig {
+        &self.config
+    }
+
+    /// The training games to label: (size, seed), every size's in turn.
+    fn training_games(&self) -> Vec<(GameSize, u64)> {
+        let mut index = 0;
+        let mut games = Vec::new();
+        for &size in &self.config.sizes {
+            for _ in 0..self.config.games {
+                games.push((size, training_instance_seed(self.config.seed, index)));
+                index += 1;
+            }
+        }
+        games
+    }
+
+    /// Labels every training and validation game, in parallel over the cores. With
+    /// `cache` (a labels file), the games already there are read back rather than
+    /// solved again, and each new one is appended as it is labelled; `on_game` is
+    /// called once per training game.
+    ///
+    /// # Errors
+    /// A cache file that is not this run's (another size or seed at a line), a failed
+    /// write, or a generator error.
+    pub fn label(
+        &mut self,
+        cache: Option<&Path>,
+        on_game: impl Fn(&LabelledGame) + Sync,
+    ) -> Result<(), LearnError> {
+        let limit = Duration::from_secs_f64(self.config.label_time_limit);
+        let games = self.training_games();
+        let mut done: Vec<LabelledGame> = match cache {
+            Some(path) if path.exists() => read_labels(path)?,
+            _ => Vec::new(),
+        };
+        for (game, &(size, seed)) in done.iter().zip(&games) {
+            if (game.size, game.seed) != (size, seed) {
+                return Err(LearnError::InvalidConfig(format!(
+                    "{} holds another run's games (seed {} of {}x{} where this run has seed {seed} of {}x{}); remove it or choose another directory",
+                    cache.map_or_else(String::new, |p| p.display().to_string()),
+                    game.seed,
+                    game.size.robots,
+                    game.size.tasks,
+                    size.robots,
+                    size.tasks
+                )));
+            }
+        }
+        done.truncate(games.len());
+        done.iter().for_each(&on_game);
+        let file = std::sync::Mutex::new(cache.map(|path| (path.to_path_buf(), lines_of(&done))));
+        let mut fresh: Vec<(usize, LabelledGame)> = games[done.len()..]
+            .par_iter()
+            .enumerate()
+            .map(|(at, &(size, seed))| {
+                let game = label(size, seed, limit)?;
+                if let Some((path, text)) = file.lock().expect("no panics while held").as_mut() {
+                    text.push_str(&serde_json::to_string(&game).expect("a game serialises"));
+                    text.push('\n');
+                    afg_game::fs::write_atomic(path, text.as_bytes())?;
+                }
+                on_game(&game);
+                Ok((at, game))
+            })
+            .collect::<Result<_, LearnError>>()?;
+        fresh.sort_by_key(|(at, _)| *at);
+        done.extend(fresh.into_iter().map(|(_, g)| g));
+        // The cache was written in the order games finished; rewrite it in run order.
+        if let Some(path) = cache {
+            afg_game::fs::write_atomic(path, lines_of(&done).as_bytes())?;
+        }
+        self.training = done;
+        let validation: Vec<(GameSize, u64)> = self
+            .config
+            .sizes
+            .iter()
+            .flat_map(|&size| {
+                (0..self.config.validation_games as u64).map(move |i| (size, (1 << 63) + i))
+            })
+            .collect();
+        self.validation = validation
+            .par_iter()
+            .map(|&(size, seed)| Ok((scarce_game(size, seed)?, label(size, seed, limit)?)))
+            .collect::<Result<_, LearnError>>()?;
+        Ok(())
+    }
+
+    /// Whether every epoch has run.
+    pub fn is_finished(&self) -> bool {
+        self.epoch >= self.config.epochs
+    }
+
+    /// The current weights as a saveable model.
+    pub fn model(&self) -> StaffingModel {
+        StaffingModel::new(self.config.clone(), PriceMlp::from_burn(&self.net))
+    }
+
+    /// One pass over every labelled game in a seeded random order, `batch` games per
+    /// Adam step, then validation.
+    ///
+    /// # Errors
+    /// [`LearnError::InvalidConfig`] before [`StaffingTrainer::label`];
+    /// [`LearnError::NonFiniteLoss`] / [`LearnError::NonFiniteWeights`] if training
+    /// diverges.
+    pub fn epoch(&mut self) -> Result<StaffingEpoch, LearnError> {
+        if self.training.is_empty() {
+            return Err(LearnError::InvalidConfig("label the games first".into()));
+        }
+        let mut games: Vec<usize> = (0..self.training.len()).collect();
+        games.shuffle(&mut self.rng);
+        let per_epoch = games.len().div_ceil(self.config.batch);
+        let total = (self.config.epochs * per_epoch).max(1);
+        let (mut loss, mut steps) = (0.0, 0);
+        for batch in games.chunks(self.config.batch) {
+            let done = self.epoch * per_epoch + steps;
+            let lr = self.config.lr * (1.0 - 0.9 * (done as f64 / total as f64).min(1.0));
+            loss += self.step(batch, lr, done as u64)?;
+            steps += 1;
+        }
+        self.epoch += 1;
+        let mlp = PriceMlp::from_burn(&self.net);
+        let (mut agree, mut tasks, mut percent) = (0usize, 0usize, 0.0);
+        for (inst, game) in &self.validation {
+            let values = values_of(&mlp, &game.features);
+            let chosen = knapsack(&game.thresholds, &values, game.size.robots);
+            agree += chosen
+                .iter()
+                .zip(&game.labels)
+                .filter(|&(&c, &y)| c == (y > 0.5))
+                .count();
+            tasks += chosen.len();
+            let (_, welfare) = staff_by_values(inst, &values)
+                .map_err(|e| LearnError::InvalidConfig(e.to_string()))?;
+            percent += 100.0 * welfare / game.welfare;
+        }
+        Ok(StaffingEpoch {
+            epoch: self.epoch,
+            loss: loss / steps.max(1) as f64,
+            agree: 100.0 * agree as f64 / tasks.max(1) as f64,
+            percent_of_opt: percent / self.validation.len().max(1) as f64,
+        })
+    }
+
+    /// One Adam step on the games `batch`: the structured hinge loss of the knapsack's
+    /// choice. With worths `w_j = (k_j / share)(m_j + z_j)` and the label's staffing
+    /// y*, the loss-augmented knapsack picks ŷ maximising `Σ_j (w_j y_j + δ_j [y_j ≠
+    /// y*_j])` (δ_j = margin · k_j / share), and the loss is `Σ_j w_j (ŷ_j − y*_j) +
+    /// Σ_j δ_j [ŷ_j ≠ y*_j] ≥ 0` (y* fits), 0 only when the label wins by its margin;
+    /// its gradient moves the worths of the tasks chosen wrongly. Returns the mean loss
+    /// per game.
+    fn step(&mut self, batch: &[usize], lr: f64, step: u64) -> Result<f64, LearnError> {
+        let device = Default::default();
+        let mut x = Vec::new();
+        for &g in batch {
+            x.extend(staffing_inputs(&self.training[g].features));
+        }
+        let rows = x.len() / STAFF_INPUTS;
+        let x =
+            Tensor::<TrainBackend, 2>::from_data(TensorData::new(x, [rows, STAFF_INPUTS]), &device);
+        let z = self.net.forward(x);
+        let corrections = crate::dense::to_vec(z.clone());
+        // Per row: the worth's slope k_j / share times (ŷ_j − y*_j), and the constant
+        // part of the loss.
+        let (mut slope, mut constant) = (Vec::with_capacity(rows), 0.0);
+        let mut at = 0;
+        for &g in batch {
+            let game = &self.training[g];
+            let m = game.labels.len();
+            let z = &corrections[at..at + m];
+            at += m;
+            let (worth, delta): (Vec<f64>, Vec<f64>) = game
+                .features
+                .chunks_exact(STAFF_FEATURES)
+                .zip(z)
+                .map(|(f, &z)| {
+                    let size = f64::from(f[SIZE]);
+                    (size * f64::from(f[MARGIN] + z), self.config.margin * size)
+                })
+                .unzip();
+            let augmented: Vec<f64> = (0..m)
+                .map(|j| {
+                    worth[j]
+                        + if game.labels[j] > 0.5 {
+                            -delta[j]
+                        } else {
+                            delta[j]
+                        }
+                })
+                .collect();
+            let chosen = knapsack(&game.thresholds, &augmented, game.size.robots);
+            for j in 0..m {
+                let diff = f64::from(u8::from(chosen[j])) - f64::from(game.labels[j]);
+                let size = f64::from(game.features[j * STAFF_FEATURES + SIZE]);
+                slope.push((size * diff) as f32);
+                constant += size * f64::from(game.features[j * STAFF_FEATURES + MARGIN]) * diff
+                    + delta[j] * diff.abs();
+            }
+        }
+        let slope = Tensor::<TrainBackend, 1>::from_data(TensorData::new(slope, [rows]), &device);
+        let games = batch.len() as f64;
+        let loss = (z * slope).sum() / games;
+        let value = f64::from(loss.clone().into_scalar()) + constant / games;
+        if !value.is_finite() {
+            return Err(LearnError::NonFiniteLoss {
+                step,
+                loss: value as f32,
+            });
+        }
+        let grads = GradientsParams::from_grads(loss.backward(), &self.net);
+        let updated = self.optim.step(lr, self.net.clone(), grads);
+        if !crate::weights::weights_are_finite(&updated) {
+            return Err(LearnError::NonFiniteWeights { step });
+        }
+        self.net = updated;
+        Ok(value)
+    }
+
+    /// Trains to the end with run directory `dir` (created if needed and locked as a
+    /// [`RunDir`](crate::run_dir::RunDir) is): labels the games (resuming from
+    /// [`LABELS_FILE_NAME`]), then after each epoch rewrites the log
+    /// ([`LOG_FILE_NAME`]) and calls `on_epoch`; at the end writes the manifest and
+    /// then the model ([`StaffingModel::FILE_NAME`]).
+    ///
+    /// # Errors
+    /// [`LearnError::RunInUse`] while another trainer holds the directory, a failed
+    /// epoch, or a file that cannot be written.
+    pub fn run_in(
+        mut self,
+        dir: &Path,
+        command: String,
+        on_game: impl Fn(&LabelledGame) + Sync,
+        mut on_epoch: impl FnMut(&StaffingEpoch),
+    ) -> Result<crate::run::RunManifest, LearnError> {
+        let start = Instant::now();
+        std::fs::create_dir_all(dir).map_err(|source| LearnError::Io {
+            path: dir.display().to_string(),
+            source,
+        })?;
+        let _lock = crate::run_dir::RunDir::new(dir).lock()?;
+        self.label(Some(&dir.join(LABELS_FILE_NAME)), on_game)?;
+        let mut log = String::new();
+        let mut last = None;
+        while !self.is_finished() {
+            let epoch = self.epoch()?;
+            log += &serde_json::to_string(&epoch).expect("an epoch always serialises");
+            log.push('\n');
+            afg_game::fs::write_atomic(&dir.join(LOG_FILE_NAME), log.as_bytes())?;
+            on_epoch(&epoch);
+            last = Some(epoch);
+        }
+        let model = self.model();
+        let record = crate::run::RunRecord::StaffingModel {
+            epochs: model.training.epochs,
+            last_epoch: last,
+        };
+        let manifest = crate::run::RunManifest {
+            wall_time_s: Some(start.elapsed().as_secs_f64()),
+            ..crate::run::RunManifest::new(command, model.training.seed, record)
+        };
+        crate::run_dir::RunDir::new(dir).write_manifest(&manifest)?;
+        model.save(&dir.join(StaffingModel::FILE_NAME))?;
+        Ok(manifest)
+    }
+}
+
+fn lines_of(games: &[LabelledGame]) -> String {
+    games
+        .iter()
+        .map(|g| serde_json::to_string(g).expect("a game serialises") + "\n")
+        .collect()
+}
+
+fn read_labels(path: &Path) -> Result<Vec<LabelledGame>, LearnError> {
+    let error = |reason: String| LearnError::RunFile {
+        path: path.display().to_string(),
+        reason,
+    };
+    let text = std::fs::read_to_string(path).map_err(|e| error(e.to_string()))?;
+    text.lines()
+        .enumerate()
+        .map(|(i, line)| {
+            let game: LabelledGame =
+                serde_json::from_str(line).map_err(|e| error(format!("line {}: {e}", i + 1)))?;
+            let m = game.size.tasks;
+            if game.features.len() != m * STAFF_FEATURES
+                || game.labels.len() != m
+                || game.thresholds.len() != m
+            {
+                return Err(error(format!(
+                    "line {}: not {m} tasks' features and labels",
+                    i + 1
+                )));
+            }
+            Ok(game)
+        })
+        .collect()
+}
