@@ -229,3 +229,60 @@ fn team_knobs_out_of_range_are_refused_and_nothing_is_written() {
     );
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// The staffing model decides team missions from its run directory: on waves of tasks
+/// that need teams it finishes what the exact solver finishes, with at least 95 % of
+/// its reward; a mission whose tasks need skills is refused in one line.
+#[test]
+fn the_staffing_model_decides_team_missions() {
+    let (dir, _) = mission_dir("staffing");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let model = root.join("models/ours/staffing_teams");
+    let model = model.to_str().unwrap();
+    let mission = dir.join("teams.json");
+    let path = mission.to_str().unwrap();
+    let generate = |extra: &[&str]| {
+        let base = [
+            "mission",
+            "gen",
+            "--preset",
+            "waves",
+            "--robots",
+            "60",
+            "--tasks",
+            "12",
+            "--min-team",
+            "4,8",
+            "--seed",
+            "3",
+            "--out",
+            path,
+        ];
+        let made = afg(&[&base[..], extra].concat());
+        assert_eq!(made.status.code(), Some(0), "{}", stderr(&made));
+    };
+    generate(&[]);
+    let out = afg(&[
+        "mission",
+        "compare",
+        "--mission",
+        path,
+        "--methods",
+        "opt",
+        "--model",
+        model,
+        "--json",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let rows: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let metric = |row: usize, key: &str| rows[row]["missions"][0][key].as_f64().unwrap();
+    assert!(rows[1]["method"].as_str().unwrap().contains("staffing"));
+    assert_eq!(metric(1, "tasks_done"), metric(0, "tasks_done"));
+    assert!(metric(1, "reward_done") >= 0.95 * metric(0, "reward_done"));
+    generate(&["--skills", "2", "--requires", "1,1"]);
+    refused(
+        &afg(&["mission", "run", "--mission", path, "--model", model]),
+        "staffing does not play games with skill requirements",
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
