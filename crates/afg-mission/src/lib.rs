@@ -45,8 +45,8 @@ pub use mission::{Failure, MISSION_FORMAT, MISSION_VERSION, Mission, RobotSpec, 
 pub use plan::{MissionMethod, MissionPlan, Planner, RadioKnobs, Recording, SwarmKnobs};
 pub use sim::{
     Decentralised, EnvStep, Frame, Latency, Metrics, MissionEnv, MissionRun, Perception,
-    ROBOT_FEATURES, Replan, RunOptions, SwarmMetrics, TASK_FEATURES, TimelinePoint, TraceEvent,
-    Waiting, simulate, simulate_with, work_rate,
+    ROBOT_FEATURES, Replan, RunOptions, SwarmMetrics, TASK_FEATURES, TEAM_FEATURES, TimelinePoint,
+    TraceEvent, Waiting, simulate, simulate_with, work_rate,
 };
 
 use afg_baseline::AllocError;

@@ -454,7 +454,7 @@ mod options;
 mod outcome;
 mod swarm;
 
-pub use env::{EnvStep, MissionEnv, Perception, ROBOT_FEATURES, TASK_FEATURES};
+pub use env::{EnvStep, MissionEnv, Perception, ROBOT_FEATURES, TASK_FEATURES, TEAM_FEATURES};
 use motion::Arrival;
 pub(crate) use options::check_options;
 pub use options::{Latency, Replan, RunOptions};

@@ -2,7 +2,9 @@
 //! and perceive, the team reward, failures leaving the episode, and one seed one
 //! episode.
 
-use afg_mission::{MissionConfig, MissionEnv, Perception, Preset, ROBOT_FEATURES, TASK_FEATURES};
+use afg_mission::{
+    MissionConfig, MissionEnv, Perception, Preset, ROBOT_FEATURES, TASK_FEATURES, TEAM_FEATURES,
+};
 
 /// Plays an episode where every agent takes the first action its mask allows;
 /// returns every epoch's (agents, observations, masks, reward).
@@ -76,7 +78,7 @@ fn robots_see_and_hear_only_what_is_in_range() {
     let deaf = Perception {
         sensing: Some(2.0),
         comm_radius: 0.0,
-        decide_every: None,
+        ..Perception::default()
     };
     let env = MissionEnv::new(mission.clone(), deaf).unwrap();
     for i in env.agents() {
@@ -168,6 +170,7 @@ fn robots_hear_of_tasks_from_their_neighbours_one_hop_per_epoch() {
         sensing: Some(0.5),
         comm_radius: 1.2,
         decide_every: Some(0.5),
+        ..Perception::default()
     };
     let mut env = MissionEnv::new(mission, perception).unwrap();
     let knows = |env: &MissionEnv| -> Vec<bool> { (0..4).map(|i| env.mask(i)[0]).collect() };
@@ -179,4 +182,51 @@ fn robots_hear_of_tasks_from_their_neighbours_one_hop_per_epoch() {
     assert_eq!(knows(&env), [true, true, true, false]);
     env.step(&keep).unwrap();
     assert_eq!(knows(&env), [true, true, true, false]);
+}
+
+/// Teams in the observation, by hand: three robots, one holding the only skill; task 0
+/// needs two robots and that skill, task 1 four robots (more than there are: masked).
+/// Robot 0 stands on task 0, robot 1 is one unit away (speed 1); both head there.
+#[test]
+fn teams_are_observed_and_unstaffable_tasks_masked() {
+    let mut mission = MissionConfig::new(Preset::Static, 3, 2, 1)
+        .generate()
+        .unwrap();
+    let at = mission.tasks[0].position;
+    mission.tasks[0].workload = 1e6;
+    mission.tasks[0].min_team = 2;
+    mission.tasks[0].requires = vec![1];
+    mission.tasks[1].min_team = 4;
+    mission.tasks[1].requires = vec![0];
+    for (i, robot) in mission.robots.iter_mut().enumerate() {
+        robot.skills = vec![u32::from(i == 0)];
+        robot.speed = 1.0;
+        robot.position = afg_game::Point::new(at.x + i as f64, at.y);
+    }
+    let perception = Perception {
+        decide_every: Some(0.5),
+        teams: true,
+        ..Perception::default()
+    };
+    let mut env = MissionEnv::new(mission, perception).unwrap();
+    let (robot, task) = (ROBOT_FEATURES + 1, TASK_FEATURES + TEAM_FEATURES + 1);
+    assert_eq!(env.observation_len(), robot + 2 * task);
+    assert_eq!(env.mask(0), [true, false, true]);
+    let team = |env: &MissionEnv, i: usize| -> Vec<f32> {
+        let obs = env.observe(i);
+        assert_eq!(
+            obs[ROBOT_FEATURES],
+            if i == 0 { 1.0 } else { 0.0 },
+            "own skill"
+        );
+        obs[robot + TASK_FEATURES..][..TEAM_FEATURES + 1].to_vec()
+    };
+    // k / N, present / k, heading or present / k, complete, the skill's missing share.
+    assert_eq!(team(&env, 1), [2.0 / 3.0, 0.0, 0.0, 0.0, 1.0]);
+    env.step(&[(0, 0), (1, 0), (2, 2)]).unwrap();
+    // t = 0.5: robot 0 is there, robot 1 on its way; the two hold the skill.
+    assert_eq!(team(&env, 2), [2.0 / 3.0, 0.5, 1.0, 0.0, 0.0]);
+    env.step(&[(0, 2), (1, 2), (2, 2)]).unwrap();
+    // t = 1: both are there, the team is complete.
+    assert_eq!(team(&env, 2), [2.0 / 3.0, 1.0, 1.0, 1.0, 0.0]);
 }

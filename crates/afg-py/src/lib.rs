@@ -430,7 +430,7 @@ impl PyInstance {
 }
 
 /// A (rows, S) int64 array of skill amounts.
-fn skill_matrix<'py, 'a>(
+pub(crate) fn skill_matrix<'py, 'a>(
     py: Python<'py>,
     rows: impl Iterator<Item = &'a [u32]>,
     n: usize,

@@ -153,6 +153,34 @@ impl PyMission {
         v.into_pyarray(py)
     }
 
+    /// (K,) each task's threshold (1 where none).
+    #[getter]
+    fn min_team<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+        let v: Vec<i64> = self.inner.tasks.iter().map(|t| t.min_team as i64).collect();
+        v.into_pyarray(py)
+    }
+
+    /// (N, S) each robot's amount of each skill (S = 0 without skills).
+    #[getter]
+    fn skills<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<i64>> {
+        let rows = self.inner.robots.iter().map(|r| r.skills.as_slice());
+        crate::skill_matrix(py, rows, self.inner.robots.len(), self.inner.num_skills())
+    }
+
+    /// (K, S) what each task requires of each skill.
+    #[getter]
+    fn requires<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<i64>> {
+        let s = self.inner.num_skills();
+        let rows: Vec<Vec<u32>> = (self.inner.tasks.iter())
+            .map(|t| {
+                (0..s)
+                    .map(|k| t.requires.get(k).copied().unwrap_or(0))
+                    .collect()
+            })
+            .collect();
+        crate::skill_matrix(py, rows.iter().map(Vec::as_slice), rows.len(), s)
+    }
+
     fn __eq__(&self, other: &Self) -> bool {
         self.inner == other.inner
     }

@@ -50,18 +50,20 @@ impl PyMissionEnv {
 #[pymethods]
 impl PyMissionEnv {
     #[new]
-    #[pyo3(signature = (mission, sensing=None, comm_radius=0.25, decide_every=None))]
+    #[pyo3(signature = (mission, sensing=None, comm_radius=0.25, decide_every=None, teams=false))]
     fn new(
         py: Python<'_>,
         mission: &PyMission,
         sensing: Option<f64>,
         comm_radius: f64,
         decide_every: Option<f64>,
+        teams: bool,
     ) -> PyResult<Self> {
         let perception = Perception {
             sensing,
             comm_radius,
             decide_every,
+            teams,
         };
         let mission = (*mission.inner).clone();
         let (jobs, inbox) = mpsc::channel::<Job>();

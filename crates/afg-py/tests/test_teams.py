@@ -86,3 +86,72 @@ def test_team_missions_wait_for_their_teams_and_refuse_what_cannot_play_them() -
             afg.run_mission(skilled, method=method)
     with pytest.raises(afg.InvalidInputError, match="need skills"):
         afg.Mission.generate("waves", robots=10, tasks=3, requires=(1, 2))
+
+
+def test_mission_env_observes_teams_and_masks_what_no_team_can_staff():
+    pytest.importorskip("pettingzoo")
+    from afg.pettingzoo import mission_v0
+
+    tasks, skills = 6, 2
+    knobs = dict(min_team=(2, 4), skills=skills, requires=(1, 1))
+    mission = afg.Mission.generate("static", 12, tasks, seed=3, **knobs)
+    assert mission.min_team.shape == (tasks,) and mission.requires.shape == (tasks, skills)
+    assert mission.skills.shape == (12, skills) and mission.min_team.min() >= 2
+    core = afg.MissionEnv(mission, teams=True)
+    length = 5 + skills + tasks * (13 + skills)
+    assert core.observation_len == length
+    observations = core.observations()
+    # Each robot's own skills follow its five features; each task's threshold over N
+    # follows its nine.
+    assert np.array_equal(observations[:, 5 : 5 + skills], mission.skills)
+    row = 5 + skills
+    assert np.allclose(observations[0, row + 9], mission.min_team[0] / 12)
+
+    env = mission_v0.parallel_env(robots=12, tasks=tasks, preset="static", **knobs)
+    assert env.observation_space("robot_0")["observation"].shape == (length,)
+    observed, _ = env.reset(seed=3)
+    assert all(o["observation"].shape == (length,) for o in observed.values())
+    from pettingzoo.test import parallel_api_test
+
+    parallel_api_test(mission_v0.parallel_env(robots=8, tasks=4, preset="waves", **knobs), num_cycles=100)
+    # Without team knobs the observation is the plain one.
+    plain = mission_v0.parallel_env(robots=12, tasks=tasks, preset="static")
+    assert plain.observation_space("robot_0")["observation"].shape == (5 + 9 * tasks,)
+    # A threshold above the robots masks the task for everyone.
+    big = afg.Mission.generate("static", 3, 2, seed=1, min_team=(4, 4))
+    masks = afg.MissionEnv(big, teams=True).masks()
+    assert not masks[:, :2].any() and masks[:, 2].all()
+
+
+def test_the_gym_environment_observes_teams():
+    gym = pytest.importorskip("gymnasium")
+    import afg.gym  # noqa: F401
+
+    env = gym.make("afg/Allocation-v0", robots=8, tasks=3, min_team=(2, 3), skills=2, requires=(1, 1))
+    obs, info = env.reset(seed=4)
+    assert obs["team"].shape == (3, 5) and obs["skills"].shape == (8, 2)
+    assert env.observation_space.contains(obs)
+    core = env.unwrapped
+    inst = core._core.instance
+    assert np.allclose(obs["team"][:, 0], inst.min_team / 8)
+    assert np.array_equal(obs["skills"], inst.skills)
+    assert not obs["team"][:, 1].any() and not obs["team"][:, 2].any()
+    # Every robot joins task 0: its members grow one by one, its team completes once
+    # the threshold is met and its skills held, and the episode's return is the team
+    # game's welfare.
+    total, done = 0.0, False
+    while not done:
+        obs, reward, done, _, info = env.step(0)
+        total += reward
+    assert np.isclose(obs["team"][0, 1], 8 / inst.min_team[0])
+    assert obs["team"][0, 2] == float(np.all(inst.skills.sum(axis=0) >= inst.requires[0]))
+    assert abs(total - info["welfare"]) < 1e-9
+    # A task no team can staff (a threshold of 5 with 4 robots) is masked.
+    inst = afg.Instance(
+        np.full((4, 2), 0.5), np.array([[0.1, 0.1], [0.9, 0.9]]), [4.0, 4.0], [2.0, 2.0],
+        min_team=[2, 5],
+    )
+    small = gym.make("afg/Allocation-v0", robots=4, tasks=2, min_team=(1, 2))
+    obs, info = small.reset(options={"instance": inst})
+    assert obs["action_mask"].tolist() == [1, 0] and info["action_mask"].tolist() == [True, False]
+    assert small.unwrapped.action_masks().tolist() == [True, False]

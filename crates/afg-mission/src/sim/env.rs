@@ -19,6 +19,11 @@ pub struct Perception {
     pub comm_radius: f64,
     /// Also an epoch every this many time units, not only at events.
     pub decide_every: Option<f64>,
+    /// Observe teams too: each robot's own skills, and per task its threshold, its
+    /// team's progress and the skills it still lacks ([`TEAM_FEATURES`]); tasks no
+    /// team of the living robots can staff are masked.
+    #[serde(default)]
+    pub teams: bool,
 }
 
 impl Default for Perception {
@@ -28,6 +33,7 @@ impl Default for Perception {
             sensing: None,
             comm_radius: 0.25,
             decide_every: None,
+            teams: false,
         }
     }
 }
@@ -53,6 +59,14 @@ pub const ROBOT_FEATURES: usize = 5;
 /// heading there, and whether it is the robot's own task (all 0 for a task the robot
 /// does not know is open).
 pub const TASK_FEATURES: usize = 9;
+/// With [`Perception::teams`], a robot's own skills (S amounts) follow
+/// [`ROBOT_FEATURES`], and each task's [`TASK_FEATURES`] are followed by these four and
+/// S more: its threshold over N, the robots present over the threshold, the robots
+/// heading there or present over the threshold, whether the present team is complete
+/// (threshold and skills), then for each skill the share of its requirement that the
+/// robots heading there or present do not hold (0 where it needs none). All 0 for a
+/// task the robot does not know is open.
+pub const TEAM_FEATURES: usize = 4;
 
 /// A mission driven from outside: at every decision epoch (a task appears or is done,
 /// a robot fails or returns, and every [`Perception::decide_every`]) every living
@@ -141,9 +155,22 @@ impl MissionEnv {
         self.sim.tasks.len()
     }
 
-    /// Length of an observation: [`ROBOT_FEATURES`] + [`TASK_FEATURES`] per task.
+    /// Length of an observation: [`ROBOT_FEATURES`] + [`TASK_FEATURES`] per task; with
+    /// [`Perception::teams`], S more for the robot and [`TEAM_FEATURES`] + S more per
+    /// task (S skills).
     pub fn observation_len(&self) -> usize {
-        ROBOT_FEATURES + TASK_FEATURES * self.num_tasks()
+        let (robot, task) = self.widths();
+        robot + task * self.num_tasks()
+    }
+
+    /// The widths of a robot's own features and of each task's.
+    fn widths(&self) -> (usize, usize) {
+        if self.perception.teams {
+            let s = self.sim.mission.num_skills();
+            (ROBOT_FEATURES + s, TASK_FEATURES + TEAM_FEATURES + s)
+        } else {
+            (ROBOT_FEATURES, TASK_FEATURES)
+        }
     }
 
     /// The mission time now.
@@ -165,13 +192,42 @@ impl MissionEnv {
         self.known[robot * self.num_tasks() + task] && self.sim.tasks[task].open
     }
 
-    /// The actions `robot` may take: the tasks it knows are open, and keeping its own.
+    /// The actions `robot` may take: the tasks it knows are open (with
+    /// [`Perception::teams`], those a team of the living robots can staff), and keeping
+    /// its own.
     pub fn mask(&self, robot: usize) -> Vec<bool> {
+        let staffable = self.perception.teams.then(|| self.staffable());
         let mut mask: Vec<bool> = (0..self.num_tasks())
-            .map(|j| self.knows_open(robot, j))
+            .map(|j| self.knows_open(robot, j) && staffable.as_ref().is_none_or(|s| s[j]))
             .collect();
         mask.push(true);
         mask
+    }
+
+    /// Whether each task's threshold and skills are within what the living robots
+    /// hold together.
+    fn staffable(&self) -> Vec<bool> {
+        let mission = &self.sim.mission;
+        let living: Vec<usize> = (0..self.num_robots())
+            .filter(|&i| self.sim.robots[i].alive)
+            .collect();
+        let mut held = vec![0u64; mission.num_skills()];
+        for &i in &living {
+            for (h, &q) in held.iter_mut().zip(&mission.robots[i].skills) {
+                *h += u64::from(q);
+            }
+        }
+        mission
+            .tasks
+            .iter()
+            .map(|t| {
+                t.min_team <= living.len()
+                    && t.requires
+                        .iter()
+                        .zip(&held)
+                        .all(|(&r, &h)| u64::from(r) <= h)
+            })
+            .collect()
     }
 
     /// Robot `robot`'s observation (see [`ROBOT_FEATURES`] and [`TASK_FEATURES`]).
@@ -183,10 +239,19 @@ impl MissionEnv {
             (Some(_), false) => 1,
             (Some(_), true) => 2,
         };
+        let (robot_width, task_width) = self.widths();
         let mut obs = vec![0.0f32; self.observation_len()];
         obs[0] = here.x as f32;
         obs[1] = here.y as f32;
         obs[2 + state] = 1.0;
+        if self.perception.teams {
+            for (o, &q) in obs[ROBOT_FEATURES..robot_width]
+                .iter_mut()
+                .zip(&self.sim.mission.robots[robot].skills)
+            {
+                *o = q as f32;
+            }
+        }
         let neighbours = self.neighbours(robot);
         let heading = |j: usize| {
             let count = neighbours
@@ -197,9 +262,12 @@ impl MissionEnv {
         };
         for j in (0..self.num_tasks()).filter(|&j| self.knows_open(robot, j)) {
             let spec = &self.sim.mission.tasks[j];
-            let row = &mut obs[ROBOT_FEATURES + TASK_FEATURES * j..][..TASK_FEATURES];
+            let row = &mut obs[robot_width + task_width * j..][..task_width];
             let (dx, dy) = (spec.position.x - here.x, spec.position.y - here.y);
-            row.copy_from_slice(&[
+            if self.perception.teams {
+                self.observe_team(j, &mut row[TASK_FEATURES..]);
+            }
+            row[..TASK_FEATURES].copy_from_slice(&[
                 1.0,
                 dx as f32,
                 dy as f32,
@@ -212,6 +280,35 @@ impl MissionEnv {
             ]);
         }
         obs
+    }
+
+    /// Task j's [`TEAM_FEATURES`] and the share of each skill it lacks, into `row`.
+    fn observe_team(&self, j: usize, row: &mut [f32]) {
+        let mission = &self.sim.mission;
+        let spec = &mission.tasks[j];
+        let k = spec.min_team as f32;
+        let bound: Vec<usize> = (0..self.num_robots())
+            .filter(|&i| self.sim.robots[i].alive && self.sim.robots[i].task == Some(j))
+            .collect();
+        let mut held = vec![0u64; mission.num_skills()];
+        for &i in &bound {
+            for (h, &q) in held.iter_mut().zip(&mission.robots[i].skills) {
+                *h += u64::from(q);
+            }
+        }
+        row[0] = k / self.num_robots() as f32;
+        row[1] = self.sim.tasks[j].present as f32 / k;
+        row[2] = bound.len() as f32 / k;
+        row[3] = f32::from(u8::from(self.sim.team_complete(j)));
+        for ((o, &need), &have) in row[TEAM_FEATURES..]
+            .iter_mut()
+            .zip(&spec.requires)
+            .zip(&held)
+        {
+            if need > 0 {
+                *o = u64::from(need).saturating_sub(have) as f32 / need as f32;
+            }
+        }
     }
 
     /// The living robots within the communication radius of `robot` (not itself).

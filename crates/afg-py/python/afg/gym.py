@@ -25,6 +25,19 @@ project's networks read:
 entries (the last one false for an instance of the paper's game given in ``reset``).
 Reward shaping is not defined there (``shaping`` must be ``"none"``).
 
+**Teams** (``min_team``, ``skills``, ``skill_share``, ``requires``, as ``afg.generate``;
+``AllocationEnv`` only): instances are drawn with thresholds and skills, the reward
+is the change in the team game's welfare (a coalition earns only once its team is
+complete), and the observation has two more entries —
+
+- ``team`` (M, 3 + S) float32: each task's threshold over N, its members so far over
+  its threshold, whether its team is complete (threshold and skills), and per skill the
+  share of its requirement its members do not hold yet (0 where it needs none);
+- ``skills`` (N, S) float32: each robot's amount of each skill —
+
+and ``action_mask`` also forbids a task no team can staff (a threshold above N, or a
+skill the robots lack together), unless that would leave the actor no action.
+
 ``info["action_mask"]`` is given at every step and ``action_masks()`` for maskable
 agents. On the last step ``info`` holds ``tasks``, ``welfare``, ``opt_welfare`` and
 ``percent_of_opt``. ``reset(options={"instance": inst})`` plays a given instance;
@@ -49,16 +62,38 @@ __all__ = ["AllocationEnv", "AllocationVectorEnv"]
 _SEED_BOUND = 2**63
 
 
-def _observation_space(robots: int, tasks: int, actions: int) -> spaces.Dict:
+def _observation_space(robots: int, tasks: int, actions: int, skills: Optional[int] = None) -> spaces.Dict:
     features = spaces.Box(-np.inf, np.inf, shape=(robots, tasks), dtype=np.float32)
-    return spaces.Dict(
-        {
-            "robot_features": spaces.Box(0.0, 1.0, shape=(robots, tasks), dtype=np.float32),
-            "task_features": features,
-            "actor": spaces.Discrete(robots + 1),
-            "action_mask": spaces.MultiBinary(actions),
-        }
-    )
+    entries: Dict[str, spaces.Space] = {
+        "robot_features": spaces.Box(0.0, 1.0, shape=(robots, tasks), dtype=np.float32),
+        "task_features": features,
+        "actor": spaces.Discrete(robots + 1),
+        "action_mask": spaces.MultiBinary(actions),
+    }
+    if skills is not None:
+        entries["team"] = spaces.Box(-np.inf, np.inf, shape=(tasks, 3 + skills), dtype=np.float32)
+        entries["skills"] = spaces.Box(0.0, np.inf, shape=(robots, skills), dtype=np.float32)
+    return spaces.Dict(entries)
+
+
+def _team_view(instance: Instance, tasks: np.ndarray) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The ``team`` and ``skills`` entries for an assignment so far (``tasks``: each
+    robot's task, -1 for none yet), and which tasks some team could staff."""
+    n = instance.num_robots
+    k = instance.min_team.astype(np.float64)
+    skills, requires = instance.skills.astype(np.float64), instance.requires.astype(np.float64)
+    members = np.zeros(len(k))
+    held = np.zeros_like(requires)
+    for robot, task in enumerate(tasks):
+        if task >= 0:
+            members[task] += 1
+            held[task] += skills[robot]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        missing = np.where(requires > 0, np.maximum(requires - held, 0.0) / requires, 0.0)
+    complete = (members >= k) & (held >= requires).all(axis=1)
+    team = np.column_stack([k / n, members / k, complete, missing]).astype(np.float32)
+    staffable = (k <= n) & (skills.sum(axis=0) >= requires).all(axis=1)
+    return team, skills.astype(np.float32), staffable
 
 
 def _final_info(instance: Instance, tasks: np.ndarray) -> Dict[str, Any]:
@@ -86,21 +121,33 @@ class AllocationEnv(gymnasium.Env):
         units: str = "bounded",
         shaping: str = "none",
         allow_void: bool = False,
+        min_team: Optional[Tuple[int, int]] = None,
+        skills: Optional[int] = None,
+        skill_share: Optional[float] = None,
+        requires: Optional[Tuple[int, int]] = None,
     ) -> None:
         self.robots, self.tasks = int(robots), int(tasks)
         self.allow_void = bool(allow_void)
         actions = self.tasks + int(self.allow_void)
+        teams = dict(min_team=min_team, skills=skills, skill_share=skill_share, requires=requires)
+        self._teams = any(v is not None for v in teams.values())
         self._draw = dict(capacity_slack=capacity_slack, eps=eps, beta=beta, allow_void=self.allow_void)
+        self._draw.update({key: value for key, value in teams.items() if value is not None})
         self._units, self._shaping = units, shaping
-        self.observation_space = _observation_space(self.robots, self.tasks, actions)
-        self.action_space = spaces.Discrete(actions)
         first = generate(self.robots, self.tasks, 0, **self._draw)
+        self._skills = first.skills.shape[1] if self._teams else None
+        self.observation_space = _observation_space(self.robots, self.tasks, actions, self._skills)
+        self.action_space = spaces.Discrete(actions)
         self._core = EnvCore(first, units, shaping, void_action=self.allow_void)
         self._oracle = False
 
     def _observe(self) -> Tuple[Dict[str, Any], Dict[str, Any]]:
         nu, mu, actor, mask = self._core.observation()
         obs = {"robot_features": nu, "task_features": mu, "actor": actor, "action_mask": mask}
+        if self._teams:
+            team, skills, staffable = _team_view(self._core.instance, self._core.tasks())
+            obs["team"], obs["skills"] = team, skills
+            obs["action_mask"] = mask = self._staffable_only(mask, staffable)
         info: Dict[str, Any] = {"action_mask": mask.astype(bool)}
         if self._oracle and actor < self.robots:
             info["q_star"] = self._core.q_star()
@@ -121,6 +168,11 @@ class AllocationEnv(gymnasium.Env):
                 f"the instance has {instance.num_robots} robots and {instance.num_tasks} "
                 f"tasks, the environment's spaces {self.robots} and {self.tasks}"
             )
+        elif self._teams and instance.skills.shape[1] != self._skills:
+            raise InvalidInputError(
+                f"the instance has {instance.skills.shape[1]} skills, the environment's "
+                f"spaces {self._skills}"
+            )
         self._core.reset(instance)
         return self._observe()
 
@@ -131,9 +183,18 @@ class AllocationEnv(gymnasium.Env):
             info.update(_final_info(self._core.instance, self._core.tasks()))
         return obs, float(reward), bool(terminated), False, info
 
+    def _staffable_only(self, mask: np.ndarray, staffable: np.ndarray) -> np.ndarray:
+        """``mask`` without the tasks no team can staff, unless that leaves nothing."""
+        allowed = mask.copy()
+        allowed[: self.tasks] &= staffable.astype(mask.dtype)
+        return allowed if allowed.any() else mask
+
     def action_masks(self) -> np.ndarray:
         """The acting robot's allowed actions, as booleans (for maskable agents)."""
-        return self._core.observation()[3].astype(bool)
+        mask = self._core.observation()[3]
+        if self._teams:
+            mask = self._staffable_only(mask, _team_view(self._core.instance, self._core.tasks())[2])
+        return mask.astype(bool)
 
 
 class AllocationVectorEnv(VectorEnv):

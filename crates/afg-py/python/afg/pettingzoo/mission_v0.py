@@ -14,6 +14,13 @@ runs (exact, event-driven time) to the next epoch:
   of the work left, share of its neighbours heading there, whether it is its own task
   (all zero for a task it does not know is open); ``action_mask`` int8 of length
   ``K + 1``.
+- **teams** (when ``min_team`` or ``skills`` is given): the observation grows to
+  ``5 + S + K (13 + S)`` for S skills — the robot's own skills after its state, and
+  after each task's nine: its threshold over N, the robots present over the
+  threshold, those heading there or present over the threshold, whether the present
+  team is complete, and per skill the share of its requirement that those robots do
+  not hold — and a task that no team of the living robots can staff (a threshold
+  above them, a skill they lack together) is masked.
 - **what a robot knows**: with ``sensing=None`` every open task; with ``sensing=s`` the
   open tasks within s of it and those a robot within ``comm_radius`` knew at the last
   epoch (news spreads one hop per epoch). ``comm_radius`` also bounds the neighbours
@@ -37,7 +44,8 @@ runs (exact, event-driven time) to the next epoch:
 Keyword arguments: ``robots``, ``tasks`` and ``preset`` ("static", "waves", "poisson",
 "attrition"), every knob of ``afg.Mission.generate`` (``workload``, ``speed``,
 ``arena``, ``horizon``, ``waves``, ``interval``, ``rate``, ``fail_share``,
-``capacity_slack``, ``allow_void``), ``sensing``, ``comm_radius``, ``decide_every``,
+``capacity_slack``, ``allow_void``, ``min_team``, ``skills``, ``skill_share``,
+``requires``), ``sensing``, ``comm_radius``, ``decide_every``,
 ``max_cycles``, ``keep_failed`` and ``render_mode``.
 """
 
@@ -95,12 +103,14 @@ class MissionParallelEnv(ParallelEnv):
         self.max_cycles = check_max_cycles(max_cycles)
         self.keep_failed = keep_failed
         self._draw = lambda seed: Mission.generate(preset, robots, tasks, seed=seed, **knobs)
-        self._perception = dict(sensing=sensing, comm_radius=comm_radius, decide_every=decide_every)
+        teams = knobs.get("min_team") is not None or knobs.get("skills") is not None
+        self._perception = dict(
+            sensing=sensing, comm_radius=comm_radius, decide_every=decide_every, teams=teams
+        )
         # Check every knob now: a bad one raises here, not at the first reset.
-        MissionEnv(self._draw(0), **self._perception)
+        length = MissionEnv(self._draw(0), **self._perception).observation_len
         self.possible_agents = [f"robot_{i}" for i in range(robots)]
         self._index = {a: i for i, a in enumerate(self.possible_agents)}
-        length = 5 + 9 * tasks
         observation = spaces.Dict(
             {
                 "observation": spaces.Box(-np.inf, np.inf, shape=(length,), dtype=np.float32),
