@@ -419,16 +419,7 @@ pub fn mission_html(
     if run.frames.is_empty() {
         return Err(EvalError::Figure("the run has no frames to animate".into()));
     }
-    let points = mission
-        .robots
-        .iter()
-        .map(|r| r.position)
-        .chain(mission.tasks.iter().map(|t| t.position));
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for p in points {
-        lo = [lo[0].min(p.x), lo[1].min(p.y)];
-        hi = [hi[0].max(p.x), hi[1].max(p.y)];
-    }
+    let (lo, hi) = mission_bounds(mission);
     let tasks: Vec<[f64; 2]> = mission
         .tasks
         .iter()
@@ -448,6 +439,21 @@ pub fn mission_html(
     Ok(MISSION_PAGE
         .replace("__DATA__", &escaped)
         .replace("__TITLE__", &html_text(title)))
+}
+
+/// The box around a mission's robots' starts and tasks: what its drawings show.
+pub(crate) fn mission_bounds(mission: &afg_mission::Mission) -> ([f64; 2], [f64; 2]) {
+    let points = mission
+        .robots
+        .iter()
+        .map(|r| r.position)
+        .chain(mission.tasks.iter().map(|t| t.position));
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in points {
+        lo = [lo[0].min(p.x), lo[1].min(p.y)];
+        hi = [hi[0].max(p.x), hi[1].max(p.y)];
+    }
+    (lo, hi)
 }
 
 /// `text` safe inside HTML.

@@ -13,6 +13,7 @@
 pub mod dataset;
 mod error;
 pub mod figures;
+pub mod frame_image;
 pub mod mission;
 pub mod realloc;
 pub mod report;

@@ -2,8 +2,8 @@
 //! PettingZoo environment `afg.pettingzoo.mission_v0`.
 
 use afg_mission::{MissionEnv, Perception};
-use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyArray2, PyReadonlyArray1};
+use numpy::ndarray::{Array2, Array3};
+use numpy::{IntoPyArray, PyArray2, PyArray3, PyReadonlyArray1};
 use std::sync::mpsc::{self, Sender};
 
 use pyo3::prelude::*;
@@ -132,6 +132,20 @@ impl PyMissionEnv {
             (0..n).flat_map(|i| env.observe(i)).collect::<Vec<f32>>()
         })?;
         let array = Array2::from_shape_vec((n, d), flat).expect("N rows of observation_len");
+        Ok(array.into_pyarray(py))
+    }
+
+    /// The mission now as an image, (size, size, 3) uint8 RGB: the animation's drawing
+    /// (robots coloured by task, rings where waiting for a team, tasks sized by the
+    /// work left) without its text.
+    #[pyo3(signature = (size=400))]
+    fn render<'py>(&self, py: Python<'py>, size: usize) -> PyResult<Bound<'py, PyArray3<u8>>> {
+        let pixels = self
+            .call(py, move |env| {
+                afg_eval::frame_image::frame_rgb(env.mission(), &env.frame(), size)
+            })?
+            .map_err(crate::crate_error)?;
+        let array = Array3::from_shape_vec((size, size, 3), pixels).expect("size × size × 3 bytes");
         Ok(array.into_pyarray(py))
     }
 

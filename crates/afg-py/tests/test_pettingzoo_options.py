@@ -106,11 +106,30 @@ def test_the_global_state_is_every_robots_view() -> None:
         aec.step(None if terminated or truncated else int(np.flatnonzero(aec.observe(agent)["action_mask"])[0]))
 
 
-def test_render_mode_none_only() -> None:
+def test_render_modes() -> None:
     for make in (mission_v0.parallel_env, allocation_v0.raw_env):
         assert make(render_mode=None).render_mode is None
         with pytest.raises(afg.InvalidInputError, match="render_mode 'human'"):
             make(render_mode="human")
+    with pytest.raises(afg.InvalidInputError, match="render_mode 'rgb_array'"):
+        allocation_v0.raw_env(render_mode="rgb_array")
+
+
+def test_a_mission_renders_as_an_image_that_follows_the_robots() -> None:
+    env = mission_v0.parallel_env(
+        robots=8, tasks=3, preset="static", min_team=(2, 3), render_mode="rgb_array", render_size=128
+    )
+    assert mission_v0.parallel_env(robots=8, tasks=3).render() is None
+    with pytest.raises(afg.RefusedError, match="reset"):
+        env.render()
+    observations, _ = env.reset(seed=2)
+    first = env.render()
+    assert first.shape == (128, 128, 3) and first.dtype == np.uint8
+    assert (first != 255).any() and (first == 255).any()  # something drawn on white
+    # Every robot heads for task 0: the picture changes as they move.
+    env.step({a: 0 for a in env.agents})
+    env.step({a: 3 for a in env.agents})
+    assert (env.render() != first).any()
 
 
 def test_supersuit_vector_wrappers_run_missions_with_failures() -> None:

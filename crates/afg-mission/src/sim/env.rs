@@ -406,6 +406,16 @@ impl MissionEnv {
         }
     }
 
+    /// The mission being played.
+    pub fn mission(&self) -> &Mission {
+        &self.sim.mission
+    }
+
+    /// The whole state now, as an animation's frame (for drawing).
+    pub fn frame(&self) -> crate::Frame {
+        self.sim.frame()
+    }
+
     /// The run so far: its metrics, timeline and trace.
     pub fn into_run(self) -> MissionRun {
         self.sim.finish()

@@ -38,15 +38,18 @@ runs (exact, event-driven time) to the next epoch:
 - **global state** for centralised critics (MAPPO, QMIX): ``state()`` is every robot's
   observation, concatenated in index order (zeros for a robot that failed), as
   PettingZoo's MPE environments do; ``state_space`` is its ``Box``.
-- **render_mode**: ``None`` only (the animation is drawn by ``afg mission run
-  --animate``).
+- **render_mode**: ``None`` or ``"rgb_array"``: ``render()`` then returns the mission
+  now as a (``render_size``, ``render_size``, 3) uint8 image (default 400), the drawing
+  of ``afg mission run --animate`` without its text — robots coloured by task (grey:
+  none, a red cross: failed, a black ring: waiting for the rest of its team), tasks as
+  squares sized by the work left.
 
 Keyword arguments: ``robots``, ``tasks`` and ``preset`` ("static", "waves", "poisson",
 "attrition"), every knob of ``afg.Mission.generate`` (``workload``, ``speed``,
 ``arena``, ``horizon``, ``waves``, ``interval``, ``rate``, ``fail_share``,
 ``capacity_slack``, ``allow_void``, ``min_team``, ``skills``, ``skill_share``,
 ``requires``), ``sensing``, ``comm_radius``, ``decide_every``,
-``max_cycles``, ``keep_failed`` and ``render_mode``.
+``max_cycles``, ``keep_failed``, ``render_mode`` and ``render_size``.
 """
 
 from __future__ import annotations
@@ -84,7 +87,7 @@ def env(**kwargs: Any) -> AECEnv:
 class MissionParallelEnv(ParallelEnv):
     """Robots as agents of a mission (see the module docs)."""
 
-    metadata = {"render_modes": [], "name": "mission_v0", "is_parallelizable": True}
+    metadata = {"render_modes": ["rgb_array"], "name": "mission_v0", "is_parallelizable": True}
 
     def __init__(
         self,
@@ -97,9 +100,11 @@ class MissionParallelEnv(ParallelEnv):
         max_cycles: Optional[int] = None,
         keep_failed: bool = False,
         render_mode: Optional[str] = None,
+        render_size: int = 400,
         **knobs: Any,
     ) -> None:
         check_render_mode(render_mode, self.metadata)
+        self.render_size = render_size
         self.max_cycles = check_max_cycles(max_cycles)
         self.keep_failed = keep_failed
         self._draw = lambda seed: Mission.generate(preset, robots, tasks, seed=seed, **knobs)
@@ -149,6 +154,15 @@ class MissionParallelEnv(ParallelEnv):
             a: {"observation": obs[self._index[a]], "action_mask": masks[self._index[a]]}
             for a in agents
         }
+
+    def render(self) -> Optional[np.ndarray]:
+        """The mission now as an (H, W, 3) uint8 image with ``render_mode="rgb_array"``;
+        None without a render mode."""
+        if self.render_mode is None:
+            return None
+        if self._env is None:
+            raise RefusedError("call reset() before render()")
+        return self._env.render(self.render_size)
 
     def state(self) -> np.ndarray:
         """The global state: every robot's observation, concatenated in index order."""
