@@ -191,6 +191,13 @@ pub struct RunArgs {
     /// no server), robots coloured by task moving, tasks sized by the work left.
     #[arg(long)]
     animate: Option<PathBuf>,
+    /// Write one moment of the run as a PNG image (the animation's drawing without its
+    /// text): at --still-at, or else where the most robots wait for their team.
+    #[arg(long)]
+    still: Option<PathBuf>,
+    /// The mission time of --still (the recorded moment nearest to it).
+    #[arg(long, requires = "still")]
+    still_at: Option<f64>,
     #[command(flatten)]
     looping: LoopArgs,
 }
@@ -279,6 +286,22 @@ fn read_mission(path: &Path) -> Result<Mission> {
     Mission::from_json(&text).with_context(|| path.display().to_string())
 }
 
+/// The PNG of `--still`: the recorded moment nearest to `at`, or else the first where
+/// the most robots wait for their team.
+fn still(mission: &Mission, run: &MissionRun, at: Option<f64>) -> Result<Vec<u8>> {
+    let frames = &run.frames;
+    let chosen = match at {
+        Some(t) => frames
+            .iter()
+            .min_by(|a, b| (a.time - t).abs().total_cmp(&(b.time - t).abs())),
+        None => frames.iter().rev().max_by_key(|f| f.waiting.len()),
+    };
+    let frame = chosen.ok_or_else(|| anyhow::anyhow!("the run recorded no moment to draw"))?;
+    const SIZE: usize = 720;
+    let rgb = afg_eval::frame_image::frame_rgb(mission, frame, SIZE)?;
+    Ok(afg_eval::frame_image::png(&rgb, SIZE))
+}
+
 fn run_one(args: &RunArgs) -> Result<()> {
     let inputs: Vec<&Path> = std::iter::once(args.mission.as_path())
         .chain(args.model.as_deref())
@@ -286,6 +309,7 @@ fn run_one(args: &RunArgs) -> Result<()> {
     let outputs = [
         ("trace", args.trace.as_deref()),
         ("animate", args.animate.as_deref()),
+        ("still", args.still.as_deref()),
     ];
     crate::refuse_overwriting_inputs(&outputs, &inputs)?;
     let mission = read_mission(&args.mission)?;
@@ -295,7 +319,12 @@ fn run_one(args: &RunArgs) -> Result<()> {
         trace: args.trace.is_some(),
         frame_every: None,
     };
-    if args.animate.is_some() {
+    if let Some(t) = args.still_at
+        && !(t.is_finite() && t >= 0.0)
+    {
+        anyhow::bail!("--still-at must be a finite time ≥ 0, not {t}");
+    }
+    if args.animate.is_some() || args.still.is_some() {
         // Frames enough for a smooth page, few enough to keep it a few megabytes.
         let frames = (2_000_000 / mission.robots.len().max(1)).clamp(20, 400);
         recording.frame_every = Some(mission.horizon / frames as f64);
@@ -314,6 +343,9 @@ fn run_one(args: &RunArgs) -> Result<()> {
     if let Some(path) = &args.animate {
         let title = format!("{} on {}", planner.name(), args.mission.display());
         write_atomic_making_dirs(path, mission_html(&mission, &run, &title)?.as_bytes())?;
+    }
+    if let Some(path) = &args.still {
+        write_atomic_making_dirs(path, &still(&mission, &run, args.still_at)?)?;
     }
     if let Some(path) = &args.trace {
         write_atomic_making_dirs(path, run.trace_jsonl().as_bytes())?;

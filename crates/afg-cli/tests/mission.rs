@@ -286,3 +286,54 @@ fn the_staffing_model_decides_team_missions() {
     );
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// `--still` writes one moment of the run as a PNG (where the most robots wait, or at
+/// `--still-at`); a negative time is refused and nothing is written.
+#[test]
+fn a_still_of_a_team_mission_is_a_png() {
+    let (dir, _) = mission_dir("still");
+    let mission = dir.join("teams.json");
+    let path = mission.to_str().unwrap();
+    let made = afg(&[
+        "mission",
+        "gen",
+        "--preset",
+        "waves",
+        "--robots",
+        "20",
+        "--tasks",
+        "4",
+        "--min-team",
+        "3,5",
+        "--out",
+        path,
+    ]);
+    assert_eq!(made.status.code(), Some(0), "{}", stderr(&made));
+    let still = dir.join("still.png");
+    let out = still.to_str().unwrap();
+    for extra in [&[][..], &["--still-at", "1.5"]] {
+        let ran = afg(&[
+            &["mission", "run", "--mission", path, "--still", out][..],
+            extra,
+        ]
+        .concat());
+        assert_eq!(ran.status.code(), Some(0), "{}", stderr(&ran));
+        let png = std::fs::read(&still).unwrap();
+        assert!(png.starts_with(b"\x89PNG\r\n\x1a\n") && png.len() > 100);
+        std::fs::remove_file(&still).unwrap();
+    }
+    refused(
+        &afg(&[
+            "mission",
+            "run",
+            "--mission",
+            path,
+            "--still",
+            out,
+            "--still-at=-1",
+        ]),
+        "--still-at must be a finite time",
+    );
+    assert!(!still.exists());
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -79,6 +79,50 @@ pub fn frame_rgb(mission: &Mission, frame: &Frame, size: usize) -> Result<Vec<u8
     Ok(image.into_bytes())
 }
 
+/// RGB bytes of a `size` × `size` image ([`frame_rgb`]'s) as a PNG file.
+///
+/// # Panics
+/// If `rgb` is not `size · size · 3` bytes.
+///
+/// # Examples
+/// ```
+/// let png = afg_eval::frame_image::png(&vec![255; 64 * 64 * 3], 64);
+/// assert!(png.starts_with(b"\x89PNG\r\n\x1a\n"));
+/// ```
+pub fn png(rgb: &[u8], size: usize) -> Vec<u8> {
+    use std::io::Write as _;
+    assert_eq!(rgb.len(), size * size * 3, "size × size RGB bytes");
+    let mut rows = Vec::with_capacity(rgb.len() + size);
+    for row in rgb.chunks_exact(size * 3) {
+        rows.push(0); // filter: none
+        rows.extend_from_slice(row);
+    }
+    let mut zlib = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::default());
+    zlib.write_all(&rows).expect("writing to memory");
+    let data = zlib.finish().expect("writing to memory");
+    let side = u32::try_from(size).expect("at most 4096 pixels");
+    let mut header = Vec::with_capacity(13);
+    header.extend_from_slice(&side.to_be_bytes());
+    header.extend_from_slice(&side.to_be_bytes());
+    header.extend_from_slice(&[8, 2, 0, 0, 0]); // 8-bit RGB, no interlace
+    let mut out = b"\x89PNG\r\n\x1a\n".to_vec();
+    for (kind, body) in [
+        (b"IHDR", header.as_slice()),
+        (b"IDAT", &data),
+        (b"IEND", &[]),
+    ] {
+        let length = u32::try_from(body.len()).expect("a chunk under 4 GiB");
+        out.extend_from_slice(&length.to_be_bytes());
+        let mut crc = crc32fast::Hasher::new();
+        crc.update(kind);
+        crc.update(body);
+        out.extend_from_slice(kind);
+        out.extend_from_slice(body);
+        out.extend_from_slice(&crc.finalize().to_be_bytes());
+    }
+    out
+}
+
 type Rgb = [f64; 3];
 const GREY: Rgb = [0.6, 0.6, 0.6];
 const RED: Rgb = [1.0, 0.0, 0.0];
@@ -233,5 +277,42 @@ mod tests {
         // Far from everything: white.
         assert_eq!(pixel(200, 500), [255, 255, 255]);
         assert!(frame_rgb(&mission, &frame, 10).is_err());
+    }
+
+    /// A PNG reads back: its chunks' checksums hold and its zlib stream inflates to the
+    /// rows, each after a filter byte of 0.
+    #[test]
+    fn a_png_reads_back() {
+        use std::io::Read as _;
+        let size = 64;
+        let rgb: Vec<u8> = (0..size * size * 3).map(|i| (i * 7 % 251) as u8).collect();
+        let file = png(&rgb, size);
+        let (mut at, mut data) = (8, Vec::new());
+        while at < file.len() {
+            let length = u32::from_be_bytes(file[at..at + 4].try_into().unwrap()) as usize;
+            let (kind, body) = (&file[at + 4..at + 8], &file[at + 8..at + 8 + length]);
+            let crc =
+                u32::from_be_bytes(file[at + 8 + length..at + 12 + length].try_into().unwrap());
+            let mut hasher = crc32fast::Hasher::new();
+            hasher.update(kind);
+            hasher.update(body);
+            assert_eq!(hasher.finalize(), crc);
+            if kind == b"IDAT" {
+                data.extend_from_slice(body);
+            }
+            at += 12 + length;
+        }
+        let mut rows = Vec::new();
+        flate2::read::ZlibDecoder::new(data.as_slice())
+            .read_to_end(&mut rows)
+            .unwrap();
+        let back: Vec<u8> = rows
+            .chunks_exact(size * 3 + 1)
+            .flat_map(|r| {
+                assert_eq!(r[0], 0);
+                r[1..].to_vec()
+            })
+            .collect();
+        assert_eq!(back, rgb);
     }
 }
