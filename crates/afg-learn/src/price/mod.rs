@@ -98,9 +98,7 @@ impl PriceModel {
     /// # Errors
     /// [`LearnError::Weights`] if the file cannot be written.
     pub fn save(&self, path: &Path) -> Result<(), LearnError> {
-        let json = serde_json::to_string(self).expect("a price model always serialises");
-        afg_game::fs::write_atomic(path, json.as_bytes())?;
-        Ok(())
+        write_model_file(self, path)
     }
 
     /// Reads a model written by [`PriceModel::save`].
@@ -109,26 +107,62 @@ impl PriceModel {
     /// [`LearnError::Weights`] for an unreadable or malformed file, another format or
     /// version, or weights whose shapes or values do not fit the recorded network.
     pub fn load(path: &Path) -> Result<Self, LearnError> {
-        let error = |reason: String| LearnError::Weights {
-            path: path.display().to_string(),
-            reason,
-        };
-        let text = std::fs::read_to_string(path).map_err(|e| error(e.to_string()))?;
-        let model: PriceModel = serde_json::from_str(&text)
-            .map_err(|e| error(format!("not a price model (truncated?): {e}")))?;
-        if model.format != PRICE_FORMAT || model.version != PRICE_VERSION {
-            return Err(error(format!(
-                "format {} version {}, expected {PRICE_FORMAT} version {PRICE_VERSION}",
-                model.format, model.version
-            )));
-        }
-        if !model.mlp.has_shape(model.training.network.hidden) {
-            return Err(error(format!(
-                "the weights are not those of a price network of width {} (or not finite)",
-                model.training.network.hidden
-            )));
-        }
+        let model: PriceModel = read_model_file(path, "a price model")?;
+        let hidden = model.training.network.hidden;
+        check_model_file(
+            path,
+            (&model.format, model.version),
+            (PRICE_FORMAT, PRICE_VERSION),
+            model.mlp.has_shape(hidden).then_some(()).ok_or_else(|| {
+                format!(
+                    "the weights are not those of a price network of width {hidden} (or not finite)"
+                )
+            }),
+        )?;
         Ok(model)
+    }
+}
+
+/// Writes a model file (the price model's, the staffing model's) as JSON, atomically.
+pub(crate) fn write_model_file<T: Serialize>(model: &T, path: &Path) -> Result<(), LearnError> {
+    let json = serde_json::to_string(model).expect("a model always serialises");
+    afg_game::fs::write_atomic(path, json.as_bytes())?;
+    Ok(())
+}
+
+/// Reads a model file written by [`write_model_file`]; `what` names it in errors.
+pub(crate) fn read_model_file<T: serde::de::DeserializeOwned>(
+    path: &Path,
+    what: &str,
+) -> Result<T, LearnError> {
+    let text = std::fs::read_to_string(path).map_err(|e| weights_error(path, e.to_string()))?;
+    serde_json::from_str(&text)
+        .map_err(|e| weights_error(path, format!("not {what} (truncated?): {e}")))
+}
+
+/// Checks a model file's format and version against the expected ones, then its
+/// weights (`shape`: why they do not fit, if they do not).
+pub(crate) fn check_model_file(
+    path: &Path,
+    (format, version): (&str, u32),
+    (expected, expected_version): (&str, u32),
+    shape: Result<(), String>,
+) -> Result<(), LearnError> {
+    if format != expected || version != expected_version {
+        return Err(weights_error(
+            path,
+            format!(
+                "format {format} version {version}, expected {expected} version {expected_version}"
+            ),
+        ));
+    }
+    shape.map_err(|reason| weights_error(path, reason))
+}
+
+fn weights_error(path: &Path, reason: String) -> LearnError {
+    LearnError::Weights {
+        path: path.display().to_string(),
+        reason,
     }
 }
 

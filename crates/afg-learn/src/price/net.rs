@@ -167,14 +167,18 @@ impl PriceMlp {
     /// with ReLU after each hidden layer.
     pub(crate) fn forward_rows(&self, inputs: &[f32], out: &mut [f32]) {
         let h = self.hidden();
-        let (mut a, mut b) = (vec![0.0; h], vec![0.0; h]);
+        self.forward_rows_with(inputs, out, (&mut vec![0.0; h], &mut vec![0.0; h]));
+    }
+
+    /// [`PriceMlp::forward_rows`] with two `[h]` scratch rows.
+    fn forward_rows_with(&self, inputs: &[f32], out: &mut [f32], rows: (&mut [f32], &mut [f32])) {
         let [first, hidden, output] = &self.layers;
         task_mlp(
             [first, hidden, output],
             inputs,
             None,
             Activation::Relu,
-            (&mut a, &mut b),
+            rows,
             out,
         );
     }
@@ -199,15 +203,7 @@ impl PriceMlp {
         a.resize(h, 0.0);
         b.resize(h, 0.0);
         task_inputs(features, inputs);
-        let [first, hidden, output] = &self.layers;
-        task_mlp(
-            [first, hidden, output],
-            inputs,
-            None,
-            Activation::Relu,
-            (a, b),
-            prices,
-        );
+        self.forward_rows_with(inputs, prices, (a, b));
     }
 }
 

@@ -46,7 +46,7 @@ pub use train::{
 };
 
 use crate::LearnError;
-use crate::price::PriceMlp;
+use crate::price::{PriceMlp, check_model_file, read_model_file, write_model_file};
 
 /// A trained staffing model and the settings it was trained with, as saved in a file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -82,9 +82,7 @@ impl StaffingModel {
     /// # Errors
     /// [`LearnError::Io`] if the file cannot be written.
     pub fn save(&self, path: &Path) -> Result<(), LearnError> {
-        let json = serde_json::to_string(self).expect("a staffing model always serialises");
-        afg_game::fs::write_atomic(path, json.as_bytes())?;
-        Ok(())
+        write_model_file(self, path)
     }
 
     /// Reads a model written by [`StaffingModel::save`].
@@ -93,25 +91,16 @@ impl StaffingModel {
     /// [`LearnError::Weights`] for an unreadable or malformed file, another format or
     /// version, or weights whose shapes or values do not fit the recorded network.
     pub fn load(path: &Path) -> Result<Self, LearnError> {
-        let error = |reason: String| LearnError::Weights {
-            path: path.display().to_string(),
-            reason,
-        };
-        let text = std::fs::read_to_string(path).map_err(|e| error(e.to_string()))?;
-        let model: StaffingModel = serde_json::from_str(&text)
-            .map_err(|e| error(format!("not a staffing model (truncated?): {e}")))?;
-        if model.format != STAFFING_FORMAT || model.version != STAFFING_VERSION {
-            return Err(error(format!(
-                "format {} version {}, expected {STAFFING_FORMAT} version {STAFFING_VERSION}",
-                model.format, model.version
-            )));
-        }
+        let model: StaffingModel = read_model_file(path, "a staffing model")?;
         let hidden = model.training.network.hidden;
-        if !model.mlp.has_layers(STAFF_INPUTS, hidden) {
-            return Err(error(format!(
-                "the weights are not those of a staffing network of width {hidden} (or not finite)"
-            )));
-        }
+        check_model_file(
+            path,
+            (&model.format, model.version),
+            (STAFFING_FORMAT, STAFFING_VERSION),
+            model.mlp.has_layers(STAFF_INPUTS, hidden).then_some(()).ok_or_else(|| {
+                format!("the weights are not those of a staffing network of width {hidden} (or not finite)")
+            }),
+        )?;
         Ok(model)
     }
 }
