@@ -116,3 +116,33 @@ pub fn run(args: StaffingArgs) -> Result<()> {
     println!("wrote {} ({seconds:.0} s)", model_path.display());
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    /// The committed staffing run's command is written back as it was given.
+    #[test]
+    fn command_args_write_a_command_back() {
+        let dir = crate::repo_root().join("models/ours/staffing_teams");
+        let command = afg_learn::run::RunDir::new(&dir)
+            .manifest()
+            .unwrap()
+            .command;
+        let with_sizes = format!("{command} --sizes 100x10,300x20");
+        for line in [command.as_str(), with_sizes.as_str()] {
+            let Ok(crate::Command::TrainStaffing(args)) =
+                crate::parse(line.strip_prefix("afg ").unwrap())
+            else {
+                unreachable!("a train-staffing command")
+            };
+            let again = format!(
+                "afg train-staffing {}",
+                crate::command_args(&args).join(" ")
+            );
+            let mut words: Vec<&str> = line.split(' ').collect();
+            let mut back: Vec<&str> = again.split(' ').collect();
+            words.sort_unstable();
+            back.sort_unstable();
+            assert_eq!(back, words, "{again}");
+        }
+    }
+}
