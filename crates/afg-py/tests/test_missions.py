@@ -164,9 +164,11 @@ def _same_knobs(flags: dict, function, defaults: dict, cli_only: set) -> None:
 def test_run_mission_takes_every_knob_of_the_command_line_with_its_default() -> None:
     flags = _flags("mission", "run")
     assert {"mission", "method", "loss", "activation", "knn", "trace"} <= set(flags), flags
-    # What only a command line has: its output file and format. `trace` is a path
-    # there and a switch in Python.
-    _same_knobs(flags, afg.run_mission, afg.mission_defaults()["run"], {"json", "animate"})
+    # What only a command line has: its output files and format (the animation and its
+    # stills; Python draws a moment with MissionEnv.render). `trace` is a path there
+    # and a switch in Python.
+    cli_only = {"json", "animate", "still", "still_at"}
+    _same_knobs(flags, afg.run_mission, afg.mission_defaults()["run"], cli_only)
 
 
 def test_mission_generate_takes_every_knob_of_the_command_line_with_its_default() -> None:
