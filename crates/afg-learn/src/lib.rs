@@ -28,6 +28,7 @@ mod load;
 mod log_float;
 mod manifest;
 mod migrate;
+mod model_file;
 pub mod policy;
 pub mod price;
 mod qnetwork;

@@ -31,6 +31,7 @@
 //! follows.
 
 mod features;
+mod labels;
 mod train;
 
 use std::path::Path;
@@ -40,13 +41,12 @@ use afg_game::{Assignment, Instance};
 use serde::{Deserialize, Serialize};
 
 pub use features::{STAFF_FEATURES, STAFF_INPUTS, staffing_features};
-pub use train::{
-    LABELS_FILE_NAME, LOG_FILE_NAME, LabelledGame, StaffingEpoch, StaffingTrainConfig,
-    StaffingTrainer, scarce_game,
-};
+pub use labels::{LABELS_FILE_NAME, LabelledGame, scarce_game};
+pub use train::{LOG_FILE_NAME, StaffingEpoch, StaffingTrainConfig, StaffingTrainer};
 
 use crate::LearnError;
-use crate::price::{PriceMlp, check_model_file, read_model_file, write_model_file};
+use crate::model_file::{check_model_file, read_model_file, write_model_file};
+use crate::price::PriceMlp;
 
 /// A trained staffing model and the settings it was trained with, as saved in a file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

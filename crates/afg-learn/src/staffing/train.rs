@@ -12,8 +12,7 @@
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use afg_baseline::TeamOptimum;
-use afg_game::{GameSize, GeneratorKnobs, Instance};
+use afg_game::{GameSize, Instance};
 use burn::optim::adaptor::OptimizerAdaptor;
 use burn::optim::{Adam, AdamConfig, GradientsParams, Optimizer};
 use burn::tensor::{Tensor, TensorData};
@@ -24,13 +23,11 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::features::{MARGIN, SIZE, STAFF_FEATURES, STAFF_INPUTS, staffing_inputs};
-use super::{StaffingModel, knapsack, staff_by_values, staffing_features, values_of};
+use super::labels::{LABELS_FILE_NAME, LabelledGame, label, lines_of, read_labels, scarce_game};
+use super::{StaffingModel, knapsack, staff_by_values, values_of};
 use crate::price::{PriceMlp, PriceNet, PriceNetConfig};
 use crate::train::training_instance_seed;
 use crate::{LearnError, TrainBackend};
-
-/// The file of a run's labelled games, one [`LabelledGame`] per line.
-pub const LABELS_FILE_NAME: &str = "labels.jsonl";
 
 /// The file name of a staffing run's log, one JSON [`StaffingEpoch`] per line.
 pub const LOG_FILE_NAME: &str = "log.jsonl";
@@ -105,65 +102,6 @@ impl StaffingTrainConfig {
         }
         Ok(())
     }
-}
-
-/// The scarce team game of `size` and `seed`: thresholds uniform in [N/M, 2N/M] (as
-/// `afg gen --robots N --tasks M --min-team N/M,2N/M --seed S`).
-///
-/// # Errors
-/// Errors of the generator.
-pub fn scarce_game(size: GameSize, seed: u64) -> Result<Instance, LearnError> {
-    let knobs = GeneratorKnobs {
-        min_team: Some(size.scarce_thresholds()),
-        ..GeneratorKnobs::default()
-    };
-    Ok(knobs.config(size.robots, size.tasks, seed)?.generate()?)
-}
-
-/// One labelled game: its seed and size, every task's features and label (1: staffed
-/// in the best assignment found), and that assignment's welfare.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct LabelledGame {
-    /// The generator seed.
-    pub seed: u64,
-    /// Its size.
-    pub size: GameSize,
-    /// `[M, STAFF_FEATURES]`.
-    pub features: Vec<f32>,
-    /// `[M]`, 0 or 1.
-    pub labels: Vec<f32>,
-    /// `[M]`, each task's threshold.
-    pub thresholds: Vec<usize>,
-    /// The welfare of the labelling assignment.
-    pub welfare: f64,
-    /// Whether it is proven optimal.
-    pub proven: bool,
-}
-
-pub(crate) fn label(
-    size: GameSize,
-    seed: u64,
-    limit: Duration,
-) -> Result<LabelledGame, LearnError> {
-    let inst = scarce_game(size, seed)?;
-    let best = TeamOptimum {
-        time_limit: Some(limit),
-    }
-    .solve(&inst)
-    .map_err(|e| LearnError::InvalidConfig(e.to_string()))?;
-    let labels = inst
-        .task_ids()
-        .map(|j| f32::from(u8::from(best.assignment.size(j) >= inst.min_team(j))))
-        .collect();
-    Ok(LabelledGame {
-        seed,
-        size,
-        features: staffing_features(&inst, &TeamOptimum::relax(&inst)),
-        labels,
-        thresholds: inst.task_ids().map(|j| inst.min_team(j)).collect(),
-        welfare: best.welfare,
-        proven: best.proven,
-    })
 }
 
 /// What one epoch did.
@@ -495,37 +433,4 @@ impl StaffingTrainer {
         model.save(&dir.join(StaffingModel::FILE_NAME))?;
         Ok(manifest)
     }
-}
-
-fn lines_of(games: &[LabelledGame]) -> String {
-    games
-        .iter()
-        .map(|g| serde_json::to_string(g).expect("a game serialises") + "\n")
-        .collect()
-}
-
-fn read_labels(path: &Path) -> Result<Vec<LabelledGame>, LearnError> {
-    let error = |reason: String| LearnError::RunFile {
-        path: path.display().to_string(),
-        reason,
-    };
-    let text = std::fs::read_to_string(path).map_err(|e| error(e.to_string()))?;
-    text.lines()
-        .enumerate()
-        .map(|(i, line)| {
-            let game: LabelledGame =
-                serde_json::from_str(line).map_err(|e| error(format!("line {}: {e}", i + 1)))?;
-            let m = game.size.tasks;
-            if game.features.len() != m * STAFF_FEATURES
-                || game.labels.len() != m
-                || game.thresholds.len() != m
-            {
-                return Err(error(format!(
-                    "line {}: not {m} tasks' features and labels",
-                    i + 1
-                )));
-            }
-            Ok(game)
-        })
-        .collect()
 }
