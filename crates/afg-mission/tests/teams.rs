@@ -288,31 +288,47 @@ fn the_exact_solver_in_the_loop_records_its_gap_per_decision() {
     assert!(refused(grape).contains("time-limit is for central decisions"));
 }
 
+/// Both decentralised methods play thresholds in a mission (the auction staffing
+/// every task of the waves with a team) and refuse skills in one line.
 #[test]
-fn grape_over_the_radio_plays_thresholds_and_the_auction_refuses_them() {
+fn grape_and_the_auction_over_the_radio_play_thresholds_and_refuse_skills() {
     use afg_mission::{MissionMethod, MissionPlan, Recording};
     let mut config = MissionConfig::new(Preset::Waves, 30, 6, 2);
     config.min_team = Some(afg_game::CountRange { min: 2, max: 4 });
     let mission = config.generate().unwrap();
-    let plan = |method| MissionPlan {
-        method,
-        ..MissionPlan::default()
+    let plan = |method| {
+        let mut plan = MissionPlan {
+            method,
+            ..MissionPlan::default()
+        };
+        plan.swarm.epsilon = 0.03;
+        plan
     };
-    let run = plan(MissionMethod::Grape)
-        .planner()
-        .unwrap()
-        .run(&mission, Recording::default(), |_| {})
-        .unwrap();
-    assert!(run.metrics.waiting.is_some() && run.metrics.swarm.is_some());
-    let refused = plan(MissionMethod::Auction)
-        .planner()
-        .unwrap()
-        .run(&mission, Recording::default(), |_| {})
-        .unwrap_err();
-    assert!(
-        refused
-            .to_string()
-            .contains("auction does not play games with team thresholds"),
-        "{refused}"
-    );
+    let run = |method, mission| {
+        plan(method)
+            .planner()
+            .unwrap()
+            .run(mission, Recording::default(), |_| {})
+    };
+    for method in [MissionMethod::Grape, MissionMethod::Auction] {
+        let done = run(method, &mission).unwrap();
+        assert!(done.metrics.waiting.is_some() && done.metrics.swarm.is_some());
+        if method == MissionMethod::Auction {
+            assert_eq!(done.metrics.tasks_done, mission.tasks.len());
+        }
+    }
+    config.skills = Some(afg_game::SkillDraw {
+        count: 2,
+        share: 0.5,
+        requires: afg_game::CountRange { min: 1, max: 1 },
+    });
+    let skilled = config.generate().unwrap();
+    for (method, name) in [
+        (MissionMethod::Grape, "grape"),
+        (MissionMethod::Auction, "auction"),
+    ] {
+        let refused = run(method, &skilled).unwrap_err().to_string();
+        let needle = format!("{name} does not play games with skill requirements");
+        assert!(refused.contains(&needle), "{refused}");
+    }
 }

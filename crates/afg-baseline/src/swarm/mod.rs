@@ -143,7 +143,9 @@ pub enum SwarmMethod {
     },
     /// The consensus-based auction on task places: robots bid for the k-th place of
     /// a task (worth `F_j(k) − F_j(k−1)`), raising its price by at least `epsilon`;
-    /// prices and winners spread by max-consensus.
+    /// prices and winners spread by max-consensus. On a game of team thresholds, the
+    /// tasks a shared rule staffs have their first k places worth the same large bonus
+    /// (ours, see the module docs of `swarm::auction`).
     Auction {
         /// The least price increment (the result is within 2N·ε of the optimum).
         epsilon: f64,
@@ -380,27 +382,27 @@ pub(crate) fn partition_of(tasks: &[Option<TaskId>], m: usize) -> Assignment {
     assignment
 }
 
-/// Refuses a team game the swarm does not play: GRAPE's robots judge a move by the
-/// coalitions' sizes they hear of (the threshold game's values, as GRAPE DA does), not
-/// by the skills the coalitions hold; the auction's bids are a concave game's prices.
+/// Refuses a game with skill requirements, which the swarm does not play: GRAPE's
+/// robots judge a move by the coalitions' sizes they hear of (the threshold game's
+/// values, as GRAPE DA does), and the auction's places are counted the same way, not
+/// by the skills the coalitions hold.
 fn refuse_teams(method: SwarmMethod, instance: &Instance) -> Result<(), AllocError> {
+    if !instance.has_skill_rules() {
+        return Ok(());
+    }
     let (method, reason) = match method {
-        SwarmMethod::Grape { .. } if instance.has_skill_rules() => (
+        SwarmMethod::Grape { .. } => (
             "grape",
             "its robots hear of a coalition's size, not of the skills it holds",
         ),
-        SwarmMethod::Auction { .. } if instance.has_teams() => {
-            ("auction", "its bids are the prices of the concave game")
-        }
-        _ => return Ok(()),
+        SwarmMethod::Auction { .. } => (
+            "auction",
+            "its places count a team's robots, not the skills they hold",
+        ),
     };
     Err(AllocError::TeamsNotSupported {
         method: method.into(),
-        rules: if instance.has_skill_rules() {
-            "skill requirements"
-        } else {
-            "team thresholds"
-        },
+        rules: "skill requirements",
         reason,
     })
 }

@@ -4,6 +4,7 @@
 use afg_game::{Point, TaskId};
 
 use super::Auction;
+use super::table::{NOBODY, Record, VOID};
 use crate::AllocError;
 use crate::swarm::Traffic;
 use crate::swarm::moving::{move_swarm, revive, tell};
@@ -31,7 +32,7 @@ impl Auction<'_> {
         if robots.is_empty() {
             return;
         }
-        self.epochs += 1;
+        self.open_epoch();
         for a in robots {
             if self.tables[a as usize].epoch < self.epochs {
                 self.restart(a, self.epochs);
@@ -40,10 +41,47 @@ impl Auction<'_> {
     }
 
     /// A mission's news: `task` appeared (or is done); the robots that hear of it
-    /// restart the auction.
+    /// restart the auction — but for a task done in a game of teams, where only the
+    /// robots it frees and those beyond a team bid again ([`Auction::free`]).
     pub fn task_event(&mut self, task: usize, done: bool) {
         let told = tell(&mut self.news, &self.radio, &self.instance, task, done);
-        self.renew(told);
+        if done && self.staffing.is_some() {
+            self.free(told, task as u32);
+        } else {
+            self.renew(told);
+        }
+    }
+
+    /// `robots` heard that `task` is done, in a game of teams: those that held its
+    /// places or a place beyond a team (which they release: no winner, ε above its
+    /// price) bid again; the others keep their teams.
+    fn free(&mut self, robots: Vec<u32>, task: u32) {
+        let Some(staffing) = &self.staffing else {
+            return;
+        };
+        let mut released = Vec::new();
+        for a in robots {
+            let held = self.holding[a as usize];
+            match held {
+                Some(place) if place.0 == task => {}
+                Some(place) if place != VOID && staffing.beyond_team(place) => {
+                    released.push((a, place));
+                }
+                Some(VOID) | None => {}
+                Some(_) => continue,
+            }
+            self.holding[a as usize] = None;
+            self.bidders.add(a);
+        }
+        for (a, place) in released {
+            let held = self.tables[a as usize].get(place);
+            let record = Record {
+                price: held.price + self.epsilon,
+                winner: NOBODY,
+                ..held
+            };
+            self.write(a, place, record);
+        }
     }
 
     /// The robots are at `points` now (see [`move_swarm`]): robots with new neighbours

@@ -34,6 +34,15 @@
 //! first record of the new epoch a robot hears makes it restart too; older epochs'
 //! records lose to any of the new one.
 //!
+//! On a game whose tasks need teams (thresholds), the robots staff the tasks a
+//! shared rule picks and each such task's first k places are worth the same large
+//! bonus ([`teams`], ours); the epoch's first record carries the number of robots
+//! living when it opened, which the rule counts. There a task done does not restart
+//! the auction: the robots that held its places, and those holding places beyond a
+//! team (who may be wanted by a team the freed robots let the rule staff), bid again,
+//! the latter releasing their place by a record without a winner at ε above its
+//! price; the teams at work keep their places.
+//!
 //! # Complexity
 //! Every robot keeps a table of the places bid on so far, at most P = Σ_j cap_j (P = N
 //! when uncapped, since a task never needs more places than robots): O(N·P) memory at
@@ -60,7 +69,9 @@ use crate::AllocError;
 
 mod events;
 mod table;
+mod teams;
 use table::{HEADER_BYTES, Place, RECORD_BYTES, Record, Table, VOID};
+use teams::Staffing;
 
 /// The auction's state between rounds.
 pub(crate) struct Auction<'a> {
@@ -71,6 +82,10 @@ pub(crate) struct Auction<'a> {
     radio: Radio<(Place, Record)>,
     /// Each task's place values `v_jk`, k from 0, as many as it has places.
     values: Vec<Vec<f64>>,
+    /// On a game of teams: the tasks staffed and their team places.
+    staffing: Option<Staffing>,
+    /// The robots living when each epoch opened (what its records tell the rule).
+    living_at: Vec<usize>,
     tables: Vec<Table>,
     /// The place each robot believes it holds.
     holding: Vec<Option<Place>>,
@@ -125,21 +140,27 @@ impl<'a> Auction<'a> {
             )));
         }
         let (n, m) = (instance.num_robots(), instance.num_tasks());
-        let values = instance
-            .task_ids()
-            .map(|j| {
-                let places = instance.capacity(j).min(n);
-                (1..=places)
-                    .map(|k| instance.marginal_value(j, k))
-                    .collect()
-            })
-            .collect();
+        let places = |j: TaskId| instance.capacity(j).min(n);
+        let staffing = Staffing::of(&instance, epsilon);
+        let values = match &staffing {
+            Some(staffing) => staffing.values(&instance, places),
+            None => (instance.task_ids())
+                .map(|j| {
+                    (1..=places(j))
+                        .map(|k| instance.marginal_value(j, k))
+                        .collect()
+                })
+                .collect(),
+        };
+        let living_at = vec![radio.living().count()];
         Ok(Auction {
             instance,
             news,
             epsilon,
             radio,
             values,
+            staffing,
+            living_at,
             tables: vec![Table::open(0, m); n],
             holding: vec![None; n],
             last_task: vec![None; n],
@@ -231,6 +252,12 @@ impl<'a> Auction<'a> {
         acted
     }
 
+    /// A new epoch, counting the robots living now.
+    fn open_epoch(&mut self) {
+        self.epochs += 1;
+        self.living_at.push(self.radio.living().count());
+    }
+
     /// Robot `a` opens a new epoch: every place open, nothing held, a bid to make.
     fn restart(&mut self, a: u32, epoch: u32) {
         let m = self.instance.num_tasks();
@@ -247,21 +274,21 @@ impl<'a> Auction<'a> {
     /// place is taken and there is no void.
     fn choose(&mut self, a: u32) -> Option<(Place, f64)> {
         let table = &self.tables[a as usize];
-        let open = Record::open(table.epoch);
+        let unbid = Record::open(table.epoch);
         let robot = RobotId(a);
         // (net value, place, price) of every place worth bidding for: the places bid
         // for so far, then each task's first open one.
         let mut options: Vec<(f64, Place, f64)> = Vec::new();
-        let known = |j: TaskId| {
-            self.news
-                .as_ref()
-                .is_none_or(|n| n.knows_open(a, j.index()))
-        };
-        for j in self.instance.task_ids().filter(|&j| known(j)) {
+        let known = |j: usize| (self.news.as_ref()).is_none_or(|n| n.knows_open(a, j));
+        let staffed = (self.staffing.as_ref())
+            .map(|s| s.staffed(self.living_at[table.epoch as usize], known));
+        let biddable =
+            |j: TaskId| known(j.index()) && staffed.as_ref().is_none_or(|s| s[j.index()]);
+        for j in self.instance.task_ids().filter(|&j| biddable(j)) {
             let cost = self.instance.cost(robot, j);
             let values = &self.values[j.index()];
             let places = &table.tasks[j.index()];
-            let first_open = (places.len() < values.len()).then_some(open);
+            let first_open = (places.len() < values.len()).then_some(unbid);
             for (k, r) in places.iter().copied().chain(first_open).enumerate() {
                 options.push((values[k] - r.price - cost, (j.0, k as u32), r.price));
             }
@@ -383,7 +410,7 @@ impl Simulation for Auction<'_> {
             self.resend(living);
         }
         if !start.noticed.is_empty() {
-            self.epochs += 1;
+            self.open_epoch();
             for (noticer, _) in start.noticed {
                 if self.tables[noticer as usize].epoch < self.epochs {
                     self.restart(noticer, self.epochs);
