@@ -6,16 +6,19 @@
   utility in each task) and the tasks' fill shares.
 - ``--env mission``: ``afg.pettingzoo.mission_v0``, the mission as a Parallel
   environment, every robot an agent of one shared policy (RLlib's multi-agent API,
-  all agents mapped to one module).
+  all agents mapped to one module). ``--teams`` plays the team game: every task needs
+  2 or 3 robots at once before its work advances.
 
-Both use RLlib's ``ActionMaskingTorchRLModule`` (observations as
-``{"observations", "action_mask"}``). The script prints the random policy's mean
+Both use RLlib's ``ActionMaskingTorchRLModule``, which reads its observation under
+``"observations"`` where PettingZoo's key is ``"observation"``: ``mission_env`` renames
+the key (and gives the mask as floats) in a ``BaseParallelWrapper``. The script prints the random policy's mean
 episode return (measured on the same environment first), then PPO's per iteration.
 On a cluster, start Ray there and pass ``--address auto`` (or set ``RAY_ADDRESS``) and
 ``--env-runners`` to spread sampling over the nodes.
 
     python examples/python/rllib_ppo.py --env allocation --iterations 20
     python examples/python/rllib_ppo.py --env mission --iterations 20
+    python examples/python/rllib_ppo.py --env mission --teams --iterations 20
 """
 
 from __future__ import annotations
@@ -30,6 +33,8 @@ import numpy as np
 ROBOTS, TASKS = 20, 5
 #: Short missions in a wide arena: travel matters, and not every task can be done.
 MISSION = dict(robots=10, tasks=12, preset="waves", arena=3.0, horizon=10.0, waves=3, interval=3.0)
+#: The team game: each task needs 2 or 3 robots present at once.
+TEAMS = dict(min_team=(2, 3))
 
 
 class AllocationForRLlib(gym.Env):
@@ -62,6 +67,10 @@ class AllocationForRLlib(gym.Env):
         return self._view(obs), reward, terminated, truncated, {}
 
 
+def mission_knobs(teams: bool) -> Dict[str, Any]:
+    return dict(MISSION, **(TEAMS if teams else {}))
+
+
 def mission_env(config: Optional[Dict[str, Any]] = None):
     """mission_v0 for RLlib: its observation key renamed, the mask as floats."""
     from pettingzoo.utils import BaseParallelWrapper
@@ -72,7 +81,7 @@ def mission_env(config: Optional[Dict[str, Any]] = None):
     class Renamed(BaseParallelWrapper):
         def __init__(self, env):
             super().__init__(env)
-            length = 5 + 9 * MISSION["tasks"]
+            length = env.observation_space(env.possible_agents[0])["observation"].shape[0]
             self._space = gym.spaces.Dict(
                 {
                     "observations": gym.spaces.Box(-np.inf, np.inf, (length,), np.float32),
@@ -97,10 +106,11 @@ def mission_env(config: Optional[Dict[str, Any]] = None):
             obs, rewards, terminations, truncations, infos = self.env.step(actions)
             return self._rename(obs), rewards, terminations, truncations, infos
 
-    return ParallelPettingZooEnv(Renamed(mission_v0.parallel_env(**MISSION)))
+    teams = bool((config or {}).get("teams", False))
+    return ParallelPettingZooEnv(Renamed(mission_v0.parallel_env(**mission_knobs(teams))))
 
 
-def random_return(env_name: str, episodes: int) -> float:
+def random_return(env_name: str, teams: bool, episodes: int) -> float:
     """Mean episode return of the uniformly random masked policy (team return per agent
     for the mission)."""
     rng = np.random.default_rng(0)
@@ -118,7 +128,7 @@ def random_return(env_name: str, episodes: int) -> float:
     else:
         from afg.pettingzoo import mission_v0
 
-        env = mission_v0.parallel_env(**MISSION)
+        env = mission_v0.parallel_env(**mission_knobs(teams))
         for e in range(episodes):
             obs, _ = env.reset(seed=e)
             total = 0.0
@@ -133,6 +143,7 @@ def random_return(env_name: str, episodes: int) -> float:
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--env", choices=["allocation", "mission"], default="allocation")
+    parser.add_argument("--teams", action="store_true", help="mission tasks need teams of 2-3 robots")
     parser.add_argument("--iterations", type=int, default=20)
     parser.add_argument("--env-runners", type=int, default=1)
     parser.add_argument("--address", default=None)
@@ -145,7 +156,9 @@ def main() -> None:
     from ray.rllib.examples.rl_modules.classes.action_masking_rlm import ActionMaskingTorchRLModule
     from ray.tune.registry import register_env
 
-    baseline = random_return(args.env, 50)
+    if args.teams and args.env != "mission":
+        parser.error("--teams is for --env mission")
+    baseline = random_return(args.env, args.teams, 50)
     print(f"random policy: mean episode return {baseline:.3f} (50 episodes)")
     ray.init(address=args.address)
     module = RLModuleSpec(
@@ -161,7 +174,7 @@ def main() -> None:
         # RLlib's multi-agent pipeline costs tens of milliseconds an epoch here (the
         # environment itself about one): smaller batches, and time to sample them.
         config = (
-            config.environment("afg-mission")
+            config.environment("afg-mission", env_config={"teams": args.teams})
             .env_runners(sample_timeout_s=1800)
             .training(train_batch_size_per_learner=1000, minibatch_size=250)
             .multi_agent(policies={"shared"}, policy_mapping_fn=lambda agent_id, episode, **kw: "shared")

@@ -262,7 +262,7 @@ pub fn check_game(
         Plays::Concave(reason) if instance.has_skill_rules() => ("skill requirements", reason),
         Plays::Counts if instance.has_skill_rules() => (
             "skill requirements",
-            "its preferences count a coalition's robots, not the skills they hold",
+            "it values a coalition by its count of robots, not by the skills they hold",
         ),
         Plays::Concave(reason) if instance.has_teams() => ("team thresholds", reason),
         _ => return Ok(()),

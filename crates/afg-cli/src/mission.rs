@@ -136,7 +136,7 @@ pub struct SwarmArgs {
     /// GRAPE's preference: selfish (GRAPE's own) or balanced.
     #[arg(long, value_parser = crate::choice::<Preference>(), default_value = SwarmKnobs::default().preference.name())]
     preference: Preference,
-    /// The auction's least price increment ε.
+    /// The auction's least price increment ε (team missions want 0.01–0.1: docs/teams.md).
     #[arg(long, default_value_t = SwarmKnobs::default().epsilon)]
     epsilon: f64,
     #[command(flatten)]

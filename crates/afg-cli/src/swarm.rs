@@ -26,7 +26,8 @@ pub struct SwarmArgs {
     /// GRAPE's preference: selfish (the paper's GRAPE DA) or balanced.
     #[arg(long, value_parser = crate::choice::<Preference>(), default_value = SwarmKnobs::default().preference.name())]
     preference: Preference,
-    /// The auction's least price increment ε (its result is within 2N·ε of the optimum).
+    /// The auction's least price increment ε (its result is within 2N·ε of the optimum;
+    /// team games want 0.01–0.1: docs/teams.md).
     #[arg(long, default_value_t = SwarmKnobs::default().epsilon)]
     epsilon: f64,
     /// Robot counts (comma-separated); instances drawn from the paper's distribution.

@@ -210,3 +210,26 @@ fn afg_mission_runs_and_refuses_a_broken_mission_in_one_line() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn afg_train_staffing_keeps_an_existing_model_unless_forced() {
+    let dir = std::env::temp_dir().join(format!("afg-staffing-kept-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let model = dir.join("staffing.json");
+    std::fs::write(&model, "a model already trained").unwrap();
+    let out = afg(&["train-staffing", "--out", dir.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert_eq!(
+        stderr(&out),
+        format!(
+            "error: {} exists; pass --force to replace it\n",
+            model.display()
+        )
+    );
+    assert_eq!(
+        std::fs::read_to_string(&model).unwrap(),
+        "a model already trained"
+    );
+    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -173,3 +173,31 @@ def test_the_void_vector_env_equals_single_envs() -> None:
         for i, core in enumerate(singles):
             assert (rewards[i], terminated[i]) == core.step(int(actions[i]))
     assert terminated.all()
+
+
+def test_the_team_vector_env_equals_single_team_envs() -> None:
+    k, n, m = 3, 8, 3
+    teams = dict(min_team=(2, 9), skills=2, requires=(1, 2))
+    venv = gym.make_vec(
+        "afg/Allocation-v0", num_envs=k, vectorization_mode="vector_entry_point", robots=n, tasks=m, **teams
+    )
+    obs, info = venv.reset(seed=5)
+    assert venv.observation_space.contains(obs)
+    assert obs["team"].shape == (k, m, 5) and obs["skills"].shape == (k, n, 2)
+    seeds = [int(s) for s in np.random.default_rng(5).integers(2**63, size=k)]
+    singles = [gym.make("afg/Allocation-v0", robots=n, tasks=m, **teams) for _ in range(k)]
+    single_obs = [env.reset(options={"instance": afg.generate(n, m, s, **teams)})[0] for env, s in zip(singles, seeds)]
+    # Some task here has a threshold above the robots: masked in the vector env too.
+    assert any(not o["action_mask"].all() for o in single_obs)
+    rng = np.random.default_rng(3)
+    for _ in range(n):
+        for i, o in enumerate(single_obs):
+            for key, value in o.items():
+                assert np.array_equal(obs[key][i], value), key
+        assert np.array_equal(venv.unwrapped.action_masks(), info["action_mask"])
+        actions = np.array([rng.choice(np.flatnonzero(info["action_mask"][i])) for i in range(k)])
+        obs, rewards, terminated, _, info = venv.step(actions)
+        for i, env in enumerate(singles):
+            single_obs[i], reward, done, _, _ = env.step(int(actions[i]))
+            assert np.isclose(rewards[i], reward) and terminated[i] == done
+    assert terminated.all()

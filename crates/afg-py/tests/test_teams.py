@@ -155,3 +155,7 @@ def test_the_gym_environment_observes_teams():
     obs, info = small.reset(options={"instance": inst})
     assert obs["action_mask"].tolist() == [1, 0] and info["action_mask"].tolist() == [True, False]
     assert small.unwrapped.action_masks().tolist() == [True, False]
+    # An instance with another number of skills than the spaces is refused.
+    other = afg.generate(8, 3, 1, min_team=(2, 3), skills=1)
+    with pytest.raises(afg.InvalidInputError, match="the instance has 1 skills, the environment's spaces 2"):
+        env.reset(options={"instance": other})

@@ -173,6 +173,10 @@ class VecEnvCore:
         units: str = "bounded",
         shaping: str = "none",
         allow_void: bool = False,
+        min_team: Optional[Tuple[int, int]] = None,
+        skills: Optional[int] = None,
+        skill_share: Optional[float] = None,
+        requires: Optional[Tuple[int, int]] = None,
     ) -> None: ...
     def reset(self, indices: Sequence[int], seeds: Sequence[int]) -> None: ...
     def step(

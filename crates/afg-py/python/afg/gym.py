@@ -26,7 +26,7 @@ entries (the last one false for an instance of the paper's game given in ``reset
 Reward shaping is not defined there (``shaping`` must be ``"none"``).
 
 **Teams** (``min_team``, ``skills``, ``skill_share``, ``requires``, as ``afg.generate``;
-``AllocationEnv`` only): instances are drawn with thresholds and skills, the reward
+both environments, the vector one stacking each entry): instances are drawn with thresholds and skills, the reward
 is the change in the team game's welfare (a coalition earns only once its team is
 complete), and the observation has two more entries —
 
@@ -96,6 +96,19 @@ def _team_view(instance: Instance, tasks: np.ndarray) -> Tuple[np.ndarray, np.nd
     return team, skills.astype(np.float32), staffable
 
 
+def _staffable_only(mask: np.ndarray, staffable: np.ndarray) -> np.ndarray:
+    """``mask`` without the tasks no team can staff, unless that leaves nothing."""
+    allowed = mask.copy()
+    allowed[: len(staffable)] &= staffable.astype(mask.dtype)
+    return allowed if allowed.any() else mask
+
+
+def _teams_drawn(min_team, skills, skill_share, requires) -> Dict[str, Any]:
+    """The team knobs given (those left out are not passed to the generator)."""
+    teams = dict(min_team=min_team, skills=skills, skill_share=skill_share, requires=requires)
+    return {key: value for key, value in teams.items() if value is not None}
+
+
 def _final_info(instance: Instance, tasks: np.ndarray) -> Dict[str, Any]:
     scored = score(instance, tasks)
     return {
@@ -129,10 +142,9 @@ class AllocationEnv(gymnasium.Env):
         self.robots, self.tasks = int(robots), int(tasks)
         self.allow_void = bool(allow_void)
         actions = self.tasks + int(self.allow_void)
-        teams = dict(min_team=min_team, skills=skills, skill_share=skill_share, requires=requires)
-        self._teams = any(v is not None for v in teams.values())
-        self._draw = dict(capacity_slack=capacity_slack, eps=eps, beta=beta, allow_void=self.allow_void)
-        self._draw.update({key: value for key, value in teams.items() if value is not None})
+        teams = _teams_drawn(min_team, skills, skill_share, requires)
+        self._teams = bool(teams)
+        self._draw = dict(capacity_slack=capacity_slack, eps=eps, beta=beta, allow_void=self.allow_void, **teams)
         self._units, self._shaping = units, shaping
         first = generate(self.robots, self.tasks, 0, **self._draw)
         self._skills = first.skills.shape[1] if self._teams else None
@@ -147,7 +159,7 @@ class AllocationEnv(gymnasium.Env):
         if self._teams:
             team, skills, staffable = _team_view(self._core.instance, self._core.tasks())
             obs["team"], obs["skills"] = team, skills
-            obs["action_mask"] = mask = self._staffable_only(mask, staffable)
+            obs["action_mask"] = mask = _staffable_only(mask, staffable)
         info: Dict[str, Any] = {"action_mask": mask.astype(bool)}
         if self._oracle and actor < self.robots:
             info["q_star"] = self._core.q_star()
@@ -183,17 +195,11 @@ class AllocationEnv(gymnasium.Env):
             info.update(_final_info(self._core.instance, self._core.tasks()))
         return obs, float(reward), bool(terminated), False, info
 
-    def _staffable_only(self, mask: np.ndarray, staffable: np.ndarray) -> np.ndarray:
-        """``mask`` without the tasks no team can staff, unless that leaves nothing."""
-        allowed = mask.copy()
-        allowed[: self.tasks] &= staffable.astype(mask.dtype)
-        return allowed if allowed.any() else mask
-
     def action_masks(self) -> np.ndarray:
         """The acting robot's allowed actions, as booleans (for maskable agents)."""
         mask = self._core.observation()[3]
         if self._teams:
-            mask = self._staffable_only(mask, _team_view(self._core.instance, self._core.tasks())[2])
+            mask = _staffable_only(mask, _team_view(self._core.instance, self._core.tasks())[2])
         return mask.astype(bool)
 
 
@@ -220,17 +226,23 @@ class AllocationVectorEnv(VectorEnv):
         units: str = "bounded",
         shaping: str = "none",
         allow_void: bool = False,
+        min_team: Optional[Tuple[int, int]] = None,
+        skills: Optional[int] = None,
+        skill_share: Optional[float] = None,
+        requires: Optional[Tuple[int, int]] = None,
         copy: bool = True,
     ) -> None:
         self.num_envs, self.robots, self.tasks = int(num_envs), int(robots), int(tasks)
         self.copy = bool(copy)
         self.allow_void = bool(allow_void)
         actions = self.tasks + int(self.allow_void)
+        teams = _teams_drawn(min_team, skills, skill_share, requires)
         self._core = VecEnvCore(
             self.num_envs, self.robots, self.tasks, capacity_slack, eps, beta, units, shaping,
-            self.allow_void,
+            self.allow_void, **teams,
         )
-        self.single_observation_space = _observation_space(self.robots, self.tasks, actions)
+        self._skills = self._core.instance(0).skills.shape[1] if teams else None
+        self.single_observation_space = _observation_space(self.robots, self.tasks, actions, self._skills)
         self.single_action_space = spaces.Discrete(actions)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
@@ -249,6 +261,13 @@ class AllocationVectorEnv(VectorEnv):
             block[0], block[1] = nu, mu
             nu, mu, actors, masks = block[0], block[1], actors.copy(), masks.copy()
         obs = {"robot_features": nu, "task_features": mu, "actor": actors, "action_mask": masks}
+        if self._skills is not None:
+            views = [_team_view(self._core.instance(i), self._core.tasks(i)) for i in range(self.num_envs)]
+            obs["team"] = np.stack([team for team, _, _ in views])
+            obs["skills"] = np.stack([skills for _, skills, _ in views])
+            obs["action_mask"] = masks = np.stack(
+                [_staffable_only(mask, staffable) for mask, (_, _, staffable) in zip(masks, views)]
+            )
         return obs, {"action_mask": masks.astype(bool)}
 
     def reset(
@@ -283,6 +302,8 @@ class AllocationVectorEnv(VectorEnv):
 
     def action_masks(self) -> np.ndarray:
         """Each sub-environment's allowed actions, shape (K, actions), as booleans."""
+        if self._skills is not None:
+            return self._observe()[1]["action_mask"]
         return self._core.observations()[3].astype(bool)
 
 

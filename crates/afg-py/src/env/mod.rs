@@ -111,24 +111,12 @@ impl EnvCore {
 struct InstanceSource {
     robots: usize,
     tasks: usize,
-    capacity_slack: Option<f64>,
-    eps: Option<f64>,
-    beta: f64,
-    allow_void: bool,
+    knobs: GeneratorKnobs,
 }
 
 impl InstanceSource {
     fn instance(&self, seed: u64) -> Result<Instance, afg_game::GameError> {
-        GeneratorKnobs {
-            capacity_slack: self.capacity_slack,
-            eps: self.eps,
-            beta: Some(self.beta),
-            rewards: None,
-            allow_void: self.allow_void,
-            ..GeneratorKnobs::default()
-        }
-        .config(self.robots, self.tasks, seed)?
-        .generate()
+        self.knobs.config(self.robots, self.tasks, seed)?.generate()
     }
 }
 
@@ -165,7 +153,7 @@ struct Buffers {
 #[pymethods]
 impl VecEnvCore {
     #[new]
-    #[pyo3(signature = (num_envs, robots, tasks=5, capacity_slack=None, eps=None, beta=1.0, units="bounded", shaping="none", allow_void=false))]
+    #[pyo3(signature = (num_envs, robots, tasks=5, capacity_slack=None, eps=None, beta=1.0, units="bounded", shaping="none", allow_void=false, min_team=None, skills=None, skill_share=None, requires=None))]
     #[allow(clippy::too_many_arguments)]
     fn py_new(
         num_envs: usize,
@@ -177,6 +165,10 @@ impl VecEnvCore {
         units: &str,
         shaping: &str,
         allow_void: bool,
+        min_team: Option<(usize, usize)>,
+        skills: Option<usize>,
+        skill_share: Option<f64>,
+        requires: Option<(usize, usize)>,
     ) -> PyResult<Self> {
         if num_envs == 0 {
             return Err(crate::bad_input("num_envs must be at least 1"));
@@ -184,10 +176,17 @@ impl VecEnvCore {
         let draw = InstanceSource {
             robots,
             tasks,
-            capacity_slack,
-            eps,
-            beta,
-            allow_void,
+            knobs: GeneratorKnobs {
+                capacity_slack,
+                eps,
+                beta: Some(beta),
+                rewards: None,
+                allow_void,
+                min_team,
+                skills,
+                skill_share,
+                requires,
+            },
         };
         let first = Arc::new(draw.instance(0).map_err(crate::crate_error)?);
         let episode = Episode::new(
@@ -288,7 +287,7 @@ impl VecEnvCore {
         moves: Option<(&[i64], &[bool])>,
     ) -> PyResult<(Vec<(f64, bool)>, VecObservationArrays<'py>)> {
         let (k, n, m) = (self.episodes.len(), self.draw.robots, self.draw.tasks);
-        let actions = m + usize::from(self.draw.allow_void);
+        let actions = m + usize::from(self.draw.knobs.allow_void);
         let min_len = self.min_len();
         let buffers = self.buffers.get_or_insert_with(|| Buffers {
             nu: PyArray3::zeros(py, (k, n, m), false).unbind(),
