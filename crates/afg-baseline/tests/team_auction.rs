@@ -3,9 +3,13 @@
 //! themselves as well as the exact placement of that staffing, within 2N·ε; a task
 //! done in a mission frees its robots without breaking the other teams.
 
+mod common;
+
 use afg_baseline::{LiveSwarm, Network, Swarm, SwarmMethod, TeamOptimum};
-use afg_game::{CountRange, GeneratorConfig, Instance, Point, Task, TaskId};
+use afg_game::{Instance, Point, Task, TaskId};
 use afg_graph::GraphKind;
+
+use common::scarce;
 
 const EPSILON: f64 = 1e-3;
 
@@ -26,18 +30,6 @@ fn rule(inst: &Instance) -> Vec<bool> {
         }
     }
     staffed
-}
-
-/// Scarce games: thresholds between N/M and 2N/M, so about two thirds of the tasks
-/// can be staffed.
-fn scarce(robots: usize, tasks: usize, seed: u64) -> Instance {
-    let per_task = robots / tasks;
-    let mut cfg = GeneratorConfig::paper(robots, tasks, seed);
-    cfg.min_team = Some(CountRange {
-        min: per_task,
-        max: 2 * per_task,
-    });
-    cfg.generate().unwrap()
 }
 
 fn networks() -> Vec<(&'static str, Network)> {

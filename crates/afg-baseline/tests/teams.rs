@@ -6,11 +6,11 @@ mod common;
 use std::time::Duration;
 
 use afg_baseline::{AllocError, Allocator, Method, Optimum, TeamOptimum, TeamSolution};
-use afg_game::{Assignment, CountRange, GeneratorConfig, Instance, Point, Task, TaskId};
+use afg_game::{Assignment, Instance, Point, Task, TaskId};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use common::{brute_force, small_instance, small_void_instance};
+use common::{brute_force, scarce, small_instance, small_void_instance};
 
 /// `inst` with thresholds drawn from 1..=N (so some tasks cannot be staffed together,
 /// and some never).
@@ -131,17 +131,6 @@ fn two_robots_needed_by_hand() {
     let best = TeamOptimum::default().solve(&void).unwrap();
     assert_eq!(best.assignment.tasks(), [None, None]);
     assert_eq!(best.welfare, 0.0);
-}
-
-/// A scarce instance: thresholds add up to more than the robots.
-fn scarce(robots: usize, tasks: usize, seed: u64) -> Instance {
-    let per_task = robots / tasks;
-    let mut cfg = GeneratorConfig::paper(robots, tasks, seed);
-    cfg.min_team = Some(CountRange {
-        min: per_task,
-        max: 2 * per_task,
-    });
-    cfg.generate().unwrap()
 }
 
 #[test]

@@ -110,3 +110,12 @@ pub fn brute_force_fixing(inst: &Instance, partial: &Assignment, out: Option<Rob
         return best;
     }
 }
+
+/// A scarce threshold game: thresholds uniform in [N/M, 2N/M] (about 1.5 N in all), so
+/// not every task can be staffed.
+pub fn scarce(robots: usize, tasks: usize, seed: u64) -> Instance {
+    let (min, max) = afg_game::GameSize { robots, tasks }.scarce_thresholds();
+    let mut cfg = GeneratorConfig::paper(robots, tasks, seed);
+    cfg.min_team = Some(afg_game::CountRange { min, max });
+    cfg.generate().unwrap()
+}
