@@ -302,6 +302,20 @@ fn still(mission: &Mission, run: &MissionRun, at: Option<f64>) -> Result<Vec<u8>
     Ok(afg_eval::frame_image::png(&rgb, SIZE))
 }
 
+/// Prints each plan's advice on the missions (`MissionPlan::advice`) once, on stderr.
+fn note(plans: &[&MissionPlan], missions: &[&Mission]) {
+    let mut said = std::collections::BTreeSet::new();
+    for plan in plans {
+        for mission in missions {
+            if let Some(advice) = plan.advice(mission)
+                && said.insert(advice.clone())
+            {
+                eprintln!("note: {advice}");
+            }
+        }
+    }
+}
+
 fn run_one(args: &RunArgs) -> Result<()> {
     let inputs: Vec<&Path> = std::iter::once(args.mission.as_path())
         .chain(args.model.as_deref())
@@ -314,6 +328,7 @@ fn run_one(args: &RunArgs) -> Result<()> {
     crate::refuse_overwriting_inputs(&outputs, &inputs)?;
     let mission = read_mission(&args.mission)?;
     let plan = args.looping.plan(args.method)?;
+    note(&[&plan], &[&mission]);
     let planner = planner(&plan, args.model.as_deref())?;
     let mut recording = Recording {
         trace: args.trace.is_some(),
@@ -435,10 +450,16 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
         .iter()
         .map(|p| read_mission(p))
         .collect::<Result<Vec<_>>>()?;
-    let mut planners: Vec<Planner> = args
-        .methods
+    let plans = (args.methods.iter())
+        .map(|&m| args.looping.plan(m))
+        .collect::<Result<Vec<_>>>()?;
+    note(
+        &plans.iter().collect::<Vec<_>>(),
+        &missions.iter().collect::<Vec<_>>(),
+    );
+    let mut planners: Vec<Planner> = plans
         .iter()
-        .map(|&m| Ok(planner(&args.looping.plan(m)?, None)?))
+        .map(|plan| Ok(planner(plan, None)?))
         .collect::<Result<_>>()?;
     let models = args
         .model

@@ -223,8 +223,18 @@ fn team_knobs_out_of_range_are_refused_and_nothing_is_written() {
         &run(&["--method", "greedy", "--time-limit", "1"]),
         "for the exact optimum",
     );
+    // The auction runs it; at the default ε it says that teams want a larger one.
     let auction = run(&["--method", "auction", "--epsilon", "0.03"]);
     assert_eq!(auction.status.code(), Some(0), "{}", stderr(&auction));
+    assert!(!stderr(&auction).contains("note:"), "{}", stderr(&auction));
+    let noted = run(&["--method", "auction"]);
+    assert_eq!(noted.status.code(), Some(0), "{}", stderr(&noted));
+    assert!(
+        stderr(&noted)
+            .contains("note: the auction on a mission whose tasks need teams wants --epsilon 0.01"),
+        "{}",
+        stderr(&noted)
+    );
     std::fs::remove_dir_all(dir).unwrap();
 }
 

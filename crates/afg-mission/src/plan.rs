@@ -145,6 +145,35 @@ pub struct Recording {
 }
 
 impl MissionPlan {
+    /// Advice on running this plan on `mission` that is not an error: the auction at
+    /// the default ε on a mission whose tasks need teams fills the teams slowly (its
+    /// robots beyond the teams bid in steps of ε).
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_mission::{Mission, MissionConfig, MissionMethod, MissionPlan, Preset};
+    /// let mut config = MissionConfig::new(Preset::Static, 8, 2, 1);
+    /// config.min_team = Some(afg_game::CountRange { min: 2, max: 3 });
+    /// let mission = config.generate()?;
+    /// let mut plan = MissionPlan { method: MissionMethod::Auction, ..MissionPlan::default() };
+    /// assert!(plan.advice(&mission).unwrap().contains("--epsilon 0.01"));
+    /// plan.swarm.epsilon = 0.01;
+    /// assert!(plan.advice(&mission).is_none());
+    /// # Ok::<(), afg_mission::MissionError>(())
+    /// ```
+    pub fn advice(&self, mission: &Mission) -> Option<String> {
+        let default = SwarmKnobs::default().epsilon;
+        (self.method == MissionMethod::Auction
+            && self.swarm.epsilon == default
+            && mission.tasks.iter().any(|t| t.min_team > 1))
+        .then(|| {
+            format!(
+                "the auction on a mission whose tasks need teams wants --epsilon 0.01 or more \
+                 (epsilon=0.01 in Python; at the default {default} its robots fill the teams slowly: docs/teams.md)"
+            )
+        })
+    }
+
     /// The planner of a built-in method (or GRAPE or the auction over the radio).
     ///
     /// # Errors

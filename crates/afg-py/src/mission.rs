@@ -13,6 +13,7 @@ use afg_mission::{
 };
 use numpy::ndarray::{Array1, Array2};
 use numpy::{IntoPyArray, PyArray1, PyArray2};
+use pyo3::exceptions::PyUserWarning;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -404,6 +405,10 @@ pub(crate) fn run_mission(
         time_limit,
     };
     let planner = planner(&plan, model.as_deref()).map_err(crate::crate_error)?;
+    if let Some(advice) = plan.advice(&mission.inner) {
+        let message = std::ffi::CString::new(advice).map_err(crate::bad_input)?;
+        PyErr::warn(py, &py.get_type::<PyUserWarning>(), &message, 1)?;
+    }
     let inner = Arc::clone(&mission.inner);
     let recording = Recording {
         trace,
