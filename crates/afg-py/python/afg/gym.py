@@ -26,8 +26,8 @@ entries (the last one false for an instance of the paper's game given in ``reset
 Reward shaping is not defined there (``shaping`` must be ``"none"``).
 
 **Teams** (``min_team``, ``skills``, ``skill_share``, ``requires``, as ``afg.generate``;
-both environments, the vector one stacking each entry): instances are drawn with thresholds and skills, the reward
-is the change in the team game's welfare (a coalition earns only once its team is
+both environments, the vector one stacking each entry): instances are drawn with
+thresholds and skills, the reward is the change in the team game's welfare (a coalition earns only once its team is
 complete), and the observation has two more entries —
 
 - ``team`` (M, 3 + S) float32: each task's threshold over N, its members so far over
@@ -101,6 +101,11 @@ def _staffable_only(mask: np.ndarray, staffable: np.ndarray) -> np.ndarray:
     allowed = mask.copy()
     allowed[: len(staffable)] &= staffable.astype(mask.dtype)
     return allowed if allowed.any() else mask
+
+
+def _staffable_masks(masks: np.ndarray, views: list) -> np.ndarray:
+    """Each row of ``masks`` without the tasks its ``_team_view`` says no team can staff."""
+    return np.stack([_staffable_only(mask, staffable) for mask, (_, _, staffable) in zip(masks, views)])
 
 
 def _teams_drawn(min_team, skills, skill_share, requires) -> Dict[str, Any]:
@@ -262,13 +267,15 @@ class AllocationVectorEnv(VectorEnv):
             nu, mu, actors, masks = block[0], block[1], actors.copy(), masks.copy()
         obs = {"robot_features": nu, "task_features": mu, "actor": actors, "action_mask": masks}
         if self._skills is not None:
-            views = [_team_view(self._core.instance(i), self._core.tasks(i)) for i in range(self.num_envs)]
+            views = self._team_views()
             obs["team"] = np.stack([team for team, _, _ in views])
             obs["skills"] = np.stack([skills for _, skills, _ in views])
-            obs["action_mask"] = masks = np.stack(
-                [_staffable_only(mask, staffable) for mask, (_, _, staffable) in zip(masks, views)]
-            )
+            obs["action_mask"] = masks = _staffable_masks(masks, views)
         return obs, {"action_mask": masks.astype(bool)}
+
+    def _team_views(self) -> list:
+        """Each sub-environment's ``_team_view``."""
+        return [_team_view(self._core.instance(i), self._core.tasks(i)) for i in range(self.num_envs)]
 
     def reset(
         self, *, seed: Optional[int] = None, options: Optional[Dict[str, Any]] = None
@@ -302,9 +309,10 @@ class AllocationVectorEnv(VectorEnv):
 
     def action_masks(self) -> np.ndarray:
         """Each sub-environment's allowed actions, shape (K, actions), as booleans."""
+        masks = self._core.observations()[3]
         if self._skills is not None:
-            return self._observe()[1]["action_mask"]
-        return self._core.observations()[3].astype(bool)
+            masks = _staffable_masks(masks, self._team_views())
+        return masks.astype(bool)
 
 
 def _register() -> None:
