@@ -234,10 +234,16 @@ impl TeamOptimum {
 
     /// The best assignment in which the tasks of `staffed` (one flag per task) hold
     /// their thresholds and the others earn nothing — one transport solve, exact for
-    /// that choice in a game without skills (with skills, a staffed task whose team
-    /// lacks a skill earns nothing) — and its welfare; `None` where no assignment
-    /// staffs them all (their thresholds add up to more than N, a task no team can
-    /// staff, too little room for the rest).
+    /// that choice in a game without skills — and its welfare; `None` where no
+    /// assignment staffs them all (their thresholds add up to more than N, a task no
+    /// team can staff, too little room for the rest).
+    ///
+    /// With skills, where a staffed task's team lacks a skill, a dive brings it: the
+    /// cheapest robot free to bring the missing skill is fixed at the task (or kept out
+    /// where that leaves no assignment), re-solved, until every staffed team holds its
+    /// skills or no robot can bring one; the best assignment met is returned (a staffed
+    /// task still short of a skill earns nothing). Not exact then: it is the exact
+    /// solver's skill branching followed down one side.
     ///
     /// # Examples
     /// ```
@@ -277,7 +283,8 @@ impl TeamOptimum {
                 }
             })
             .collect();
-        search.node(decisions, Vec::new(), None)?;
+        let node = search.node(decisions, Vec::new(), None)?;
+        search.skill_dive(node);
         let (best, welfare, _) = search.into_best();
         Some((best, welfare))
     }

@@ -408,6 +408,26 @@ impl<'a> Search<'a> {
         }
     }
 
+    /// Brings the skills that the earning tasks of `node` lack, robot by robot: each
+    /// step fixes the robot that the skill branching names (the cheapest one free to
+    /// bring a missing skill to the earning task with the most value at stake) at that
+    /// task, or keeps it out where that leaves no assignment, and re-solves, until no
+    /// earning task lacks a skill or no robot can bring one. Every assignment met is
+    /// offered to the best found. Nothing happens in a game without skills.
+    pub(super) fn skill_dive(&mut self, node: Node) {
+        let mut current = node;
+        while let Some(branch @ Branch::Pair(..)) = self.skill_branch(&current) {
+            let [(join, with), (keep_out, without)] = self.children(&current, branch);
+            let next = self
+                .node(join, with, Some(&current))
+                .or_else(|| self.node(keep_out, without, Some(&current)));
+            match next {
+                Some(next) => current = next,
+                None => return,
+            }
+        }
+    }
+
     /// Rounds the relaxation down to an assignment with no task between 0 and its
     /// threshold, a good first incumbent: `round` decides every such task of a node at
     /// once (staffed or not; all unstaffed where its choice asks for too many robots),
