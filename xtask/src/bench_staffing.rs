@@ -1,5 +1,5 @@
-//! `cargo xtask bench-staffing`: the staffing model (ours) on held-out scarce threshold
-//! games against the certified optimum (or its bound), every hand-written allocator
+//! `cargo xtask bench-staffing`: the staffing model (ours) on held-out scarce team
+//! games (thresholds, and skills with `--skills`) against the certified optimum (or its bound), every hand-written allocator
 //! (the model's own pipeline with no network, a knapsack over each task's nearest
 //! robots, included), afg's exact solver, CP-SAT and HiGHS given the model's own time
 //! on each instance.
@@ -13,13 +13,13 @@ use afg_game::io::dataset_to_jsonl;
 use afg_game::{GameSize, Instance};
 use afg_learn::price::PriceNetConfig;
 use afg_learn::run::{ModelOptions, load_model};
-use afg_learn::staffing::{StaffingPolicy, scarce_game};
+use afg_learn::staffing::StaffingPolicy;
 use anyhow::{Context, Result};
 use clap::Args;
 use serde::Serialize;
 
 use crate::bench::runs::{check_python, measure_rows, scratch_dir};
-use crate::bench_teams::{ALLOCATORS, peer};
+use crate::bench_teams::{ALLOCATORS, SkillFlags, peer, scarce};
 
 /// The options of `cargo xtask bench-staffing`.
 #[derive(Args)]
@@ -30,6 +30,10 @@ pub struct BenchStaffingArgs {
     /// Sizes as NxM; thresholds uniform in [N/M, 2N/M] (the training games' kind).
     #[arg(long, value_delimiter = ',', default_values = ["100x10", "1000x50", "10000x100"])]
     cases: Vec<GameSize>,
+    /// The games' skills (give the model's own training skills: `train-staffing
+    /// --skills`).
+    #[command(flatten)]
+    skills: SkillFlags,
     /// Instances per size (seeds seed, seed + 1, …; training used seeds from 2^62 and
     /// validation from 2^63, so these are held out).
     #[arg(long, default_value_t = 5)]
@@ -123,7 +127,7 @@ fn measure(
     args: &BenchStaffingArgs,
     dir: &Path,
 ) -> Result<Row> {
-    let inst = scarce_game(case, seed)?;
+    let inst = scarce(case, seed, args.skills.knobs()?.as_ref())?;
     let one_core = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
     let limit = Duration::try_from_secs_f64(args.time_limit).context("--time-limit")?;
     let exact = one_core.install(|| {
@@ -132,7 +136,8 @@ fn measure(
         }
         .solve(&inst)
     })?;
-    let mut runs = one_core.install(|| hand_written(&inst, case, seed, model))?;
+    let skills = args.skills.knobs()?.is_some();
+    let mut runs = one_core.install(|| hand_written(&inst, case, seed, model, skills))?;
     let equal = Duration::from_secs_f64(runs[0].seconds);
     runs.push(one_core.install(|| {
         timed("afg opt at the model's time", || {
@@ -185,13 +190,15 @@ fn measure(
 }
 
 /// The model, then every hand-written allocator: the model's pipeline with no
-/// network, `opt`'s own first answer (its dive), and every allocator that plays the
-/// threshold game (GRAPE DA decentralised up to N = 1 000: it grows as N²).
+/// network (reading skills where the games have them), `opt`'s own first answer (its
+/// dive), and every allocator that plays the game (GRAPE DA decentralised up to
+/// N = 1 000: it grows as N²).
 fn hand_written(
     inst: &Instance,
     case: GameSize,
     seed: u64,
     model: &dyn Allocator,
+    skills: bool,
 ) -> Result<Vec<Run>> {
     let welfare_of = |a: Result<afg_baseline::Allocation, AllocError>| -> Result<Option<f64>> {
         match a {
@@ -200,7 +207,7 @@ fn hand_written(
             Err(e) => Err(e.into()),
         }
     };
-    let hand = StaffingPolicy::untrained(PriceNetConfig { hidden: 1, seed: 0 });
+    let hand = StaffingPolicy::untrained(PriceNetConfig { hidden: 1, seed: 0 }, skills);
     let mut runs = vec![
         timed("staffing model (ours)", || welfare_of(model.allocate(inst)))?,
         timed("knapsack over nearest robots (ours)", || {
@@ -225,10 +232,16 @@ fn hand_written(
 
 fn markdown(rows: &[Row], args: &BenchStaffingArgs) -> String {
     let mut md = format!(
-        "Held-out scarce threshold games ({} per size, seeds from {}); % of afg's proven \
+        "Held-out {}{} per size, seeds from {}); % of afg's proven \
          bound (the optimum where proven: {}s limit, one core), mean, and time per instance. \
          The solvers at the model's time get, on each instance, the time the model took.\n\n| N | M | proven |",
-        args.instances, args.seed, args.time_limit
+        match args.skills.knobs() {
+            Ok(Some(_)) => format!("scarce games ({}; ", args.skills.game_text()),
+            _ => "scarce threshold games (".to_owned(),
+        },
+        args.instances,
+        args.seed,
+        args.time_limit
     );
     let Some(first) = rows.first() else {
         return md;

@@ -31,16 +31,8 @@ pub struct BenchTeamsArgs {
     /// Seed of the first instance: `afg gen --robots N --tasks M --min-team N/M,2N/M --seed S`.
     #[arg(long, default_value_t = 54)]
     seed: u64,
-    /// Skill games as well: S binary skills (each robot holds each with probability
-    /// --skill-share), as `afg gen --skills`.
-    #[arg(long, value_name = "S")]
-    skills: Option<usize>,
-    /// With --skills: the probability that a robot holds a skill.
-    #[arg(long, default_value_t = GeneratorKnobs::SKILL_SHARE)]
-    skill_share: f64,
-    /// With --skills: each task requires each skill in an amount uniform in LO..=HI.
-    #[arg(long, value_delimiter = ',', num_args = 1, value_names = ["LO,HI"], default_values_t = [1, 2])]
-    requires: Vec<usize>,
+    #[command(flatten)]
+    skills: SkillFlags,
     /// afg's time limit per instance, seconds.
     #[arg(long, default_value_t = 10.0)]
     time_limit: f64,
@@ -148,6 +140,50 @@ pub fn run(args: BenchTeamsArgs) -> Result<()> {
     Ok(())
 }
 
+/// `--skills`, `--skill-share` and `--requires`: the skills of the scarce games.
+#[derive(Args)]
+pub struct SkillFlags {
+    /// Skill games: S binary skills (each robot holds each with probability
+    /// --skill-share), as `afg gen --skills`.
+    #[arg(long, value_name = "S")]
+    skills: Option<usize>,
+    /// With --skills: the probability that a robot holds a skill.
+    #[arg(long, default_value_t = GeneratorKnobs::SKILL_SHARE)]
+    skill_share: f64,
+    /// With --skills: each task requires each skill in an amount uniform in LO..=HI.
+    #[arg(long, value_delimiter = ',', num_args = 1, value_names = ["LO,HI"], default_values_t = [1, 2])]
+    requires: Vec<usize>,
+}
+
+impl SkillFlags {
+    /// The generator's skill knobs (`None`: no skills).
+    pub fn knobs(&self) -> Result<Option<GeneratorKnobs>> {
+        let Some(count) = self.skills else {
+            return Ok(None);
+        };
+        let &[lo, hi] = self.requires.as_slice() else {
+            bail!("--requires takes two numbers, LO,HI");
+        };
+        Ok(Some(GeneratorKnobs {
+            skills: Some(count),
+            skill_share: Some(self.skill_share),
+            requires: Some((lo, hi)),
+            ..GeneratorKnobs::default()
+        }))
+    }
+
+    /// The game the scarce instances are, in words.
+    pub fn game_text(&self) -> String {
+        match self.skills {
+            Some(count) => format!(
+                "thresholds uniform in [N/M, 2N/M] and {count} skills (each robot holds each with probability {}, each task requires {}..={} of each)",
+                self.skill_share, self.requires[0], self.requires[1]
+            ),
+            None => "thresholds uniform in [N/M, 2N/M]".to_owned(),
+        }
+    }
+}
+
 /// The scarce threshold instance of `case` and `seed`: thresholds uniform in
 /// [N/M, 2N/M], and the skills of `skills` where given.
 pub fn scarce(case: Case, seed: u64, skills: Option<&GeneratorKnobs>) -> Result<Instance> {
@@ -158,24 +194,8 @@ pub fn scarce(case: Case, seed: u64, skills: Option<&GeneratorKnobs>) -> Result<
     Ok(knobs.config(case.robots, case.tasks, seed)?.generate()?)
 }
 
-/// The skill knobs of `--skills`, `--skill-share` and `--requires`.
-fn skill_knobs(args: &BenchTeamsArgs) -> Result<Option<GeneratorKnobs>> {
-    let Some(count) = args.skills else {
-        return Ok(None);
-    };
-    let &[lo, hi] = args.requires.as_slice() else {
-        bail!("--requires takes two numbers, LO,HI");
-    };
-    Ok(Some(GeneratorKnobs {
-        skills: Some(count),
-        skill_share: Some(args.skill_share),
-        requires: Some((lo, hi)),
-        ..GeneratorKnobs::default()
-    }))
-}
-
 fn measure(case: Case, seed: u64, args: &BenchTeamsArgs, dir: &Path) -> Result<Row> {
-    let inst = scarce(case, seed, skill_knobs(args)?.as_ref())?;
+    let inst = scarce(case, seed, args.skills.knobs()?.as_ref())?;
     let file = dir.join(format!(
         "teams_n{}_m{}_seed{seed}.jsonl",
         case.robots, case.tasks
@@ -334,7 +354,7 @@ fn markdown(rows: &[Row], args: &BenchTeamsArgs) -> String {
         })
         .collect();
     let k = args.instances;
-    let game = game_text(args);
+    let game = args.skills.game_text();
     let mut md = format!(
         "Game: {game}.\n\nExact solvers ({k} scarce instance{} per size; % of the best proven bound, mean; \
          proven: instances proven optimal; afg with a {}s limit on one core):\n\n| N | M | afg time | afg proven | afg % of bound | afg nodes | afg peak RSS |",
@@ -400,17 +420,6 @@ fn markdown(rows: &[Row], args: &BenchTeamsArgs) -> String {
         md.push('\n');
     }
     md + "\n" + &allocator_table(&cases, k)
-}
-
-/// The game a run measured, in words.
-fn game_text(args: &BenchTeamsArgs) -> String {
-    match args.skills {
-        Some(count) => format!(
-            "thresholds uniform in [N/M, 2N/M] and {count} skills (each robot holds each with probability {}, each task requires {}..={} of each)",
-            args.skill_share, args.requires[0], args.requires[1]
-        ),
-        None => "thresholds uniform in [N/M, 2N/M]".to_owned(),
-    }
 }
 
 /// The allocators' table: each one's welfare as a share of the best proven bound

@@ -1,9 +1,9 @@
-//! `afg train-staffing`: the staffing model (ours) for the team threshold game, trained
-//! on the staffing of certified optima.
+//! `afg train-staffing`: the staffing model (ours) for the team games (thresholds, and
+//! skills with `--skills`), trained on the staffing of certified optima.
 
 use std::path::PathBuf;
 
-use afg_game::GameSize;
+use afg_game::{CountRange, GameSize, GeneratorKnobs, SkillDraw};
 use afg_learn::staffing::{StaffingModel, StaffingTrainConfig, StaffingTrainer};
 use anyhow::{Result, bail};
 use clap::Args;
@@ -16,6 +16,20 @@ pub struct StaffingArgs {
     #[arg(long, value_delimiter = ',')]
     #[serde(serialize_with = "joined")]
     sizes: Vec<GameSize>,
+    /// Skill games: S binary skills, each robot holding each with probability
+    /// --skill-share, each task requiring each skill in an amount uniform in
+    /// --requires (as `afg gen --skills`). A model trained with skills plays skill games
+    /// (it reads three more features per task); without, it refuses them.
+    #[arg(long, value_name = "S")]
+    skills: Option<usize>,
+    /// With --skills: the probability that a robot holds a skill (default 0.5).
+    #[arg(long, value_name = "P")]
+    skill_share: Option<f64>,
+    /// With --skills: each task requires each skill in an amount uniform in LO..=HI
+    /// (default 1,2).
+    #[arg(long, value_delimiter = ',', num_args = 1, value_names = ["LO,HI"])]
+    #[serde(serialize_with = "joined")]
+    requires: Vec<usize>,
     /// Training games per size.
     #[arg(long)]
     games: Option<usize>,
@@ -54,13 +68,36 @@ pub struct StaffingArgs {
     force: bool,
 }
 
-/// `--sizes` as written: `100x10,300x20` (nothing where none was given).
-fn joined<S: serde::Serializer>(sizes: &[GameSize], out: S) -> Result<S::Ok, S::Error> {
-    if sizes.is_empty() {
+/// A list flag as written: `100x10,300x20` (nothing where none was given).
+fn joined<S: serde::Serializer, T: std::fmt::Display>(
+    items: &[T],
+    out: S,
+) -> Result<S::Ok, S::Error> {
+    if items.is_empty() {
         return out.serialize_none();
     }
-    let text: Vec<String> = sizes.iter().map(GameSize::to_string).collect();
+    let text: Vec<String> = items.iter().map(T::to_string).collect();
     out.serialize_str(&text.join(","))
+}
+
+/// The skills of `--skills`, `--skill-share` and `--requires`.
+fn skill_draw(args: &StaffingArgs) -> Result<Option<SkillDraw>> {
+    let Some(count) = args.skills else {
+        if args.skill_share.is_some() || !args.requires.is_empty() {
+            bail!("--skill-share and --requires need --skills S");
+        }
+        return Ok(None);
+    };
+    let (min, max) = match args.requires.as_slice() {
+        [] => GeneratorKnobs::REQUIRES,
+        &[lo, hi] => (lo, hi),
+        _ => bail!("--requires takes two numbers, LO,HI"),
+    };
+    Ok(Some(SkillDraw {
+        count,
+        share: args.skill_share.unwrap_or(GeneratorKnobs::SKILL_SHARE),
+        requires: CountRange { min, max },
+    }))
 }
 
 /// Trains a staffing model into its run directory.
@@ -80,6 +117,7 @@ pub fn run(args: StaffingArgs) -> Result<()> {
     if !args.sizes.is_empty() {
         config.sizes.clone_from(&args.sizes);
     }
+    config.skills = skill_draw(&args)?;
     crate::set_given!(config;
         games = args.games,
         validation_games = args.validation_games,

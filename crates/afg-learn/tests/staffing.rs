@@ -67,8 +67,12 @@ fn features_by_hand() {
     // Thresholds of the tasks filled more, then all thresholds, over N = 4.
     assert_eq!((a[7], b[7]), (0.0, 0.5));
     assert_eq!((a[8], b[8]), (1.25, 1.25));
-    // Neither task is unstaffable.
+    // Neither task is unstaffable; without skills, every skill feature is neutral.
     assert_eq!((a[9], b[9]), (0.0, 0.0));
+    assert_eq!(
+        (&a[10..], &b[10..]),
+        (&[1.0, 0.0, 3.0][..], &[1.0, 0.0, 3.0][..])
+    );
     // A member's value at the threshold, F(k)/k, over their mean; the price over it;
     // less the nearest k robots' mean cost (0 at the first task, 1 at the second).
     let v = |j: u32, k: f64| inst.value_function(afg_game::TaskId(j)).value(k as usize) / k;
@@ -77,6 +81,44 @@ fn features_by_hand() {
     assert!(close(a[4], v(0, 2.0) / unit) && close(b[4], v(1, 3.0) / unit));
     assert!(close(a[5], 1.0 / unit) && close(b[5], 0.0));
     assert!(close(a[6], v(0, 2.0) / unit) && close(b[6], (v(1, 3.0) - 1.0) / unit));
+}
+
+/// Three robots on a line at 0, 0.1 and 0.5; task 0 at 0 needs two robots and one of
+/// skill 0, which only the furthest robot holds; task 1 at 1 needs one robot and no
+/// skill.
+#[test]
+fn skill_features_by_hand() {
+    let task = |x: f64| Task {
+        position: Point::new(x, 0.0),
+        reward: 4.0,
+        eps: 2.0,
+        capacity: None,
+    };
+    let robots = [0.0, 0.1, 0.5].map(|x| Point::new(x, 0.0)).to_vec();
+    let inst = Instance::new(robots, vec![task(0.0), task(1.0)], 1.0)
+        .unwrap()
+        .with_teams(
+            vec![2, 1],
+            &[vec![0], vec![0], vec![1]],
+            &[vec![1], vec![0]],
+        )
+        .unwrap();
+    let root = TeamRelaxation {
+        sizes: vec![2, 1],
+        prices: vec![0.0, 0.0],
+        bound: 0.0,
+    };
+    let f = staffing_features(&inst, &root);
+    let (a, b) = f.split_at(STAFF_FEATURES);
+    let v = |j: u32, k: f64| inst.value_function(afg_game::TaskId(j)).value(k as usize) / k;
+    let unit = (v(0, 2.0) + v(1, 1.0)) / 2.0;
+    // Task 0: its two nearest robots hold none of skill 0 (cover 0); its holder is 0.4
+    // further than the second nearest; one robot holds it for one required in all.
+    assert_eq!(a[10], 0.0);
+    assert!((f64::from(a[11]) - 0.4 / unit).abs() < 1e-5, "{}", a[11]);
+    assert_eq!(a[12], 1.0);
+    // Task 1 requires nothing.
+    assert_eq!(&b[10..], &[1.0, 0.0, 3.0]);
 }
 
 #[test]
@@ -152,6 +194,7 @@ fn a_trained_run_is_an_allocator_for_threshold_games() {
                 robots: 40,
                 tasks: 5,
             },
+            None,
             seed,
         )
         .unwrap();
@@ -171,6 +214,7 @@ fn a_trained_run_is_an_allocator_for_threshold_games() {
             robots: 20,
             tasks: 3,
         },
+        None,
         1,
     )
     .unwrap();
@@ -186,6 +230,45 @@ fn a_trained_run_is_an_allocator_for_threshold_games() {
         policy.allocate(&skills),
         Err(AllocError::TeamsNotSupported { .. })
     ));
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// A model trained on skill games reads the skill features, keeps its skills in its
+/// file, and plays skill games: valid assignments at or below the optimum, whose full
+/// teams nearly all hold their skills.
+#[test]
+fn a_run_trained_on_skill_games_plays_them() {
+    let dir = scratch("skills");
+    let mut config = tiny();
+    config.skills = Some(afg_game::SkillDraw {
+        count: 2,
+        share: 0.3,
+        requires: afg_game::CountRange { min: 1, max: 3 },
+    });
+    let model = train(config.clone(), &dir).unwrap();
+    assert_eq!(model.training.skills, config.skills);
+    assert_eq!(model.training.input_width(), 2 * STAFF_FEATURES);
+    let policy = load_model(&dir, ModelOptions::default()).unwrap();
+    let (mut earning, mut games) = (0, 0);
+    for seed in 0..5 {
+        let size = GameSize {
+            robots: 40,
+            tasks: 5,
+        };
+        let inst = scarce_game(size, config.skills, seed).unwrap();
+        let out = policy.allocate(&inst).unwrap().assignment;
+        inst.check(&out).unwrap();
+        let best = TeamOptimum::default().solve(&inst).unwrap().welfare;
+        assert!(inst.welfare(&out) <= best + 1e-9);
+        // Every task it fills to its threshold holds its skills: the placement brings
+        // them.
+        let held = inst.skills_held(&out);
+        for j in inst.task_ids().filter(|&j| out.size(j) >= inst.min_team(j)) {
+            games += 1;
+            earning += usize::from(inst.skills_met(j, &held[j.index() * 2..][..2]));
+        }
+    }
+    assert!(earning * 10 >= games * 9, "{earning} of {games}");
     std::fs::remove_dir_all(dir).unwrap();
 }
 

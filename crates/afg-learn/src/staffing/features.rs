@@ -1,20 +1,39 @@
-//! What the staffing network reads of a task: the root relaxation's verdict on it and
-//! the geometry of its threshold, all in units free of N, M and the reward scale, so
-//! that one model serves any size.
+//! What the staffing network reads of a task: the root relaxation's verdict on it, the
+//! geometry of its threshold and, in a game with skills, how near the skills it
+//! requires are, all in units free of N, M and the reward scale, so that one model
+//! serves any size.
 
 use afg_baseline::TeamRelaxation;
-use afg_game::Instance;
+use afg_game::{Instance, TaskId};
 
-/// Features per task.
-pub const STAFF_FEATURES: usize = 10;
+/// Features per task: [`COUNT_FEATURES`] that count robots, then three of skills (0,
+/// 0 and 3 in a game without skills).
+pub const STAFF_FEATURES: usize = 13;
+
+/// The features that count robots (the first ten), all that a model trained on
+/// threshold games reads.
+pub const COUNT_FEATURES: usize = 10;
 
 /// Feature 3: the threshold over the mean share.
 pub(crate) const SIZE: usize = 3;
 /// Feature 6: a member's value at the threshold less its nearest robots' cost.
 pub(crate) const MARGIN: usize = 6;
 
-/// Width of a task's network input: its features and the mean of all tasks' features.
-pub const STAFF_INPUTS: usize = 2 * STAFF_FEATURES;
+/// Width of a task's network input: the features the model reads (all of them where
+/// it reads skills, else the first [`COUNT_FEATURES`]) and their means over the tasks.
+///
+/// # Examples
+/// ```
+/// use afg_learn::staffing::staffing_input_width;
+/// assert_eq!((staffing_input_width(false), staffing_input_width(true)), (20, 26));
+/// ```
+pub const fn staffing_input_width(reads_skills: bool) -> usize {
+    2 * if reads_skills {
+        STAFF_FEATURES
+    } else {
+        COUNT_FEATURES
+    }
+}
 
 /// The features of every task (`[M, STAFF_FEATURES]`, row-major) of `instance` and its
 /// root relaxation `root`; with `share` = N / M and `v_j = F_j(k_j) / k_j` (a member's
@@ -32,6 +51,9 @@ pub const STAFF_INPUTS: usize = 2 * STAFF_FEATURES;
 /// | 7 | the thresholds of the tasks the relaxation fills more (ties: lower index) over N |
 /// | 8 | every task's threshold together over N (the same for all tasks) |
 /// | 9 | 1 where no team can staff the task |
+/// | 10 | skill cover: the least, over the skills the task requires, of what its `k_j` nearest robots hold over the requirement, at most 1 (1 without requirements) |
+/// | 11 | skill reach: how much further than its `k_j`-th nearest robot the nearest holders of every required skill are (the largest such cost difference, at least 0, over `v̄`; 0 where too few robots hold a skill) |
+/// | 12 | skill supply: the least, over the skills the task requires, of all robots' holding over all tasks' requirement, at most 3 (3 without requirements) |
 ///
 /// # Examples
 /// ```
@@ -65,6 +87,7 @@ pub fn staffing_features(instance: &Instance, root: &TeamRelaxation) -> Vec<f32>
         .collect();
     let thresholds: usize = instance.task_ids().map(|j| instance.min_team(j)).sum();
     let unstaffable = instance.unstaffable_tasks();
+    let supply = skill_supply(instance);
     let mut costs = vec![0.0; n];
     let mut out = Vec::with_capacity(m * STAFF_FEATURES);
     for j in instance.task_ids() {
@@ -74,6 +97,7 @@ pub fn staffing_features(instance: &Instance, root: &TeamRelaxation) -> Vec<f32>
             *c = instance.cost(i, j);
         }
         let nearest = k.clamp(1, n);
+        let (cover, reach) = skill_cover_and_reach(instance, j, &costs, nearest);
         costs.select_nth_unstable_by(nearest - 1, f64::total_cmp);
         let near_cost = costs[..nearest].iter().sum::<f64>() / nearest as f64;
         let ahead: usize = instance
@@ -94,6 +118,9 @@ pub fn staffing_features(instance: &Instance, root: &TeamRelaxation) -> Vec<f32>
                 ahead as f64 / n as f64,
                 thresholds as f64 / n as f64,
                 flag(unstaffable.contains(&j)),
+                cover,
+                reach / unit,
+                supply[t],
             ]
             .map(|x| x as f32),
         );
@@ -101,10 +128,81 @@ pub fn staffing_features(instance: &Instance, root: &TeamRelaxation) -> Vec<f32>
     out
 }
 
-/// The network inputs of every task: its features, then the mean of all tasks'
-/// (`[M, STAFF_INPUTS]`).
-pub(crate) fn staffing_inputs(features: &[f32]) -> Vec<f32> {
-    let mut inputs = vec![0.0; 2 * features.len()];
-    afg_graph::rows_with_mean(features, STAFF_FEATURES, &mut inputs);
+/// Task j's skill cover and reach (features 10 and 11, the reach not yet over `v̄`)
+/// from every robot's cost to it, `nearest` = its threshold (at least 1).
+fn skill_cover_and_reach(
+    instance: &Instance,
+    j: TaskId,
+    costs: &[f64],
+    nearest: usize,
+) -> (f64, f64) {
+    let requires = instance.requires(j);
+    if requires.iter().all(|&r| r == 0) {
+        return (1.0, 0.0);
+    }
+    let mut order: Vec<usize> = (0..costs.len()).collect();
+    order.sort_by(|&a, &b| costs[a].total_cmp(&costs[b]).then(a.cmp(&b)));
+    let robots: Vec<_> = instance.robot_ids().collect();
+    let skills = |at: usize| instance.skills(robots[order[at]]);
+    let mut held = vec![0u64; requires.len()];
+    for at in 0..nearest {
+        for (h, &q) in held.iter_mut().zip(skills(at)) {
+            *h += u64::from(q);
+        }
+    }
+    let cover = requires
+        .iter()
+        .zip(&held)
+        .filter(|&(&r, _)| r > 0)
+        .map(|(&r, &h)| (h as f64 / f64::from(r)).min(1.0))
+        .fold(1.0, f64::min);
+    // The cost of the nearest robot at which every skill's requirement is held.
+    let mut held = vec![0u64; requires.len()];
+    let reached = (0..order.len()).find(|&at| {
+        for (h, &q) in held.iter_mut().zip(skills(at)) {
+            *h += u64::from(q);
+        }
+        instance.skills_met(j, &held)
+    });
+    let reach = reached.map_or(0.0, |at| {
+        (costs[order[at]] - costs[order[nearest - 1]]).max(0.0)
+    });
+    (cover, reach)
+}
+
+/// Every task's skill supply (feature 12).
+fn skill_supply(instance: &Instance) -> Vec<f64> {
+    let s = instance.num_skills();
+    let (mut held, mut required) = (vec![0.0f64; s], vec![0.0f64; s]);
+    for i in instance.robot_ids() {
+        for (h, &q) in held.iter_mut().zip(instance.skills(i)) {
+            *h += f64::from(q);
+        }
+    }
+    for j in instance.task_ids() {
+        for (r, &q) in required.iter_mut().zip(instance.requires(j)) {
+            *r += f64::from(q);
+        }
+    }
+    instance
+        .task_ids()
+        .map(|j| {
+            (0..s)
+                .filter(|&k| instance.requires(j)[k] > 0)
+                .map(|k| (held[k] / required[k]).min(3.0))
+                .fold(3.0, f64::min)
+        })
+        .collect()
+}
+
+/// The network inputs of every task: the first `read` of its features, then their
+/// mean over the tasks (`[M, 2 · read]`).
+pub(crate) fn staffing_inputs(features: &[f32], read: usize) -> Vec<f32> {
+    let chosen: Vec<f32> = features
+        .chunks_exact(STAFF_FEATURES)
+        .flat_map(|row| row[..read].iter().copied())
+        .collect();
+    let mut inputs = vec![0.0; 2 * chosen.len()];
+    afg_graph::rows_with_mean(&chosen, read, &mut inputs);
     inputs
 }

@@ -6,7 +6,7 @@ use std::path::Path;
 use std::time::Duration;
 
 use afg_baseline::TeamOptimum;
-use afg_game::{GameSize, GeneratorKnobs, Instance};
+use afg_game::{GameSize, GeneratorKnobs, Instance, SkillDraw};
 use serde::{Deserialize, Serialize};
 
 use super::features::STAFF_FEATURES;
@@ -16,21 +16,30 @@ use crate::LearnError;
 /// The file of a run's labelled games, one [`LabelledGame`] per line.
 pub const LABELS_FILE_NAME: &str = "labels.jsonl";
 
-/// The scarce team game of `size` and `seed`: thresholds uniform in [N/M, 2N/M] (as
-/// `afg gen --robots N --tasks M --min-team N/M,2N/M --seed S`).
+/// The scarce team game of `size` and `seed`: thresholds uniform in [N/M, 2N/M] and,
+/// with `skills`, skills drawn so (as `afg gen --robots N --tasks M --min-team
+/// N/M,2N/M --seed S`, with `--skills S --skill-share P --requires LO,HI`).
 ///
 /// # Errors
 /// Errors of the generator.
-pub fn scarce_game(size: GameSize, seed: u64) -> Result<Instance, LearnError> {
+pub fn scarce_game(
+    size: GameSize,
+    skills: Option<SkillDraw>,
+    seed: u64,
+) -> Result<Instance, LearnError> {
     let knobs = GeneratorKnobs {
         min_team: Some(size.scarce_thresholds()),
+        skills: skills.map(|d| d.count),
+        skill_share: skills.map(|d| d.share),
+        requires: skills.map(|d| (d.requires.min, d.requires.max)),
         ..GeneratorKnobs::default()
     };
     Ok(knobs.config(size.robots, size.tasks, seed)?.generate()?)
 }
 
-/// One labelled game: its seed and size, every task's features and label (1: staffed
-/// in the best assignment found), and that assignment's welfare.
+/// One labelled game: its seed and size, every task's features and label (1: earning
+/// in the best assignment found, its team complete and holding its skills), and that
+/// assignment's welfare.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LabelledGame {
     /// The generator seed.
@@ -51,18 +60,25 @@ pub struct LabelledGame {
 
 pub(super) fn label(
     size: GameSize,
+    skills: Option<SkillDraw>,
     seed: u64,
     limit: Duration,
 ) -> Result<LabelledGame, LearnError> {
-    let inst = scarce_game(size, seed)?;
+    let inst = scarce_game(size, skills, seed)?;
     let best = TeamOptimum {
         time_limit: Some(limit),
     }
     .solve(&inst)
     .map_err(|e| LearnError::InvalidConfig(e.to_string()))?;
+    let held = inst.skills_held(&best.assignment);
+    let s = inst.num_skills();
     let labels = inst
         .task_ids()
-        .map(|j| f32::from(u8::from(best.assignment.size(j) >= inst.min_team(j))))
+        .map(|j| {
+            let earns = best.assignment.size(j) >= inst.min_team(j)
+                && inst.skills_met(j, &held[j.index() * s..][..s]);
+            f32::from(u8::from(earns))
+        })
         .collect();
     Ok(LabelledGame {
         seed,

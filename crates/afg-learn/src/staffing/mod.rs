@@ -40,7 +40,7 @@ use afg_baseline::{AllocError, AllocStats, Allocation, Allocator, Plays, TeamOpt
 use afg_game::{Assignment, Instance};
 use serde::{Deserialize, Serialize};
 
-pub use features::{STAFF_FEATURES, STAFF_INPUTS, staffing_features};
+pub use features::{COUNT_FEATURES, STAFF_FEATURES, staffing_features, staffing_input_width};
 pub use labels::{LABELS_FILE_NAME, LabelledGame, scarce_game};
 pub use train::{LOG_FILE_NAME, StaffingEpoch, StaffingTrainConfig, StaffingTrainer};
 
@@ -56,7 +56,7 @@ pub struct StaffingModel {
     version: u32,
     /// The settings of the training run.
     pub training: StaffingTrainConfig,
-    /// The weights (an MLP of the price model's shape, [`STAFF_INPUTS`] wide).
+    /// The weights (an MLP of the price model's shape, [`staffing_input_width`] wide).
     pub mlp: PriceMlp,
 }
 
@@ -93,11 +93,12 @@ impl StaffingModel {
     pub fn load(path: &Path) -> Result<Self, LearnError> {
         let model: StaffingModel = read_model_file(path, "a staffing model")?;
         let hidden = model.training.network.hidden;
+        let width = model.training.input_width();
         check_model_file(
             path,
             (&model.format, model.version),
             (STAFFING_FORMAT, STAFFING_VERSION),
-            model.mlp.has_layers(STAFF_INPUTS, hidden).then_some(()).ok_or_else(|| {
+            model.mlp.has_layers(width, hidden).then_some(()).ok_or_else(|| {
                 format!("the weights are not those of a staffing network of width {hidden} (or not finite)")
             }),
         )?;
@@ -106,7 +107,9 @@ impl StaffingModel {
 }
 
 /// The staffing model as an [`Allocator`]: it plays the paper's game and team
-/// thresholds, and refuses skills (its features count robots, not skills).
+/// thresholds and, where it was trained on skill games (it reads the skill features),
+/// skills too; a model trained without skills refuses them (its features count robots,
+/// not skills).
 ///
 /// # Examples
 /// ```
@@ -119,7 +122,7 @@ impl StaffingModel {
 /// let inst = cfg.generate()?;
 /// // Untrained, every correction is 0: the hand-written knapsack over each task's
 /// // nearest robots.
-/// let policy = StaffingPolicy::untrained(PriceNetConfig { hidden: 8, seed: 0 });
+/// let policy = StaffingPolicy::untrained(PriceNetConfig { hidden: 8, seed: 0 }, false);
 /// let out = policy.allocate(&inst)?;
 /// assert!(inst.welfare(&out.assignment) <= TeamOptimum::default().solve(&inst)?.welfare + 1e-9);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
@@ -127,32 +130,42 @@ impl StaffingModel {
 #[derive(Clone, Debug)]
 pub struct StaffingPolicy {
     mlp: PriceMlp,
+    reads_skills: bool,
 }
 
 impl StaffingPolicy {
-    /// A policy with these weights.
+    /// A policy with these weights: a network reading the skill features
+    /// ([`staffing_input_width`]`(true)` inputs) plays skill games, one reading only
+    /// the robot counts does not.
     ///
     /// # Errors
     /// [`LearnError::InvalidConfig`] if they are not a staffing network's.
     pub fn new(mlp: PriceMlp) -> Result<Self, LearnError> {
-        if !mlp.has_layers(STAFF_INPUTS, mlp.hidden()) {
-            return Err(LearnError::InvalidConfig(
-                "the weights are not those of a staffing network".into(),
-            ));
-        }
-        Ok(StaffingPolicy { mlp })
+        let reads = |skills| mlp.has_layers(staffing_input_width(skills), mlp.hidden());
+        let reads_skills = match (reads(false), reads(true)) {
+            (true, _) => false,
+            (_, true) => true,
+            _ => {
+                return Err(LearnError::InvalidConfig(
+                    "the weights are not those of a staffing network".into(),
+                ));
+            }
+        };
+        Ok(StaffingPolicy { mlp, reads_skills })
     }
 
-    /// The untrained network of `config` (every correction 0).
-    pub fn untrained(config: crate::price::PriceNetConfig) -> Self {
+    /// The untrained network of `config` (every correction 0), reading the skill
+    /// features where `reads_skills`.
+    pub fn untrained(config: crate::price::PriceNetConfig, reads_skills: bool) -> Self {
         let net = crate::price::PriceNet::<crate::InferBackend>::seeded(
             &mut <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(config.seed),
-            STAFF_INPUTS,
+            staffing_input_width(reads_skills),
             config.hidden,
             &Default::default(),
         );
         StaffingPolicy {
             mlp: PriceMlp::from_burn(&net),
+            reads_skills,
         }
     }
 
@@ -161,23 +174,23 @@ impl StaffingPolicy {
     /// # Errors
     /// See [`StaffingModel::load`].
     pub fn load(path: &Path) -> Result<Self, LearnError> {
-        Ok(StaffingPolicy {
-            mlp: StaffingModel::load(path)?.mlp,
-        })
+        Self::new(StaffingModel::load(path)?.mlp)
     }
 
     /// What staffing each task of `instance` is worth, by the model (see the module
     /// docs).
     pub fn values(&self, instance: &Instance) -> Vec<f64> {
         let root = TeamOptimum::relax(instance);
-        values_of(&self.mlp, &staffing_features(instance, &root))
+        let read = staffing_input_width(self.reads_skills) / 2;
+        values_of(&self.mlp, &staffing_features(instance, &root), read)
     }
 }
 
 /// Each task's worth `(k_j / share) · (m_j + z_j)` from its features
-/// (`[M, STAFF_FEATURES]`) and the network's corrections.
-pub(crate) fn values_of(mlp: &PriceMlp, features: &[f32]) -> Vec<f64> {
-    let inputs = features::staffing_inputs(features);
+/// (`[M, STAFF_FEATURES]`) and the network's corrections, the network reading the
+/// first `read` features.
+pub(crate) fn values_of(mlp: &PriceMlp, features: &[f32], read: usize) -> Vec<f64> {
+    let inputs = features::staffing_inputs(features, read);
     let mut corrections = vec![0.0; features.len() / STAFF_FEATURES];
     mlp.forward_rows(&inputs, &mut corrections);
     features
@@ -299,7 +312,9 @@ impl Allocator for StaffingPolicy {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
-        afg_baseline::check_game(instance, self, Plays::Counts)?;
+        if !self.reads_skills {
+            afg_baseline::check_game(instance, self, Plays::Counts)?;
+        }
         let start = std::time::Instant::now();
         let (assignment, _) = staff_by_values(instance, &self.values(instance))?;
         Ok(Allocation {

@@ -12,7 +12,7 @@
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use afg_game::{GameSize, Instance};
+use afg_game::{GameSize, Instance, SkillDraw};
 use burn::optim::adaptor::OptimizerAdaptor;
 use burn::optim::{Adam, AdamConfig, GradientsParams, Optimizer};
 use burn::tensor::{Tensor, TensorData};
@@ -22,7 +22,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::features::{MARGIN, SIZE, STAFF_FEATURES, STAFF_INPUTS, staffing_inputs};
+use super::features::{MARGIN, SIZE, STAFF_FEATURES, staffing_input_width, staffing_inputs};
 use super::labels::{LABELS_FILE_NAME, LabelledGame, label, lines_of, read_labels, scarce_game};
 use super::{StaffingModel, knapsack, staff_by_values, values_of};
 use crate::price::{PriceMlp, PriceNet, PriceNetConfig};
@@ -39,6 +39,10 @@ pub struct StaffingTrainConfig {
     /// The sizes of the training games; each game's thresholds are uniform in
     /// [N/M, 2N/M] (scarce: they add up to about 1.5 N).
     pub sizes: Vec<GameSize>,
+    /// The games' skills (`None`: thresholds only). A model trained with skills reads
+    /// the skill features too and plays skill games; one trained without refuses them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub skills: Option<SkillDraw>,
     /// Training games per size.
     pub games: usize,
     /// Validation games per size (other seeds).
@@ -68,6 +72,7 @@ impl StaffingTrainConfig {
             sizes: [(100, 10), (300, 20), (600, 30)]
                 .map(|(robots, tasks)| GameSize { robots, tasks })
                 .to_vec(),
+            skills: None,
             games: 600,
             validation_games: 20,
             label_time_limit: 10.0,
@@ -100,7 +105,18 @@ impl StaffingTrainConfig {
         if !(self.label_time_limit.is_finite() && self.label_time_limit > 0.0) {
             return bad("the label time limit must be positive and finite");
         }
+        if let Some(d) = self.skills {
+            if d.count == 0 || !(0.0..=1.0).contains(&d.share) || d.requires.min > d.requires.max {
+                return bad("skills need S ≥ 1, a share in [0, 1] and requirements LO ≤ HI");
+            }
+        }
         Ok(())
+    }
+
+    /// The width of the network's input (it reads the skill features where the games
+    /// have skills).
+    pub fn input_width(&self) -> usize {
+        staffing_input_width(self.skills.is_some())
     }
 }
 
@@ -155,7 +171,7 @@ impl StaffingTrainer {
         Ok(StaffingTrainer {
             net: PriceNet::seeded(
                 &mut rng,
-                STAFF_INPUTS,
+                config.input_width(),
                 config.network.hidden,
                 &Default::default(),
             ),
@@ -200,6 +216,7 @@ impl StaffingTrainer {
         on_game: impl Fn(&LabelledGame) + Sync,
     ) -> Result<(), LearnError> {
         let limit = Duration::from_secs_f64(self.config.label_time_limit);
+        let skills = self.config.skills;
         let games = self.training_games();
         let mut done: Vec<LabelledGame> = match cache {
             Some(path) if path.exists() => read_labels(path)?,
@@ -225,7 +242,7 @@ impl StaffingTrainer {
             .par_iter()
             .enumerate()
             .map(|(at, &(size, seed))| {
-                let game = label(size, seed, limit)?;
+                let game = label(size, skills, seed, limit)?;
                 if let Some((path, text)) = file.lock().expect("no panics while held").as_mut() {
                     text.push_str(&serde_json::to_string(&game).expect("a game serialises"));
                     text.push('\n');
@@ -252,7 +269,12 @@ impl StaffingTrainer {
             .collect();
         self.validation = validation
             .par_iter()
-            .map(|&(size, seed)| Ok((scarce_game(size, seed)?, label(size, seed, limit)?)))
+            .map(|&(size, seed)| {
+                Ok((
+                    scarce_game(size, skills, seed)?,
+                    label(size, skills, seed, limit)?,
+                ))
+            })
             .collect::<Result<_, LearnError>>()?;
         Ok(())
     }
@@ -291,9 +313,10 @@ impl StaffingTrainer {
         }
         self.epoch += 1;
         let mlp = PriceMlp::from_burn(&self.net);
+        let read = self.config.input_width() / 2;
         let (mut agree, mut tasks, mut percent) = (0usize, 0usize, 0.0);
         for (inst, game) in &self.validation {
-            let values = values_of(&mlp, &game.features);
+            let values = values_of(&mlp, &game.features, read);
             let chosen = knapsack(&game.thresholds, &values, game.size.robots);
             agree += chosen
                 .iter()
@@ -322,13 +345,13 @@ impl StaffingTrainer {
     /// per game.
     fn step(&mut self, batch: &[usize], lr: f64, step: u64) -> Result<f64, LearnError> {
         let device = Default::default();
+        let width = self.config.input_width();
         let mut x = Vec::new();
         for &g in batch {
-            x.extend(staffing_inputs(&self.training[g].features));
+            x.extend(staffing_inputs(&self.training[g].features, width / 2));
         }
-        let rows = x.len() / STAFF_INPUTS;
-        let x =
-            Tensor::<TrainBackend, 2>::from_data(TensorData::new(x, [rows, STAFF_INPUTS]), &device);
+        let rows = x.len() / width;
+        let x = Tensor::<TrainBackend, 2>::from_data(TensorData::new(x, [rows, width]), &device);
         let z = self.net.forward(x);
         let corrections = crate::dense::to_vec(z.clone());
         // Per row: the worth's slope k_j / share times (ŷ_j − y*_j), and the constant
