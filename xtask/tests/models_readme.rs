@@ -40,10 +40,11 @@ fn is_change(word: &str) -> bool {
 }
 
 /// Whether a run's directory name reads `{model}[_{change}…]_n{N}`, or
-/// `staffing_teams[_{change}…]` (trained on several sizes at once).
+/// `staffing_teams[_{change}…]` or `staffing_skills[_{change}…]` (trained on several
+/// sizes at once).
 fn follows_the_grammar(name: &str) -> bool {
     let words: Vec<&str> = name.split('_').collect();
-    if let ["staffing", "teams", changes @ ..] = words.as_slice() {
+    if let ["staffing", "teams" | "skills", changes @ ..] = words.as_slice() {
         return changes.iter().all(|w| is_change(w));
     }
     let changes = match words.as_slice() {
@@ -70,6 +71,7 @@ fn the_grammar_takes_the_readme_names_and_refuses_the_old_ones() {
         "afgnet_ddqn_optshape_warm60_n100",
         "staffing_teams",
         "staffing_teams_seed1",
+        "staffing_skills",
     ] {
         assert!(follows_the_grammar(name), "{name}");
     }
@@ -83,6 +85,7 @@ fn the_grammar_takes_the_readme_names_and_refuses_the_old_ones() {
         "gnn_ddqn_n60",
         "staffing_n60",
         "staffing_teams_big",
+        "staffing_both",
     ] {
         assert!(!follows_the_grammar(name), "{name}");
     }

@@ -211,6 +211,33 @@ fn afg_mission_runs_and_refuses_a_broken_mission_in_one_line() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// Skill knobs without `--skills`, or a malformed `--requires`, are refused before
+/// anything is written.
+#[test]
+fn afg_train_staffing_refuses_skill_knobs_without_skills() {
+    let dir = std::env::temp_dir().join(format!("afg-staffing-knobs-{}", std::process::id()));
+    let out_dir = dir.to_str().unwrap();
+    for (flags, says) in [
+        (
+            &["--skill-share", "0.2"][..],
+            "--skill-share and --requires need --skills S",
+        ),
+        (
+            &["--skills", "2", "--requires", "1,2,3"][..],
+            "--requires takes two numbers, LO,HI",
+        ),
+        (
+            &["--skills", "2", "--requires", "3,1"][..],
+            "requirements LO ≤ HI",
+        ),
+    ] {
+        let out = afg(&[&["train-staffing", "--out", out_dir][..], flags].concat());
+        assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+        assert!(stderr(&out).contains(says), "{}", stderr(&out));
+        assert!(!dir.exists(), "{flags:?} wrote {}", dir.display());
+    }
+}
+
 #[test]
 fn afg_train_staffing_keeps_an_existing_model_unless_forced() {
     let dir = std::env::temp_dir().join(format!("afg-staffing-kept-{}", std::process::id()));

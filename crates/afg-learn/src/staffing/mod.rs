@@ -29,6 +29,14 @@
 //! neural diving (Nair et al. 2020) with an exact sub-solver on each side: the network
 //! fixes the integer decisions through a knapsack, the flow does the rest. No repair
 //! follows.
+//!
+//! **Skills.** A model trained on skill games (`StaffingTrainConfig::skills`) reads
+//! three more features per task — whether its nearest robots hold what it requires,
+//! how much further the holders are, how scarce the skills are over all tasks — and
+//! is labelled with the tasks that *earn* in the optimum (team complete, skills held).
+//! Its placement is [`TeamOptimum::staff`], which then also brings each staffed team
+//! the skills it lacks (the exact solver's skill branching followed down one side), so
+//! it is no longer exact there. A model trained without skills refuses skill games.
 
 mod features;
 mod labels;
