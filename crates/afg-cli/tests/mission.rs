@@ -240,7 +240,8 @@ fn team_knobs_out_of_range_are_refused_and_nothing_is_written() {
 
 /// The staffing model decides team missions from its run directory: on waves of tasks
 /// that need teams it finishes what the exact solver finishes, with at least 95 % of
-/// its reward; a mission whose tasks need skills is refused in one line.
+/// its reward; a mission whose tasks need skills is refused in one line, and played by
+/// the model trained on skill games as well as by the exact solver.
 #[test]
 fn the_staffing_model_decides_team_missions() {
     let (dir, _) = mission_dir("staffing");
@@ -292,6 +293,24 @@ fn the_staffing_model_decides_team_missions() {
         &afg(&["mission", "run", "--mission", path, "--model", model]),
         "staffing does not play games with skill requirements",
     );
+    // The model trained on skill games plays it, as well as the exact solver.
+    let skills = root.join("models/ours/staffing_skills");
+    let out = afg(&[
+        "mission",
+        "compare",
+        "--mission",
+        path,
+        "--methods",
+        "opt",
+        "--model",
+        skills.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let rows: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let metric = |row: usize, key: &str| rows[row]["missions"][0][key].as_f64().unwrap();
+    assert_eq!(metric(1, "tasks_done"), metric(0, "tasks_done"));
+    assert!(metric(1, "reward_done") >= 0.95 * metric(0, "reward_done"));
     std::fs::remove_dir_all(dir).unwrap();
 }
 

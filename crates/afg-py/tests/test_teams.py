@@ -4,6 +4,7 @@ knobs, the exact optimum with its bound and gap, and allocators that refuse."""
 from __future__ import annotations
 
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -168,3 +169,13 @@ def test_the_gym_environment_observes_teams():
     other = afg.generate(8, 3, 1, min_team=(2, 3), skills=1)
     with pytest.raises(afg.InvalidInputError, match="the instance has 1 skills, the environment's spaces 2"):
         env.reset(options={"instance": other})
+
+
+def test_the_staffing_models_play_their_games_or_refuse() -> None:
+    root = Path(__file__).resolve().parents[3]
+    inst = afg.generate(100, 10, seed=5, min_team=(10, 20), skills=2, skill_share=0.2, requires=(1, 3))
+    exact = afg.solve(inst, method="opt")
+    learned = afg.solve(inst, model=str(root / "models" / "ours" / "staffing_skills"))
+    assert 0.9 * exact.welfare <= learned.welfare <= exact.welfare + 1e-9
+    with pytest.raises(afg.InvalidInputError, match="trained without skills"):
+        afg.solve(inst, model=str(root / "models" / "ours" / "staffing_teams"))

@@ -44,7 +44,7 @@ mod train;
 
 use std::path::Path;
 
-use afg_baseline::{AllocError, AllocStats, Allocation, Allocator, Plays, TeamOptimum};
+use afg_baseline::{AllocError, AllocStats, Allocation, Allocator, TeamOptimum};
 use afg_game::{Assignment, Instance};
 use serde::{Deserialize, Serialize};
 
@@ -320,8 +320,14 @@ impl Allocator for StaffingPolicy {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
-        if !self.reads_skills {
-            afg_baseline::check_game(instance, self, Plays::Counts)?;
+        if !self.reads_skills && instance.has_skill_rules() {
+            return Err(AllocError::TeamsNotSupported {
+                method: self.name(),
+                rules: "skill requirements",
+                reason: "this model was trained without skills, and its features count robots, not \
+                         the skills they hold (a model trained with `afg train-staffing --skills`, \
+                         such as models/ours/staffing_skills, plays them)",
+            });
         }
         let start = std::time::Instant::now();
         let (assignment, _) = staff_by_values(instance, &self.values(instance))?;

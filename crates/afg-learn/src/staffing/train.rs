@@ -105,10 +105,10 @@ impl StaffingTrainConfig {
         if !(self.label_time_limit.is_finite() && self.label_time_limit > 0.0) {
             return bad("the label time limit must be positive and finite");
         }
-        if let Some(d) = self.skills {
-            if d.count == 0 || !(0.0..=1.0).contains(&d.share) || d.requires.min > d.requires.max {
-                return bad("skills need S ≥ 1, a share in [0, 1] and requirements LO ≤ HI");
-            }
+        if let Some(d) = self.skills
+            && (d.count == 0 || !(0.0..=1.0).contains(&d.share) || d.requires.min > d.requires.max)
+        {
+            return bad("skills need S ≥ 1, a share in [0, 1] and requirements LO ≤ HI");
         }
         Ok(())
     }
