@@ -173,9 +173,10 @@ def test_the_gym_environment_observes_teams():
 
 def test_the_staffing_models_play_their_games_or_refuse() -> None:
     root = Path(__file__).resolve().parents[3]
-    inst = afg.generate(100, 10, seed=5, min_team=(10, 20), skills=2, skill_share=0.2, requires=(1, 3))
-    exact = afg.solve(inst, method="opt")
-    learned = afg.solve(inst, model=str(root / "models" / "ours" / "staffing_skills"))
-    assert 0.9 * exact.welfare <= learned.welfare <= exact.welfare + 1e-9
+    for seed in (1, 2):
+        inst = afg.generate(100, 10, seed=seed, min_team=(10, 20), skills=2, skill_share=0.2, requires=(1, 3))
+        exact = afg.solve(inst, method="opt")
+        learned = afg.solve(inst, model=str(root / "models" / "ours" / "staffing_skills"))
+        assert 0.95 * exact.welfare <= learned.welfare <= exact.welfare + 1e-9
     with pytest.raises(afg.InvalidInputError, match="trained without skills"):
         afg.solve(inst, model=str(root / "models" / "ours" / "staffing_teams"))

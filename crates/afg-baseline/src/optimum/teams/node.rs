@@ -411,16 +411,29 @@ impl<'a> Search<'a> {
     /// Brings the skills that the earning tasks of `node` lack, robot by robot: each
     /// step fixes the robot that the skill branching names (the cheapest one free to
     /// bring a missing skill to the earning task with the most value at stake) at that
-    /// task, or keeps it out where that leaves no assignment, and re-solves, until no
-    /// earning task lacks a skill or no robot can bring one. Every assignment met is
-    /// offered to the best found. Nothing happens in a game without skills.
+    /// task, or keeps it out where that leaves no assignment, or, where neither does
+    /// (the robots that hold the skill are fixed at other tasks), gives the task up
+    /// (unstaffed, its robots free again), and re-solves, until no earning task lacks a
+    /// skill or no robot can bring one. Every assignment met is offered to the best
+    /// found. Nothing happens in a game without skills.
     pub(super) fn skill_dive(&mut self, node: Node) {
         let mut current = node;
-        while let Some(branch @ Branch::Pair(..)) = self.skill_branch(&current) {
+        while let Some(branch @ Branch::Pair(_, task)) = self.skill_branch(&current) {
             let [(join, with), (keep_out, without)] = self.children(&current, branch);
+            let give_up = || {
+                let mut decisions = current.decisions.clone();
+                decisions[task.index()] = Decision::Unstaffed;
+                let mut pairs = current.pairs.clone();
+                pairs.retain(|&(_, j, _)| j != task);
+                (decisions, pairs)
+            };
             let next = self
                 .node(join, with, Some(&current))
-                .or_else(|| self.node(keep_out, without, Some(&current)));
+                .or_else(|| self.node(keep_out, without, Some(&current)))
+                .or_else(|| {
+                    let (decisions, pairs) = give_up();
+                    self.node(decisions, pairs, Some(&current))
+                });
             match next {
                 Some(next) => current = next,
                 None => return,
