@@ -1,7 +1,8 @@
 //! The auction on games whose tasks need teams: the robots staff the tasks a shared
 //! rule picks (value per member, first fit in the robots), fill every team, and place
 //! themselves as well as the exact placement of that staffing, within 2N·ε; a task
-//! done in a mission frees its robots without breaking the other teams.
+//! done in a mission frees its robots without breaking the other teams; on skill
+//! games a team's skill places go to robots that hold the skill.
 
 mod common;
 
@@ -167,7 +168,7 @@ fn a_task_done_frees_its_robots_for_the_next_team_and_keeps_the_others() {
 }
 
 #[test]
-fn the_team_auction_repeats_per_seed_and_refuses_skills() {
+fn the_team_auction_repeats_per_seed() {
     let inst = scarce(30, 4, 5);
     let network = Network {
         loss: 0.3,
@@ -181,20 +182,78 @@ fn the_team_auction_repeats_per_seed_and_refuses_skills() {
         (r.rounds, r.messages, r.welfare.to_bits(), r.assignment)
     };
     assert_eq!(run(3), run(3));
-    let skilled = inst
-        .clone()
-        .with_teams(
-            inst.task_ids().map(|j| inst.min_team(j)).collect(),
-            &vec![vec![1]; inst.num_robots()],
-            &vec![vec![1]; inst.num_tasks()],
-        )
-        .unwrap();
-    let err = Swarm::auction(EPSILON, Network::default(), 0)
-        .run(&skilled)
-        .unwrap_err();
-    assert!(
-        err.to_string()
-            .starts_with("auction does not play games with skill requirements"),
-        "{err}"
-    );
+}
+
+#[test]
+fn a_skill_place_goes_to_the_robot_that_holds_the_skill() {
+    // Task 0 at the origin needs two robots and one of skill 0, which only robot 2
+    // holds; the spare task at (0, 1) pays nothing. Robots at 0.1, 0.2 and 0.5 on the
+    // x axis: robot 2 takes the skill place, robot 0 the other (robot 1 is 0.085
+    // dearer there, far more than 2Nε), robot 1 the spare task.
+    let task = |y: f64, reward: f64, capacity| Task {
+        position: Point::new(0.0, y),
+        reward,
+        eps: 2.0,
+        capacity,
+    };
+    let robots = [0.1, 0.2, 0.5].map(|x| Point::new(x, 0.0)).to_vec();
+    let inst = Instance::new(
+        robots,
+        vec![task(0.0, 10.0, Some(2)), task(1.0, 0.0, None)],
+        1.0,
+    )
+    .unwrap()
+    .with_teams(vec![2, 1], &[vec![0], vec![0], vec![1]], &[vec![1], vec![]])
+    .unwrap();
+    for (name, network) in networks() {
+        let r = Swarm::auction(EPSILON, network, 1).run(&inst).unwrap();
+        let tasks = r.assignment.expect("converged").tasks().to_vec();
+        assert_eq!(
+            tasks,
+            [Some(TaskId(0)), Some(TaskId(1)), Some(TaskId(0))],
+            "{name}"
+        );
+        let by_hand = 10.0 * 3f64.log2() - 0.1 - 0.5 - (0.2f64.powi(2) + 1.0).sqrt();
+        assert!((r.welfare - by_hand).abs() < 1e-9, "{name}");
+    }
+}
+
+/// On skill games with enough holders, every team the auction forms is complete and
+/// holds its skills (its skill places went to holders), over every network.
+#[test]
+fn the_auction_forms_teams_that_hold_their_skills() {
+    let mut earning = 0;
+    for (idx, (n, m)) in [(20, 4), (30, 5), (40, 6)].into_iter().enumerate() {
+        let plain = scarce(n, m, 60 + idx as u64);
+        let skills: Vec<Vec<u32>> = (0..n)
+            .map(|i| vec![u32::from(i % 2 == 0), u32::from(i % 3 == 0)])
+            .collect();
+        let requires: Vec<Vec<u32>> = (0..m).map(|j| vec![1 + (j % 2) as u32, 1]).collect();
+        let inst = plain
+            .clone()
+            .with_teams(
+                plain.task_ids().map(|j| plain.min_team(j)).collect(),
+                &skills,
+                &requires,
+            )
+            .unwrap();
+        let best = TeamOptimum::default().solve(&inst).unwrap().welfare;
+        for (name, network) in networks() {
+            let r = Swarm::auction(EPSILON, network, 2).run(&inst).unwrap();
+            let a = r.assignment.expect("converged");
+            let held = inst.skills_held(&a);
+            for j in inst.task_ids().filter(|&j| a.size(j) > 0) {
+                let why = format!("{name}, N = {n}, task {j:?}");
+                assert!(a.size(j) >= inst.min_team(j), "{why}");
+                assert!(inst.skills_met(j, &held[j.index() * 2..][..2]), "{why}");
+                earning += 1;
+            }
+            assert!(
+                r.welfare <= best + 1e-9 && r.welfare > 0.5 * best,
+                "{name}: {} vs {best}",
+                r.welfare
+            );
+        }
+    }
+    assert!(earning > 20, "{earning}");
 }

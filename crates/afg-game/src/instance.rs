@@ -312,6 +312,45 @@ impl Instance {
         Ok(instance)
     }
 
+    /// The same game with some of its own robots, `kept` (in that order), now at
+    /// `points` (survivors, robots that have moved): their skills, the tasks'
+    /// thresholds and requirements kept. The generator record is not kept.
+    ///
+    /// # Errors
+    /// As [`Instance::new`] for the new positions, and [`GameError::TeamListLength`]
+    /// where `kept` and `points` differ in length.
+    ///
+    /// # Panics
+    /// If `kept` names a robot not in the game.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::{Instance, Point, RobotId, Task};
+    /// let task = Task { position: Point::new(0.0, 0.0), reward: 1.0, eps: 2.0, capacity: None };
+    /// let robots = vec![Point::new(1.0, 0.0), Point::new(2.0, 0.0)];
+    /// let inst = Instance::new(robots, vec![task], 1.0)?.with_teams(vec![1], &[vec![0], vec![1]], &[vec![1]])?;
+    /// let moved = inst.with_robots_at(&[RobotId(1)], vec![Point::new(0.5, 0.0)])?;
+    /// assert_eq!((moved.num_robots(), moved.skills(RobotId(0))), (1, &[1][..]));
+    /// # Ok::<(), afg_game::GameError>(())
+    /// ```
+    pub fn with_robots_at(&self, kept: &[RobotId], points: Vec<Point>) -> Result<Self, GameError> {
+        if kept.len() != points.len() {
+            return Err(GameError::TeamListLength {
+                what: "the robots kept",
+                len: kept.len(),
+                expected: points.len(),
+            });
+        }
+        let instance = Self::build(points, self.tasks.clone(), self.beta, self.allow_void)?;
+        if !self.has_teams() {
+            return Ok(instance);
+        }
+        let skills: Vec<Vec<u32>> = kept.iter().map(|&i| self.skills(i).to_vec()).collect();
+        let requires: Vec<Vec<u32>> = self.task_ids().map(|j| self.requires(j).to_vec()).collect();
+        let min_team = self.task_ids().map(|j| self.min_team(j)).collect();
+        instance.with_teams(min_team, &skills, &requires)
+    }
+
     /// Records the generator parameters that produced this instance.
     pub fn with_generator(mut self, generator: GeneratorConfig) -> Self {
         self.generator = Some(generator);

@@ -367,7 +367,8 @@ fn survivors_game(
     tasks: &[Option<TaskId>],
 ) -> Result<(Instance, Assignment), AllocError> {
     let points: Vec<Point> = survivors.iter().map(|&i| instance.robots()[i]).collect();
-    let sub = instance.with_robots(points)?;
+    let kept: Vec<RobotId> = survivors.iter().map(|&i| RobotId(i as u32)).collect();
+    let sub = instance.with_robots_at(&kept, points)?;
     let kept: Vec<Option<TaskId>> = survivors.iter().map(|&i| tasks[i]).collect();
     Ok((sub, partition_of(&kept, instance.num_tasks())))
 }
@@ -382,10 +383,10 @@ pub(crate) fn partition_of(tasks: &[Option<TaskId>], m: usize) -> Assignment {
     assignment
 }
 
-/// Refuses a game with skill requirements, which the swarm does not play: GRAPE's
+/// Refuses a game with skill requirements for GRAPE, which does not play it: its
 /// robots judge a move by the coalitions' sizes they hear of (the threshold game's
-/// values, as GRAPE DA does), and the auction's places are counted the same way, not
-/// by the skills the coalitions hold.
+/// values, as GRAPE DA does), not by the skills the coalitions hold. The auction plays
+/// it (skill places, [`auction`]'s teams).
 fn refuse_teams(method: SwarmMethod, instance: &Instance) -> Result<(), AllocError> {
     if !instance.has_skill_rules() {
         return Ok(());
@@ -395,10 +396,7 @@ fn refuse_teams(method: SwarmMethod, instance: &Instance) -> Result<(), AllocErr
             "grape",
             "its robots hear of a coalition's size, not of the skills it holds",
         ),
-        SwarmMethod::Auction { .. } => (
-            "auction",
-            "its places count a team's robots, not the skills they hold",
-        ),
+        SwarmMethod::Auction { .. } => return Ok(()),
     };
     Err(AllocError::TeamsNotSupported {
         method: method.into(),

@@ -45,7 +45,8 @@ pub(super) fn move_swarm<M>(
         .as_mut()
         .map_or_else(Vec::new, |news| news.sense(&points));
     let saw = saw.into_iter().filter(|&a| radio.alive(a)).collect();
-    *instance = Cow::Owned(instance.with_robots(points)?);
+    let robots: Vec<afg_game::RobotId> = instance.robot_ids().collect();
+    *instance = Cow::Owned(instance.with_robots_at(&robots, points)?);
     Ok((relinked, saw))
 }
 

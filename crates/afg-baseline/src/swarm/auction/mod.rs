@@ -284,12 +284,22 @@ impl<'a> Auction<'a> {
             .map(|s| s.staffed(self.living_at[table.epoch as usize], known));
         let biddable =
             |j: TaskId| known(j.index()) && staffed.as_ref().is_none_or(|s| s[j.index()]);
+        let eligible = |j: usize, k: usize| {
+            (self.staffing.as_ref()).is_none_or(|s| s.eligible(a as usize, j, k))
+        };
         for j in self.instance.task_ids().filter(|&j| biddable(j)) {
             let cost = self.instance.cost(robot, j);
             let values = &self.values[j.index()];
             let places = &table.tasks[j.index()];
-            let first_open = (places.len() < values.len()).then_some(unbid);
-            for (k, r) in places.iter().copied().chain(first_open).enumerate() {
+            let open = (self.staffing.as_ref()).map_or(places.len(), |s| {
+                s.first_eligible(a as usize, j.index(), places.len())
+            });
+            let first_open = (open < values.len()).then_some((open, unbid));
+            let known = places.iter().copied().enumerate();
+            for (k, r) in known
+                .chain(first_open)
+                .filter(|&(k, _)| eligible(j.index(), k))
+            {
                 options.push((values[k] - r.price - cost, (j.0, k as u32), r.price));
             }
         }
