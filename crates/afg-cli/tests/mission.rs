@@ -230,8 +230,9 @@ fn team_knobs_out_of_range_are_refused_and_nothing_is_written() {
     let noted = run(&["--method", "auction"]);
     assert_eq!(noted.status.code(), Some(0), "{}", stderr(&noted));
     assert!(
-        stderr(&noted)
-            .contains("note: the auction on a mission whose tasks need teams wants --epsilon 0.01"),
+        stderr(&noted).contains(
+            "note: the auction on a mission whose tasks need teams or skills wants --epsilon 0.01"
+        ),
         "{}",
         stderr(&noted)
     );

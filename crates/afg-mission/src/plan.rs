@@ -146,8 +146,8 @@ pub struct Recording {
 
 impl MissionPlan {
     /// Advice on running this plan on `mission` that is not an error: the auction at
-    /// the default ε on a mission whose tasks need teams fills the teams slowly (its
-    /// robots beyond the teams bid in steps of ε).
+    /// the default ε on a mission whose tasks need teams or skills fills the teams
+    /// slowly (its robots beyond the teams bid in steps of ε).
     ///
     /// # Examples
     /// ```
@@ -165,10 +165,10 @@ impl MissionPlan {
         let default = SwarmKnobs::default().epsilon;
         (self.method == MissionMethod::Auction
             && self.swarm.epsilon == default
-            && mission.tasks.iter().any(|t| t.min_team > 1))
+            && (mission.tasks.iter()).any(|t| t.min_team > 1 || t.requires.iter().any(|&r| r > 0)))
         .then(|| {
             format!(
-                "the auction on a mission whose tasks need teams wants --epsilon 0.01 or more \
+                "the auction on a mission whose tasks need teams or skills wants --epsilon 0.01 or more \
                  (epsilon=0.01 in Python; at the default {default} its robots fill the teams slowly: docs/teams.md)"
             )
         })
