@@ -139,16 +139,18 @@ pub struct SwarmArgs {
     /// GRAPE's preference: selfish (GRAPE's own) or balanced.
     #[arg(long, value_parser = crate::choice::<Preference>(), default_value = SwarmKnobs::default().preference.name())]
     preference: Preference,
-    /// The auction's least price increment ε (team missions want 0.01–0.1: docs/teams.md).
-    #[arg(long, default_value_t = SwarmKnobs::default().epsilon)]
-    epsilon: f64,
+    /// The auction's least price increment ε [default: 0.001, or 0.01 where a
+    /// mission's tasks need teams or skills: docs/teams.md].
+    #[arg(long)]
+    epsilon: Option<f64>,
     #[command(flatten)]
     radio: RadioArgs,
 }
 
 impl LoopArgs {
-    /// The plan of `method` with these options.
-    fn plan(&self, method: MissionMethod) -> Result<MissionPlan> {
+    /// The plan of `method` with these options, for `missions` (the auction's default
+    /// ε depends on them).
+    fn plan(&self, method: MissionMethod, missions: &[Mission]) -> Result<MissionPlan> {
         let latency = Latency::from_knobs(self.latency, self.latency_factor)?;
         let knobs = &self.swarm;
         Ok(MissionPlan {
@@ -157,7 +159,8 @@ impl LoopArgs {
             seed: self.seed,
             swarm: SwarmKnobs {
                 preference: knobs.preference,
-                epsilon: knobs.epsilon,
+                epsilon: (knobs.epsilon)
+                    .unwrap_or_else(|| SwarmKnobs::default_epsilon(method, missions)),
                 radio: knobs.radio.knobs(knobs.loss),
                 rounds_per_time: knobs.rounds_per_time,
                 sensing: knobs.sensing,
@@ -300,7 +303,7 @@ fn run_one(args: &RunArgs) -> Result<()> {
     ];
     crate::refuse_overwriting_inputs(&outputs, &inputs)?;
     let mission = read_mission(&args.mission)?;
-    let plan = args.looping.plan(args.method)?;
+    let plan = (args.looping).plan(args.method, std::slice::from_ref(&mission))?;
     note(std::slice::from_ref(&plan), std::slice::from_ref(&mission));
     let planner = planner(&plan, args.model.as_deref())?;
     let mut recording = Recording {
@@ -365,7 +368,7 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
         .map(|p| read_mission(p))
         .collect::<Result<Vec<_>>>()?;
     let plans = (args.methods.iter())
-        .map(|&m| args.looping.plan(m))
+        .map(|&m| args.looping.plan(m, &missions))
         .collect::<Result<Vec<_>>>()?;
     note(&plans, &missions);
     let mut planners: Vec<Planner> = plans
@@ -377,7 +380,7 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
         .iter()
         .map(|dir| {
             Ok(planner(
-                &args.looping.plan(MissionMethod::default())?,
+                &args.looping.plan(MissionMethod::default(), &missions)?,
                 Some(dir),
             )?)
         })

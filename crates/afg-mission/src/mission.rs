@@ -128,6 +128,11 @@ pub struct Mission {
 }
 
 impl Mission {
+    /// Whether any task needs a team (a threshold above 1) or a skill.
+    pub fn needs_teams(&self) -> bool {
+        (self.tasks.iter()).any(|t| t.min_team > 1 || t.requires.iter().any(|&r| r > 0))
+    }
+
     /// A checked mission.
     ///
     /// # Errors

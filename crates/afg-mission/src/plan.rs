@@ -146,8 +146,9 @@ pub struct Recording {
 
 impl MissionPlan {
     /// Advice on running this plan on `mission` that is not an error: the auction at
-    /// the default ε on a mission whose tasks need teams or skills fills the teams
-    /// slowly (its robots beyond the teams bid in steps of ε).
+    /// ε = 0.001 (the paper's game's default; the front ends give team missions 0.01,
+    /// [`SwarmKnobs::default_epsilon`]) on a mission whose tasks need teams or skills
+    /// fills the teams slowly (its robots beyond the teams bid in steps of ε).
     ///
     /// # Examples
     /// ```
@@ -165,11 +166,11 @@ impl MissionPlan {
         let default = SwarmKnobs::default().epsilon;
         (self.method == MissionMethod::Auction
             && self.swarm.epsilon == default
-            && (mission.tasks.iter()).any(|t| t.min_team > 1 || t.requires.iter().any(|&r| r > 0)))
+            && mission.needs_teams())
         .then(|| {
             format!(
                 "the auction on a mission whose tasks need teams or skills wants --epsilon 0.01 or more \
-                 (epsilon=0.01 in Python; at the default {default} its robots fill the teams slowly: docs/teams.md)"
+                 (epsilon=0.01 in Python, the default there; at {default} its robots fill the teams slowly: docs/teams.md)"
             )
         })
     }
@@ -309,8 +310,8 @@ impl MissionPlan {
     }
 }
 
-/// A decentralised method's name in tables, with its radio: `grape (swarm, r 0.120,
-/// loss 30 %)`.
+/// A decentralised method's name in tables, with its radio (and the auction's ε where
+/// it is not 0.001): `grape (swarm, r 0.120, loss 30 %)`.
 fn swarm_name(method: SwarmMethod, knobs: &SwarmKnobs) -> String {
     let mut name = match method {
         SwarmMethod::Grape { .. } => "grape (swarm".to_string(),
@@ -326,6 +327,11 @@ fn swarm_name(method: SwarmMethod, knobs: &SwarmKnobs) -> String {
     }
     if let Some(range) = knobs.sensing {
         let _ = write!(name, ", sensing {range}");
+    }
+    if matches!(method, SwarmMethod::Auction { .. })
+        && knobs.epsilon != SwarmKnobs::default().epsilon
+    {
+        let _ = write!(name, ", ε {}", knobs.epsilon);
     }
     name.push(')');
     name

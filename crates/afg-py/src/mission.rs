@@ -341,7 +341,8 @@ fn object_dict<'py>(py: Python<'py>, value: &serde_json::Value) -> PyResult<Boun
 /// awake in a round with chance `activation`, and tasks seen within `sensing` (else
 /// heard of at once); its metrics gain a "swarm" dict (rounds, messages, bytes,
 /// response times). A swarm knob left at None takes its default
-/// (`afg.mission_defaults()`); one set with a central method is refused.
+/// (`afg.mission_defaults()`; `epsilon` is 0.01 instead where the mission's tasks
+/// need teams or skills); one set with a central method is refused.
 #[pyfunction]
 #[pyo3(signature = (mission, method=None, model=None, warm=false, replan=None, latency=None, latency_factor=None, commit=false, hysteresis=None, time_limit=None, seed=0, trace=false, rounds_per_time=None, loss=None, sensing=None, preference=None, epsilon=None, radius=None, knn=None, burst=None, delay=None, activation=None))]
 // Python's keyword arguments, one per option.
@@ -387,13 +388,16 @@ pub(crate) fn run_mission(
         delay: delay.unwrap_or(defaults.radio.delay),
         activation: activation.unwrap_or(defaults.radio.activation),
     };
+    let method = MissionMethod::from_str(method.unwrap_or("opt")).map_err(crate::bad_input)?;
     let plan = MissionPlan {
-        method: MissionMethod::from_str(method.unwrap_or("opt")).map_err(crate::bad_input)?,
+        method,
         warm,
         seed,
         swarm: SwarmKnobs {
             preference: preference.map_or(Ok(defaults.preference), crate::named)?,
-            epsilon: epsilon.unwrap_or(defaults.epsilon),
+            epsilon: epsilon.unwrap_or_else(|| {
+                SwarmKnobs::default_epsilon(method, std::slice::from_ref(&mission.inner))
+            }),
             radio,
             rounds_per_time: rounds_per_time.unwrap_or(defaults.rounds_per_time),
             sensing,

@@ -5,6 +5,8 @@ use afg_baseline::Network;
 use afg_game::Preference;
 use afg_graph::GraphKind;
 
+use crate::{Mission, MissionMethod};
+
 /// The radio's knobs as the front ends spell them (`--radius`, `--knn`, `--loss`,
 /// `--burst`, `--delay`, `--activation`); [`RadioKnobs::network`] is the [`Network`] they
 /// give. The defaults are [`Network::default`]'s: each robot linked to its 10 nearest,
@@ -131,6 +133,36 @@ impl Default for SwarmKnobs {
 }
 
 impl SwarmKnobs {
+    /// The ε where none is given, for `method` on `missions`: for the auction, 0.01
+    /// where a task of any of them needs a team or a skill; the default 0.001
+    /// otherwise (a method that does not use ε refuses any other). At 0.001 the
+    /// auction's robots beyond the teams bid the places left up in steps too small to
+    /// settle before a team mission's horizon (docs/teams.md measures it).
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_mission::{MissionConfig, MissionMethod, Preset, SwarmKnobs};
+    /// let mut config = MissionConfig::new(Preset::Static, 8, 2, 1);
+    /// let plain = config.generate()?;
+    /// config.min_team = Some(afg_game::CountRange { min: 2, max: 3 });
+    /// let teams = config.generate()?;
+    /// let auction = MissionMethod::Auction;
+    /// assert_eq!(SwarmKnobs::default_epsilon(auction, &[plain.clone()]), 1e-3);
+    /// assert_eq!(SwarmKnobs::default_epsilon(auction, &[plain, teams.clone()]), 0.01);
+    /// assert_eq!(SwarmKnobs::default_epsilon(MissionMethod::Grape, &[teams]), 1e-3);
+    /// # Ok::<(), afg_mission::MissionError>(())
+    /// ```
+    pub fn default_epsilon(method: MissionMethod, missions: &[Mission]) -> f64 {
+        if method == MissionMethod::Auction && missions.iter().any(Mission::needs_teams) {
+            Self::TEAM_EPSILON
+        } else {
+            Self::default().epsilon
+        }
+    }
+
+    /// The auction's ε on missions whose tasks need teams or skills.
+    pub const TEAM_EPSILON: f64 = 0.01;
+
     /// The knobs set away from their defaults, by their command-line names.
     pub(super) fn changed(&self) -> Vec<&'static str> {
         let default = SwarmKnobs::default();
