@@ -278,9 +278,11 @@ pub fn check_game(
 /// "team thresholds"), for [`AllocError::TeamsNotSupported`]'s message.
 fn team_players(rules: &str) -> &'static str {
     if rules == "skill requirements" {
-        "`nearest`, `random` and `blind`"
+        "`nearest`, `random`, `blind`, the auction over the radio and the staffing model \
+         trained on skills (models/ours/staffing_skills)"
     } else {
-        "`greedy`, the DA family, `nearest`, `random` and `blind`"
+        "`greedy`, the DA family, `nearest`, `random`, `blind`, the auction over the radio and \
+         the staffing models"
     }
 }
 
