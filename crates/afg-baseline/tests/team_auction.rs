@@ -10,7 +10,7 @@ use afg_baseline::{LiveSwarm, Network, Swarm, SwarmMethod, TeamOptimum};
 use afg_game::{Instance, Point, Task, TaskId};
 use afg_graph::GraphKind;
 
-use common::scarce;
+use common::{scarce, skill_by_hand, skill_by_hand_welfare};
 
 const EPSILON: f64 = 1e-3;
 
@@ -186,25 +186,9 @@ fn the_team_auction_repeats_per_seed() {
 
 #[test]
 fn a_skill_place_goes_to_the_robot_that_holds_the_skill() {
-    // Task 0 at the origin needs two robots and one of skill 0, which only robot 2
-    // holds; the spare task at (0, 1) pays nothing. Robots at 0.1, 0.2 and 0.5 on the
-    // x axis: robot 2 takes the skill place, robot 0 the other (robot 1 is 0.085
-    // dearer there, far more than 2Nε), robot 1 the spare task.
-    let task = |y: f64, reward: f64, capacity| Task {
-        position: Point::new(0.0, y),
-        reward,
-        eps: 2.0,
-        capacity,
-    };
-    let robots = [0.1, 0.2, 0.5].map(|x| Point::new(x, 0.0)).to_vec();
-    let inst = Instance::new(
-        robots,
-        vec![task(0.0, 10.0, Some(2)), task(1.0, 0.0, None)],
-        1.0,
-    )
-    .unwrap()
-    .with_teams(vec![2, 1], &[vec![0], vec![0], vec![1]], &[vec![1], vec![]])
-    .unwrap();
+    // In `skill_by_hand`, robot 2 takes the skill place, robot 0 the other (robot 1 is
+    // 0.085 dearer there, far more than 2Nε), robot 1 the spare task.
+    let inst = skill_by_hand();
     for (name, network) in networks() {
         let r = Swarm::auction(EPSILON, network, 1).run(&inst).unwrap();
         let tasks = r.assignment.expect("converged").tasks().to_vec();
@@ -213,8 +197,7 @@ fn a_skill_place_goes_to_the_robot_that_holds_the_skill() {
             [Some(TaskId(0)), Some(TaskId(1)), Some(TaskId(0))],
             "{name}"
         );
-        let by_hand = 10.0 * 3f64.log2() - 0.1 - 0.5 - (0.2f64.powi(2) + 1.0).sqrt();
-        assert!((r.welfare - by_hand).abs() < 1e-9, "{name}");
+        assert!((r.welfare - skill_by_hand_welfare()).abs() < 1e-9, "{name}");
     }
 }
 

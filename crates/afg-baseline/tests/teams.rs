@@ -10,7 +10,9 @@ use afg_game::{Assignment, Instance, Point, Task, TaskId};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use common::{brute_force, scarce, small_instance, small_void_instance};
+use common::{
+    brute_force, scarce, skill_by_hand, skill_by_hand_welfare, small_instance, small_void_instance,
+};
 
 /// `inst` with thresholds drawn from 1..=N (so some tasks cannot be staffed together,
 /// and some never).
@@ -173,35 +175,14 @@ fn the_same_instance_gives_the_same_answer() {
 
 #[test]
 fn a_skill_by_hand_picks_the_robot_that_holds_it() {
-    // One task needing two robots and one unit of skill 0; robot 2 holds it but is
-    // further than robots 0 and 1. The optimum takes robots 0 (or 1) and 2.
-    let task = Task {
-        position: Point::new(0.0, 0.0),
-        reward: 10.0,
-        eps: 2.0,
-        capacity: Some(2),
-    };
-    let spare = Task {
-        position: Point::new(0.0, 1.0),
-        reward: 0.0,
-        eps: 2.0,
-        capacity: None,
-    };
-    let robots = vec![
-        Point::new(0.1, 0.0),
-        Point::new(0.2, 0.0),
-        Point::new(0.5, 0.0),
-    ];
-    let inst = Instance::new(robots, vec![task, spare], 1.0)
-        .unwrap()
-        .with_teams(vec![2, 1], &[vec![0], vec![0], vec![1]], &[vec![1], vec![]])
-        .unwrap();
+    // Robot 2 holds the skill but is further than robots 0 and 1: the optimum takes
+    // robots 0 and 2.
+    let inst = skill_by_hand();
     let best = TeamOptimum::default().solve(&inst).unwrap();
     let tasks = best.assignment.tasks();
     assert_eq!((tasks[0], tasks[2]), (Some(TaskId(0)), Some(TaskId(0))));
     assert_eq!(tasks[1], Some(TaskId(1)));
-    let by_hand = 10.0 * 3f64.log2() - 0.1 - 0.5 - (0.2f64.powi(2) + 1.0).sqrt();
-    assert!((best.welfare - by_hand).abs() < 1e-12);
+    assert!((best.welfare - skill_by_hand_welfare()).abs() < 1e-12);
 }
 
 #[test]
@@ -273,6 +254,25 @@ fn welfare_counts_a_coalition_only_when_its_team_is_complete() {
     }
 }
 
+/// The best welfare over every staffing's placement ([`TeamOptimum::staff`]), each
+/// placement checked valid and worth what it says, and shown to `check`.
+fn best_placed_staffing(inst: &Instance, case: usize, check: impl Fn(&[bool], &Assignment)) -> f64 {
+    let m = inst.num_tasks();
+    let mut best = f64::NEG_INFINITY;
+    for set in 0..1u32 << m {
+        let staffed: Vec<bool> = (0..m).map(|j| set >> j & 1 == 1).collect();
+        let Some((a, welfare)) = TeamOptimum::staff(inst, &staffed) else {
+            continue;
+        };
+        inst.check(&a).unwrap();
+        let tol = 1e-9 * welfare.abs().max(1.0);
+        assert!((inst.welfare(&a) - welfare).abs() < tol, "case {case}");
+        check(&staffed, &a);
+        best = best.max(welfare);
+    }
+    best
+}
+
 /// Placing a staffing is exact: over every set of tasks S, `staff(S)` is an
 /// assignment whose tasks of S hold their thresholds and the others do not, worth
 /// what it says; the best of them is the brute-force optimum (so the optimum's own
@@ -290,21 +290,12 @@ fn placing_a_staffing_is_exact_and_the_relaxation_bounds_it() {
         let inst = with_thresholds(&mut rng, plain);
         let brute = brute_force(&inst);
         let tol = 1e-9 * brute.abs().max(1.0);
-        let m = inst.num_tasks();
-        let mut best = f64::NEG_INFINITY;
-        for set in 0..1u32 << m {
-            let staffed: Vec<bool> = (0..m).map(|j| set >> j & 1 == 1).collect();
-            let Some((a, welfare)) = TeamOptimum::staff(&inst, &staffed) else {
-                continue;
-            };
-            inst.check(&a).unwrap();
-            assert!((inst.welfare(&a) - welfare).abs() < tol, "case {case}");
+        let best = best_placed_staffing(&inst, case, |staffed, a| {
             for j in inst.task_ids() {
                 let full = a.size(j) >= inst.min_team(j);
-                assert_eq!(full, staffed[j.index()], "case {case} set {set:b} task {j}");
+                assert_eq!(full, staffed[j.index()], "case {case} {staffed:?} task {j}");
             }
-            best = best.max(welfare);
-        }
+        });
         assert!((best - brute).abs() < tol, "case {case}: {best} vs {brute}");
         assert!(
             TeamOptimum::relax(&inst).bound >= brute - tol,
@@ -323,32 +314,16 @@ fn placing_a_staffing_is_exact_and_the_relaxation_bounds_it() {
 
 #[test]
 fn placing_a_staffing_brings_the_skill_its_team_lacks() {
-    // The game of `a_skill_by_hand_picks_the_robot_that_holds_it`: staffing both tasks,
-    // the transport alone sends the two nearest robots to task 0, which lack its skill;
-    // the skill dive fixes robot 2 there instead.
-    let task = |y: f64, reward: f64, capacity| Task {
-        position: Point::new(0.0, y),
-        reward,
-        eps: 2.0,
-        capacity,
-    };
-    let robots = vec![
-        Point::new(0.1, 0.0),
-        Point::new(0.2, 0.0),
-        Point::new(0.5, 0.0),
-    ];
-    let inst = Instance::new(
-        robots,
-        vec![task(0.0, 10.0, Some(2)), task(1.0, 0.0, None)],
-        1.0,
-    )
-    .unwrap()
-    .with_teams(vec![2, 1], &[vec![0], vec![0], vec![1]], &[vec![1], vec![]])
-    .unwrap();
+    // Staffing both tasks of `skill_by_hand`, the transport alone sends the two nearest
+    // robots to task 0, which lack its skill; the skill dive fixes robot 2 there
+    // instead.
+    let inst = skill_by_hand();
     let (placed, welfare) = TeamOptimum::staff(&inst, &[true, true]).unwrap();
     assert_eq!(placed.tasks()[2], Some(TaskId(0)));
-    let best = TeamOptimum::default().solve(&inst).unwrap().welfare;
-    assert!((welfare - best).abs() < 1e-12, "{welfare} vs {best}");
+    assert!(
+        (welfare - skill_by_hand_welfare()).abs() < 1e-12,
+        "{welfare}"
+    );
 }
 
 /// On small skill games, every staffing's placement is valid and worth its welfare,
@@ -365,18 +340,8 @@ fn placing_staffings_with_skills_nearly_always_reaches_the_optimum() {
         let inst = with_skills(&mut rng, plain, case);
         let brute = brute_force(&inst);
         let tol = 1e-9 * brute.abs().max(1.0);
-        let m = inst.num_tasks();
-        let mut best = f64::NEG_INFINITY;
-        for set in 0..1u32 << m {
-            let staffed: Vec<bool> = (0..m).map(|j| set >> j & 1 == 1).collect();
-            let Some((a, welfare)) = TeamOptimum::staff(&inst, &staffed) else {
-                continue;
-            };
-            inst.check(&a).unwrap();
-            assert!((inst.welfare(&a) - welfare).abs() < tol, "case {case}");
-            assert!(welfare <= brute + tol, "case {case}");
-            best = best.max(welfare);
-        }
+        let best = best_placed_staffing(&inst, case, |_, _| ());
+        assert!(best <= brute + tol, "case {case}");
         reached += usize::from(best >= brute - tol);
     }
     assert!(reached >= cases * 9 / 10, "{reached} of {cases}");

@@ -139,8 +139,8 @@ pub struct SwarmArgs {
     /// GRAPE's preference: selfish (GRAPE's own) or balanced.
     #[arg(long, value_parser = crate::choice::<Preference>(), default_value = SwarmKnobs::default().preference.name())]
     preference: Preference,
-    /// The auction's least price increment ε [default: 0.001, or 0.01 where a
-    /// mission's tasks need teams or skills: docs/teams.md].
+    /// The auction's least price increment ε: 0.001, or 0.01 where a mission's tasks
+    /// need teams or skills (docs/teams.md) [default: by the mission].
     #[arg(long)]
     epsilon: Option<f64>,
     #[command(flatten)]

@@ -437,7 +437,8 @@ pub(crate) fn mission_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     run.set_item("loss", knobs.radio.loss)?;
     run.set_item("sensing", knobs.sensing)?;
     run.set_item("preference", afg_game::Named::name(knobs.preference))?;
-    run.set_item("epsilon", knobs.epsilon)?;
+    // It depends on the mission: SwarmKnobs::default_epsilon.
+    run.set_item("epsilon", py.None())?;
     run.set_item("radius", knobs.radio.radius)?;
     run.set_item("knn", knobs.radio.knn)?;
     run.set_item("burst", knobs.radio.burst)?;

@@ -119,3 +119,31 @@ pub fn scarce(robots: usize, tasks: usize, seed: u64) -> Instance {
     cfg.min_team = Some(afg_game::CountRange { min, max });
     cfg.generate().unwrap()
 }
+
+/// One task at the origin needing two robots and one unit of skill 0 (capacity 2,
+/// reward 10), and a spare task at (0, 1) paying nothing; robots at 0.1, 0.2 and 0.5
+/// on the x axis, only the furthest holding the skill. The optimum: robots 0 and 2 at
+/// the task, robot 1 at the spare one, worth [`skill_by_hand_welfare`].
+pub fn skill_by_hand() -> Instance {
+    let task = |y: f64, reward: f64, capacity| Task {
+        position: Point::new(0.0, y),
+        reward,
+        eps: 2.0,
+        capacity,
+    };
+    let robots = [0.1, 0.2, 0.5].map(|x| Point::new(x, 0.0)).to_vec();
+    Instance::new(
+        robots,
+        vec![task(0.0, 10.0, Some(2)), task(1.0, 0.0, None)],
+        1.0,
+    )
+    .unwrap()
+    .with_teams(vec![2, 1], &[vec![0], vec![0], vec![1]], &[vec![1], vec![]])
+    .unwrap()
+}
+
+/// The optimum of [`skill_by_hand`], by hand: F(2) = 10 log2 3 less the three robots'
+/// distances.
+pub fn skill_by_hand_welfare() -> f64 {
+    10.0 * 3f64.log2() - 0.1 - 0.5 - (0.2f64.powi(2) + 1.0).sqrt()
+}

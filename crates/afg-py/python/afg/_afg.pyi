@@ -313,7 +313,8 @@ def run_mission(
 ) -> MissionResult:
     """One allocator in the loop of ``mission``, with every knob of ``afg mission run``.
 
-    A swarm knob left at None takes its default (``mission_defaults()``).
+    A swarm knob left at None takes its default (``mission_defaults()``); ``epsilon``
+    depends on the mission: 0.001, or 0.01 where its tasks need teams or skills.
 
     Raises:
         InvalidInputError: a knob out of range, an unknown method, a radio knob with a
