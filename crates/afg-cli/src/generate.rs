@@ -106,7 +106,7 @@ impl TeamArgs {
 }
 
 /// A `LO,HI` flag's two values.
-fn pair<T: Copy>(flag: &str, values: Option<&[T]>) -> Result<Option<(T, T)>> {
+pub(crate) fn pair<T: Copy>(flag: &str, values: Option<&[T]>) -> Result<Option<(T, T)>> {
     match values {
         None => Ok(None),
         Some(&[lo, hi]) => Ok(Some((lo, hi))),

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use afg_game::{CountRange, GameSize, GeneratorKnobs, SkillDraw};
+use afg_game::{GameSize, GeneratorKnobs, SkillDraw};
 use afg_learn::staffing::{StaffingModel, StaffingTrainConfig, StaffingTrainer};
 use anyhow::{Result, bail};
 use clap::Args;
@@ -80,24 +80,16 @@ fn joined<S: serde::Serializer, T: std::fmt::Display>(
     out.serialize_str(&text.join(","))
 }
 
-/// The skills of `--skills`, `--skill-share` and `--requires`.
+/// The skills of `--skills`, `--skill-share` and `--requires`, as `afg gen` draws them.
 fn skill_draw(args: &StaffingArgs) -> Result<Option<SkillDraw>> {
-    let Some(count) = args.skills else {
-        if args.skill_share.is_some() || !args.requires.is_empty() {
-            bail!("--skill-share and --requires need --skills S");
-        }
-        return Ok(None);
+    let requires = (!args.requires.is_empty()).then_some(args.requires.as_slice());
+    let knobs = GeneratorKnobs {
+        skills: args.skills,
+        skill_share: args.skill_share,
+        requires: crate::generate::pair("--requires", requires)?,
+        ..GeneratorKnobs::default()
     };
-    let (min, max) = match args.requires.as_slice() {
-        [] => GeneratorKnobs::REQUIRES,
-        &[lo, hi] => (lo, hi),
-        _ => bail!("--requires takes two numbers, LO,HI"),
-    };
-    Ok(Some(SkillDraw {
-        count,
-        share: args.skill_share.unwrap_or(GeneratorKnobs::SKILL_SHARE),
-        requires: CountRange { min, max },
-    }))
+    Ok(knobs.skill_draw()?)
 }
 
 /// Trains a staffing model into its run directory.

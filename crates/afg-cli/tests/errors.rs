@@ -220,7 +220,7 @@ fn afg_train_staffing_refuses_skill_knobs_without_skills() {
     for (flags, says) in [
         (
             &["--skill-share", "0.2"][..],
-            "--skill-share and --requires need --skills S",
+            "a skill share or requirements need skills (a number of skills S ≥ 1)",
         ),
         (
             &["--skills", "2", "--requires", "1,2,3"][..],
@@ -228,7 +228,7 @@ fn afg_train_staffing_refuses_skill_knobs_without_skills() {
         ),
         (
             &["--skills", "2", "--requires", "3,1"][..],
-            "requirements LO ≤ HI",
+            "requires range 3..=1 is empty",
         ),
     ] {
         let out = afg(&[&["train-staffing", "--out", out_dir][..], flags].concat());

@@ -160,11 +160,10 @@ impl Instance {
             self.num_robots(),
             "assignment of another instance"
         );
-        let held = self.skills_held(assignment);
-        let s = self.num_skills();
+        let earning = self.earning_tasks(assignment);
         let value: f64 = self
             .task_ids()
-            .filter(|j| s == 0 || self.skills_met(*j, &held[j.index() * s..][..s]))
+            .filter(|j| earning[j.index()])
             .map(|j| self.coalition_value(j, assignment.size(j)))
             .sum();
         let cost: f64 = self

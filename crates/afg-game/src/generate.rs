@@ -183,6 +183,27 @@ impl GeneratorKnobs {
             }
             cfg.min_team = Some(CountRange { min, max }.check("threshold (min_team)")?);
         }
+        cfg.skills = self.skill_draw()?;
+        Ok(cfg)
+    }
+
+    /// The skills these knobs draw (`None`: no skill rule), their defaults filled in.
+    ///
+    /// # Errors
+    /// [`GameError::InvalidGenerator`] for a share outside [0, 1], an empty requirement
+    /// range, or a share or requirements without skills.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::GeneratorKnobs;
+    /// let knobs = GeneratorKnobs { skills: Some(2), ..GeneratorKnobs::default() };
+    /// let draw = knobs.skill_draw()?.expect("two skills");
+    /// assert_eq!((draw.count, draw.share), (2, GeneratorKnobs::SKILL_SHARE));
+    /// let alone = GeneratorKnobs { skill_share: Some(0.2), ..GeneratorKnobs::default() };
+    /// assert!(alone.skill_draw().is_err());
+    /// # Ok::<(), afg_game::GameError>(())
+    /// ```
+    pub fn skill_draw(&self) -> Result<Option<SkillDraw>, GameError> {
         match self.skills {
             Some(count) if count > 0 => {
                 let share = self.skill_share.unwrap_or(Self::SKILL_SHARE);
@@ -193,20 +214,19 @@ impl GeneratorKnobs {
                 }
                 let (min, max) = self.requires.unwrap_or(Self::REQUIRES);
                 let requires = CountRange { min, max }.check("requires")?;
-                cfg.skills = Some(SkillDraw {
+                Ok(Some(SkillDraw {
                     count,
                     share,
                     requires,
-                });
+                }))
             }
             _ if self.skill_share.is_some() || self.requires.is_some() => {
-                return Err(GameError::InvalidGenerator(
+                Err(GameError::InvalidGenerator(
                     "a skill share or requirements need skills (a number of skills S ≥ 1)".into(),
-                ));
+                ))
             }
-            _ => {}
+            _ => Ok(None),
         }
-        Ok(cfg)
     }
 }
 

@@ -199,6 +199,32 @@ impl Instance {
             .all(|(&need, &have)| have >= u64::from(need))
     }
 
+    /// Which tasks earn in `assignment`: their coalition at or above the threshold and
+    /// holding every skill they require.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::{Assignment, Instance, Point, Task, TaskId};
+    /// let task = Task { position: Point::new(0.0, 0.0), reward: 1.0, eps: 2.0, capacity: None };
+    /// let robots = vec![Point::new(1.0, 0.0), Point::new(2.0, 0.0)];
+    /// let inst = Instance::new(robots, vec![task], 1.0)?.with_teams(vec![1], &[vec![0], vec![1]], &[vec![1]])?;
+    /// let alone = Assignment::from_tasks(&inst, vec![Some(TaskId(0)), None])?;
+    /// assert_eq!(inst.earning_tasks(&alone), [false]);
+    /// let both = Assignment::from_tasks(&inst, vec![Some(TaskId(0)); 2])?;
+    /// assert_eq!(inst.earning_tasks(&both), [true]);
+    /// # Ok::<(), afg_game::GameError>(())
+    /// ```
+    pub fn earning_tasks(&self, assignment: &Assignment) -> Vec<bool> {
+        let held = self.skills_held(assignment);
+        let s = self.num_skills();
+        self.task_ids()
+            .map(|j| {
+                assignment.size(j) >= self.min_team(j)
+                    && self.skills_met(j, &held[j.index() * s..][..s])
+            })
+            .collect()
+    }
+
     /// The skills each coalition of `assignment` holds: row-major M × S totals.
     pub fn skills_held(&self, assignment: &Assignment) -> Vec<u64> {
         let s = self.teams.num_skills;

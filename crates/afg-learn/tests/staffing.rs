@@ -38,21 +38,23 @@ fn train(config: StaffingTrainConfig, dir: &Path) -> Result<StaffingModel, Learn
     StaffingModel::load(&dir.join(StaffingModel::FILE_NAME))
 }
 
-/// Two tasks at the ends of a line, four robots: thresholds 2 and 3, so both cannot
-/// be staffed from a relaxation that fills the first and leaves the second empty.
-#[test]
-fn features_by_hand() {
+/// Two tasks at 0 and 1 on the x axis (reward 4, eps 2, uncapped) and `robots`.
+fn line_game(robots: Vec<Point>) -> Instance {
     let task = |x: f64| Task {
         position: Point::new(x, 0.0),
         reward: 4.0,
         eps: 2.0,
         capacity: None,
     };
+    Instance::new(robots, vec![task(0.0), task(1.0)], 1.0).unwrap()
+}
+
+/// Two tasks at the ends of a line, four robots: thresholds 2 and 3, so both cannot
+/// be staffed from a relaxation that fills the first and leaves the second empty.
+#[test]
+fn features_by_hand() {
     let robots = vec![Point::new(0.0, 0.0); 4];
-    let inst = Instance::new(robots, vec![task(0.0), task(1.0)], 1.0)
-        .unwrap()
-        .with_teams(vec![2, 3], &[], &[])
-        .unwrap();
+    let inst = line_game(robots).with_teams(vec![2, 3], &[], &[]).unwrap();
     let root = TeamRelaxation {
         sizes: vec![4, 0],
         prices: vec![1.0, 0.0],
@@ -88,15 +90,8 @@ fn features_by_hand() {
 /// skill.
 #[test]
 fn skill_features_by_hand() {
-    let task = |x: f64| Task {
-        position: Point::new(x, 0.0),
-        reward: 4.0,
-        eps: 2.0,
-        capacity: None,
-    };
     let robots = [0.0, 0.1, 0.5].map(|x| Point::new(x, 0.0)).to_vec();
-    let inst = Instance::new(robots, vec![task(0.0), task(1.0)], 1.0)
-        .unwrap()
+    let inst = line_game(robots)
         .with_teams(
             vec![2, 1],
             &[vec![0], vec![0], vec![1]],

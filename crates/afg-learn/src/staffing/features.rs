@@ -4,7 +4,7 @@
 //! serves any size.
 
 use afg_baseline::TeamRelaxation;
-use afg_game::{Instance, TaskId};
+use afg_game::{Instance, RobotId, TaskId};
 
 /// Features per task: [`COUNT_FEATURES`] that count robots, then three of skills (0,
 /// 0 and 3 in a game without skills).
@@ -142,8 +142,7 @@ fn skill_cover_and_reach(
     }
     let mut order: Vec<usize> = (0..costs.len()).collect();
     order.sort_by(|&a, &b| costs[a].total_cmp(&costs[b]).then(a.cmp(&b)));
-    let robots: Vec<_> = instance.robot_ids().collect();
-    let skills = |at: usize| instance.skills(robots[order[at]]);
+    let skills = |at: usize| instance.skills(RobotId(order[at] as u32));
     let mut held = vec![0u64; requires.len()];
     for at in 0..nearest {
         for (h, &q) in held.iter_mut().zip(skills(at)) {
@@ -195,9 +194,11 @@ fn skill_supply(instance: &Instance) -> Vec<f64> {
         .collect()
 }
 
-/// The network inputs of every task: the first `read` of its features, then their
-/// mean over the tasks (`[M, 2 · read]`).
-pub(crate) fn staffing_inputs(features: &[f32], read: usize) -> Vec<f32> {
+/// The network inputs of every task: the features the model reads (all where it
+/// `reads_skills`, else the first [`COUNT_FEATURES`]), then their mean over the tasks
+/// (`[M, staffing_input_width(reads_skills)]`).
+pub(crate) fn staffing_inputs(features: &[f32], reads_skills: bool) -> Vec<f32> {
+    let read = staffing_input_width(reads_skills) / 2;
     let chosen: Vec<f32> = features
         .chunks_exact(STAFF_FEATURES)
         .flat_map(|row| row[..read].iter().copied())

@@ -70,15 +70,8 @@ pub(super) fn label(
     }
     .solve(&inst)
     .map_err(|e| LearnError::InvalidConfig(e.to_string()))?;
-    let held = inst.skills_held(&best.assignment);
-    let s = inst.num_skills();
-    let labels = inst
-        .task_ids()
-        .map(|j| {
-            let earns = best.assignment.size(j) >= inst.min_team(j)
-                && inst.skills_met(j, &held[j.index() * s..][..s]);
-            f32::from(u8::from(earns))
-        })
+    let labels = (inst.earning_tasks(&best.assignment).into_iter())
+        .map(|earns| f32::from(u8::from(earns)))
         .collect();
     Ok(LabelledGame {
         seed,

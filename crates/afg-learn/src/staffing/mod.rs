@@ -189,16 +189,19 @@ impl StaffingPolicy {
     /// docs).
     pub fn values(&self, instance: &Instance) -> Vec<f64> {
         let root = TeamOptimum::relax(instance);
-        let read = staffing_input_width(self.reads_skills) / 2;
-        values_of(&self.mlp, &staffing_features(instance, &root), read)
+        values_of(
+            &self.mlp,
+            &staffing_features(instance, &root),
+            self.reads_skills,
+        )
     }
 }
 
 /// Each task's worth `(k_j / share) · (m_j + z_j)` from its features
 /// (`[M, STAFF_FEATURES]`) and the network's corrections, the network reading the
-/// first `read` features.
-pub(crate) fn values_of(mlp: &PriceMlp, features: &[f32], read: usize) -> Vec<f64> {
-    let inputs = features::staffing_inputs(features, read);
+/// skill features where `reads_skills`.
+pub(crate) fn values_of(mlp: &PriceMlp, features: &[f32], reads_skills: bool) -> Vec<f64> {
+    let inputs = features::staffing_inputs(features, reads_skills);
     let mut corrections = vec![0.0; features.len() / STAFF_FEATURES];
     mlp.forward_rows(&inputs, &mut corrections);
     features

@@ -313,10 +313,10 @@ impl StaffingTrainer {
         }
         self.epoch += 1;
         let mlp = PriceMlp::from_burn(&self.net);
-        let read = self.config.input_width() / 2;
+        let reads_skills = self.config.skills.is_some();
         let (mut agree, mut tasks, mut percent) = (0usize, 0usize, 0.0);
         for (inst, game) in &self.validation {
-            let values = values_of(&mlp, &game.features, read);
+            let values = values_of(&mlp, &game.features, reads_skills);
             let chosen = knapsack(&game.thresholds, &values, game.size.robots);
             agree += chosen
                 .iter()
@@ -348,7 +348,10 @@ impl StaffingTrainer {
         let width = self.config.input_width();
         let mut x = Vec::new();
         for &g in batch {
-            x.extend(staffing_inputs(&self.training[g].features, width / 2));
+            x.extend(staffing_inputs(
+                &self.training[g].features,
+                self.config.skills.is_some(),
+            ));
         }
         let rows = x.len() / width;
         let x = Tensor::<TrainBackend, 2>::from_data(TensorData::new(x, [rows, width]), &device);

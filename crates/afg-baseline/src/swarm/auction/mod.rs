@@ -295,11 +295,9 @@ impl<'a> Auction<'a> {
                 s.first_eligible(a as usize, j.index(), places.len())
             });
             let first_open = (open < values.len()).then_some((open, unbid));
-            let known = places.iter().copied().enumerate();
-            for (k, r) in known
-                .chain(first_open)
-                .filter(|&(k, _)| eligible(j.index(), k))
-            {
+            let known =
+                (places.iter().copied().enumerate()).filter(|&(k, _)| eligible(j.index(), k));
+            for (k, r) in known.chain(first_open) {
                 options.push((values[k] - r.price - cost, (j.0, k as u32), r.price));
             }
         }
