@@ -129,13 +129,8 @@ fn measure(
 ) -> Result<Row> {
     let inst = scarce(case, seed, args.skills.knobs()?.as_ref())?;
     let one_core = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
-    let limit = Duration::try_from_secs_f64(args.time_limit).context("--time-limit")?;
-    let exact = one_core.install(|| {
-        TeamOptimum {
-            time_limit: Some(limit),
-        }
-        .solve(&inst)
-    })?;
+    let exact = TeamOptimum::with_time_limit(args.time_limit).context("--time-limit")?;
+    let exact = one_core.install(|| exact.solve(&inst))?;
     let skills = args.skills.knobs()?.is_some();
     let mut runs = one_core.install(|| hand_written(&inst, case, seed, model, skills))?;
     let equal = Duration::from_secs_f64(runs[0].seconds);

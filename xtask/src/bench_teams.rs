@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use afg_baseline::{AllocError, Method, TeamOptimum};
 use afg_game::fs::write_atomic;
@@ -205,15 +205,10 @@ fn measure(case: Case, seed: u64, args: &BenchTeamsArgs, dir: &Path) -> Result<R
         dataset_to_jsonl(std::slice::from_ref(&inst)).as_bytes(),
     )?;
     crate::bench::reset_peak_rss();
-    let limit = Duration::try_from_secs_f64(args.time_limit).context("--time-limit")?;
+    let exact = TeamOptimum::with_time_limit(args.time_limit).context("--time-limit")?;
     let start = Instant::now();
     let one_core = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
-    let exact = one_core.install(|| {
-        TeamOptimum {
-            time_limit: Some(limit),
-        }
-        .solve(&inst)
-    })?;
+    let exact = one_core.install(|| exact.solve(&inst))?;
     let afg = Exact {
         seconds: start.elapsed().as_secs_f64(),
         peak_rss_mib: crate::bench::peak_rss_mib(),

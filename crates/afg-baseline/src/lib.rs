@@ -124,6 +124,36 @@ pub struct AllocStats {
     pub bound: Option<f64>,
 }
 
+impl AllocStats {
+    /// The certified relative gap of an exact method's `welfare` under its
+    /// [`AllocStats::bound`] (see [`certified_gap`]); `None` for a method that reports
+    /// no bound.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::AllocStats;
+    /// let stats = AllocStats { bound: Some(110.0), ..AllocStats::default() };
+    /// assert_eq!(stats.gap(100.0), Some(0.1));
+    /// assert_eq!(AllocStats::default().gap(100.0), None);
+    /// ```
+    pub fn gap(&self, welfare: f64) -> Option<f64> {
+        self.bound.map(|bound| certified_gap(bound, welfare))
+    }
+}
+
+/// The certified relative gap `(bound − welfare) / |welfare|` of an assignment whose
+/// welfare a proven `bound` caps (never negative; where the welfare is 0, the absolute
+/// gap): the one formula behind every gap afg prints.
+///
+/// # Examples
+/// ```
+/// assert_eq!(afg_baseline::certified_gap(12.0, 10.0), 0.2);
+/// assert_eq!(afg_baseline::certified_gap(10.0, 10.0), 0.0);
+/// ```
+pub fn certified_gap(bound: f64, welfare: f64) -> f64 {
+    (bound - welfare).max(0.0) / welfare.abs().max(1e-12)
+}
+
 mod seconds {
     use std::time::Duration;
 
@@ -342,6 +372,39 @@ impl Method {
             Method::Nearest => Box::new(Nearest),
             Method::Random => Box::new(RandomAllocator { seed }),
             Method::Blind => Box::new(Blind),
+        }
+    }
+
+    /// The allocator, stopped within `time_limit` seconds where one is given: the one
+    /// place a user's time limit becomes a solver (the command line, Python, missions
+    /// and the benchmarks all come here). Only the exact optimum takes one
+    /// ([`TeamOptimum::with_time_limit`]).
+    ///
+    /// # Errors
+    /// [`AllocError::InvalidParameter`] where a time limit is given to another method,
+    /// or is not a finite, positive number of seconds.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::Method;
+    /// assert_eq!(Method::Opt.allocator_with(0, Some(2.5))?.name(), "opt");
+    /// assert!(Method::Greedy.allocator_with(0, Some(1.0)).is_err());
+    /// assert!(Method::Opt.allocator_with(0, Some(0.0)).is_err());
+    /// # Ok::<(), afg_baseline::AllocError>(())
+    /// ```
+    pub fn allocator_with(
+        self,
+        seed: u64,
+        time_limit: Option<f64>,
+    ) -> Result<Box<dyn Allocator>, AllocError> {
+        match time_limit {
+            None => Ok(self.allocator(seed)),
+            Some(seconds) if self == Method::Opt => {
+                Ok(Box::new(TeamOptimum::with_time_limit(seconds)?))
+            }
+            Some(_) => Err(AllocError::InvalidParameter(
+                "a time limit is for the exact optimum (method opt) only".into(),
+            )),
         }
     }
 

@@ -202,10 +202,11 @@ fn a_skill_place_goes_to_the_robot_that_holds_the_skill() {
 }
 
 /// On skill games with enough holders, every team the auction forms is complete and
-/// holds its skills (its skill places went to holders), over every network.
+/// holds its skills (its skill places went to holders), over every network, at 95 % of
+/// the optimum or more and 96.5 % on average.
 #[test]
 fn the_auction_forms_teams_that_hold_their_skills() {
-    let mut earning = 0;
+    let (mut earning, mut shares) = (0, Vec::new());
     for (idx, (n, m)) in [(20, 4), (30, 5), (40, 6)].into_iter().enumerate() {
         let plain = scarce(n, m, 60 + idx as u64);
         let skills: Vec<Vec<u32>> = (0..n)
@@ -232,11 +233,15 @@ fn the_auction_forms_teams_that_hold_their_skills() {
                 earning += 1;
             }
             assert!(
-                r.welfare <= best + 1e-9 && r.welfare > 0.5 * best,
+                r.welfare <= best + 1e-9 && r.welfare >= 0.95 * best,
                 "{name}: {} vs {best}",
                 r.welfare
             );
+            shares.push(r.welfare / best);
         }
     }
     assert!(earning > 20, "{earning}");
+    // The range docs/teams.md measures on the committed skill games starts at 96.5 %.
+    let mean = shares.iter().sum::<f64>() / shares.len() as f64;
+    assert!(mean >= 0.965, "{mean}");
 }

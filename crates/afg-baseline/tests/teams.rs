@@ -135,29 +135,47 @@ fn two_robots_needed_by_hand() {
     assert_eq!(best.welfare, 0.0);
 }
 
+/// A skill game (30 robots, 5 tasks, two scarce skills) that takes the exact solver
+/// hundreds of nodes: its Lagrangian pricing runs, and a limit that is ignored shows.
+fn hard_skill_game() -> Instance {
+    let knobs = afg_game::GeneratorKnobs {
+        min_team: Some((3, 8)),
+        skills: Some(2),
+        skill_share: Some(0.2),
+        requires: Some((1, 3)),
+        ..afg_game::GeneratorKnobs::default()
+    };
+    knobs.config(30, 5, 4).unwrap().generate().unwrap()
+}
+
 #[test]
 fn a_time_limit_returns_the_best_found_with_a_certified_bound() {
-    let inst = scarce(100, 10, 3);
-    let exact = TeamOptimum::default().solve(&inst).unwrap();
-    assert!(exact.proven);
-    let cut = TeamOptimum {
-        time_limit: Some(Duration::ZERO),
-    }
-    .solve(&inst)
-    .unwrap();
-    // The root and its dive are always solved: a feasible answer and a true bound.
-    assert!(cut.nodes >= 1);
-    assert!((inst.welfare(&cut.assignment) - cut.welfare).abs() < 1e-9);
-    assert!(cut.welfare <= exact.welfare + 1e-9);
-    assert!(
-        cut.bound >= exact.welfare - 1e-9,
-        "{} < {}",
-        cut.bound,
-        exact.welfare
-    );
-    assert!(cut.gap() >= 0.0);
-    if !cut.proven {
-        assert!((cut.gap() - (cut.bound - cut.welfare) / cut.welfare.abs()).abs() < 1e-12);
+    for inst in [scarce(100, 10, 3), hard_skill_game()] {
+        let exact = TeamOptimum::default().solve(&inst).unwrap();
+        assert!(exact.proven);
+        let cut = TeamOptimum {
+            time_limit: Some(Duration::ZERO),
+        }
+        .solve(&inst)
+        .unwrap();
+        // The limit stops the search: the root and its dive are always solved (a
+        // feasible answer and a true bound), and nothing more.
+        assert_eq!(cut.nodes, 1);
+        assert!(exact.nodes > cut.nodes && !cut.proven, "{}", exact.nodes);
+        assert!((inst.welfare(&cut.assignment) - cut.welfare).abs() < 1e-9);
+        assert!(cut.welfare <= exact.welfare + 1e-9);
+        assert!(
+            cut.bound >= exact.welfare - 1e-9,
+            "{} < {}",
+            cut.bound,
+            exact.welfare
+        );
+        assert!(
+            (cut.gap() - (cut.bound - cut.welfare) / cut.welfare.abs()).abs() < 1e-12,
+            "{}",
+            cut.gap()
+        );
+        assert!(cut.gap() > 0.0);
     }
 }
 

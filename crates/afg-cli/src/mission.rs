@@ -112,7 +112,7 @@ pub struct LoopArgs {
     /// The exact optimum's time limit per decision, seconds (opt without --warm): each
     /// decision takes the best found, its certified gap in the trace and the metrics'
     /// largest gap.
-    #[arg(long, value_name = "SECS")]
+    #[arg(long, value_name = "SECS", allow_negative_numbers = true)]
     time_limit: Option<f64>,
     /// Seed of the random method, and of GRAPE's draws and the radio's (grape).
     #[arg(long, default_value_t = MissionPlan::default().seed)]
@@ -159,8 +159,9 @@ impl LoopArgs {
             seed: self.seed,
             swarm: SwarmKnobs {
                 preference: knobs.preference,
-                epsilon: (knobs.epsilon)
-                    .unwrap_or_else(|| SwarmKnobs::default_epsilon(method, missions)),
+                epsilon: (knobs.epsilon).unwrap_or_else(|| {
+                    SwarmKnobs::default_epsilon(method, missions.iter().any(Mission::needs_teams))
+                }),
                 radio: knobs.radio.knobs(knobs.loss),
                 rounds_per_time: knobs.rounds_per_time,
                 sensing: knobs.sensing,

@@ -2,14 +2,14 @@
 
 use std::path::PathBuf;
 
-use afg_baseline::{Allocator, Method, TeamOptimum};
+use afg_baseline::{Allocator, Method};
 use afg_eval::solve::{Report, Row};
 use afg_game::fs::write_atomic_making_dirs;
 use afg_game::io::read_instances;
 use afg_game::{Assignment, Instance};
 use afg_learn::LearnError;
 use afg_learn::run::{ModelOptions, OptionConflict, load_model};
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Args;
 
 /// `afg solve`: an allocator, a source of instances and what to write.
@@ -66,7 +66,7 @@ pub struct SolveArgs {
     /// The exact optimum (--method opt) stops after SECS seconds with the best
     /// assignment found, its proven bound and the gap (the team games are NP-hard;
     /// without a limit it runs until optimality is proven).
-    #[arg(long, value_name = "SECS")]
+    #[arg(long, value_name = "SECS", allow_negative_numbers = true)]
     pub(crate) time_limit: Option<f64>,
     /// Seed of the randomised methods (random, da-decentralised).
     #[arg(long, default_value_t = 0)]
@@ -138,20 +138,14 @@ pub fn run(args: SolveArgs) -> Result<()> {
     }
     crate::warn_unstaffable(&instances);
     let (name, method): (String, Box<dyn Allocator>) = match (&args.method, &args.model) {
-        (Some(Method::Opt), _) if args.time_limit.is_some() => {
-            let time_limit = args.time_limit.map(std::time::Duration::try_from_secs_f64);
-            let Some(Ok(limit)) = time_limit else {
-                anyhow::bail!("--time-limit takes a number of seconds, at least 0");
-            };
-            let exact = TeamOptimum {
-                time_limit: Some(limit),
-            };
-            ("opt".to_owned(), Box::new(exact))
-        }
+        (Some(m), _) => (
+            m.to_string(),
+            m.allocator_with(args.seed, args.time_limit)
+                .context("--time-limit")?,
+        ),
         _ if args.time_limit.is_some() => {
-            anyhow::bail!("--time-limit applies to the exact optimum (--method opt)")
+            anyhow::bail!("--time-limit: a time limit is for the exact optimum (method opt) only")
         }
-        (Some(m), _) => (m.to_string(), m.allocator(args.seed)),
         (None, Some(dir)) => {
             let options = ModelOptions {
                 block: args.block,
@@ -326,12 +320,10 @@ mod tests {
             assert!((inst.welfare(&a) - best.welfare).abs() < 1e-9);
         }
         for (flags, needle) in [
-            (
-                "--method greedy --time-limit 1",
-                "applies to the exact optimum",
-            ),
-            ("--method opt --time-limit=-1", "number of seconds"),
-            ("--method opt --time-limit nan", "number of seconds"),
+            ("--method greedy --time-limit 1", "for the exact optimum"),
+            ("--method opt --time-limit -1", "finite and positive"),
+            ("--method opt --time-limit 0", "finite and positive"),
+            ("--method opt --time-limit nan", "finite and positive"),
         ] {
             let err = solve(&format!("{flags} --input {file}")).unwrap_err();
             assert!(format!("{err:#}").contains(needle), "{flags}: {err:#}");

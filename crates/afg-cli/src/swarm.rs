@@ -27,9 +27,10 @@ pub struct SwarmArgs {
     #[arg(long, value_parser = crate::choice::<Preference>(), default_value = SwarmKnobs::default().preference.name())]
     preference: Preference,
     /// The auction's least price increment ε (its result is within 2N·ε of the optimum;
-    /// team games want 0.01–0.1: docs/teams.md).
-    #[arg(long, default_value_t = SwarmKnobs::default().epsilon)]
-    epsilon: f64,
+    /// team games want 0.01–0.1: docs/teams.md) [default: 0.01 where a task needs a
+    /// team or a skill, 0.001 otherwise, as in `afg mission`].
+    #[arg(long)]
+    epsilon: Option<f64>,
     /// Robot counts (comma-separated); instances drawn from the paper's distribution.
     #[arg(long, value_delimiter = ',', default_value = "1000")]
     robots: Vec<usize>,
@@ -175,6 +176,7 @@ fn grid(args: &SwarmArgs) -> Result<SwarmGrid> {
             })
             .collect::<Result<_>>()?,
     };
+    let needs_teams = instances.iter().any(afg_game::Instance::has_teams);
     let methods = args
         .method
         .iter()
@@ -183,7 +185,9 @@ fn grid(args: &SwarmArgs) -> Result<SwarmGrid> {
                 preference: args.preference,
             },
             MethodName::Auction => SwarmMethod::Auction {
-                epsilon: args.epsilon,
+                epsilon: args.epsilon.unwrap_or_else(|| {
+                    SwarmKnobs::default_epsilon(afg_mission::MissionMethod::Auction, needs_teams)
+                }),
             },
         })
         .collect();
@@ -219,6 +223,26 @@ mod tests {
         let text = std::fs::read_to_string(&svg).unwrap();
         assert!(text.contains("N = 40, loss 30 %, 20 % fail"));
         std::fs::remove_dir_all(dir).unwrap();
+    }
+
+    /// The auction's ε defaults by the rule `afg mission` and Python use: 0.01 on team
+    /// games, 0.001 on the paper's; a given ε is kept.
+    #[test]
+    fn the_auction_epsilon_defaults_by_the_game() {
+        let epsilon = |line: &str| -> f64 {
+            let crate::Command::Swarm(args) = crate::parse(line).unwrap() else {
+                unreachable!("a swarm command")
+            };
+            match super::grid(&args).unwrap().methods[..] {
+                [afg_baseline::SwarmMethod::Auction { epsilon }] => epsilon,
+                _ => unreachable!("one auction"),
+            }
+        };
+        let teams = crate::repo_root().join("datasets/teams-thresholds.jsonl");
+        let teams = format!("swarm --method auction --input {}", teams.display());
+        assert_eq!(epsilon(&teams), 0.01);
+        assert_eq!(epsilon(&format!("{teams} --epsilon 0.05")), 0.05);
+        assert_eq!(epsilon("swarm --method auction --robots 20"), 0.001);
     }
 
     #[test]

@@ -39,10 +39,7 @@ impl Row {
             None => optimum_welfare(instance)?,
         };
         let score = Score::of("the allocation", instance, &out.assignment, opt)?;
-        let gap = out
-            .stats
-            .bound
-            .map(|bound| (bound - welfare).max(0.0) / welfare.abs().max(1e-12));
+        let gap = out.stats.gap(welfare);
         let row = Row {
             score,
             stats: out.stats,

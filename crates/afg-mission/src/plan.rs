@@ -4,9 +4,8 @@
 //! their flags or keyword arguments onto a plan.
 
 use std::fmt::Write as _;
-use std::time::Duration;
 
-use afg_baseline::{Allocator, Method, SwarmMethod, TeamOptimum};
+use afg_baseline::{Allocator, Method, SwarmMethod};
 use afg_game::Preference;
 use afg_graph::GraphKind;
 
@@ -184,28 +183,15 @@ impl MissionPlan {
     pub fn planner(&self) -> Result<Planner, MissionError> {
         let decider = match self.method {
             MissionMethod::Central(method) => {
-                let allocator: Box<dyn Allocator> = match self.time_limit {
-                    None => method.allocator(self.seed),
-                    Some(seconds) if method == Method::Opt && !self.warm => {
-                        let limit = Duration::try_from_secs_f64(seconds)
-                            .ok()
-                            .filter(|d| !d.is_zero())
-                            .ok_or_else(|| {
-                                MissionError::Invalid(format!(
-                                    "the time limit must be finite and positive (got {seconds})"
-                                ))
-                            })?;
-                        Box::new(TeamOptimum {
-                            time_limit: Some(limit),
-                        })
-                    }
-                    Some(_) => {
-                        return Err(MissionError::Invalid(
-                            "a time limit is for the exact optimum (method opt, without --warm)"
-                                .into(),
-                        ));
-                    }
-                };
+                if self.time_limit.is_some() && self.warm {
+                    return Err(MissionError::Invalid(
+                        "a time limit is for the exact optimum solved from scratch (without --warm)"
+                            .into(),
+                    ));
+                }
+                let allocator = method
+                    .allocator_with(self.seed, self.time_limit)
+                    .map_err(|e| MissionError::Invalid(e.to_string()))?;
                 return self.central(allocator, Some(method));
             }
             MissionMethod::Grape => SwarmMethod::Grape {

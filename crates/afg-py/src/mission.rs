@@ -396,7 +396,7 @@ pub(crate) fn run_mission(
         swarm: SwarmKnobs {
             preference: preference.map_or(Ok(defaults.preference), crate::named)?,
             epsilon: epsilon.unwrap_or_else(|| {
-                SwarmKnobs::default_epsilon(method, std::slice::from_ref(&mission.inner))
+                SwarmKnobs::default_epsilon(method, mission.inner.needs_teams())
             }),
             radio,
             rounds_per_time: rounds_per_time.unwrap_or(defaults.rounds_per_time),

@@ -254,21 +254,18 @@ fn solve(
     seed: u64,
     time_limit: Option<f64>,
 ) -> PyResult<SolveResult> {
-    if let Some(seconds) = time_limit {
-        if method != Some("opt") {
-            return Err(crate::bad_input(
-                "time_limit applies to method=\"opt\" only",
-            ));
-        }
-        let limit = std::time::Duration::try_from_secs_f64(seconds)
-            .map_err(|_| crate::bad_input("time_limit is a number of seconds, at least 0"))?;
-        let exact = afg_baseline::TeamOptimum {
-            time_limit: Some(limit),
-        };
-        return run(py, instance, &exact);
+    if time_limit.is_some() && method.is_none() {
+        return Err(crate::bad_input(
+            "time_limit: a time limit is for the exact optimum (method opt) only",
+        ));
     }
     match (method, model) {
-        (Some(name), None) => run(py, instance, self::method(name)?.allocator(seed).as_ref()),
+        (Some(name), None) => {
+            let allocator = self::method(name)?
+                .allocator_with(seed, time_limit)
+                .map_err(|e| crate::bad_input(format!("time_limit: {e}")))?;
+            run(py, instance, allocator.as_ref())
+        }
         (None, Some(model)) => match model.cast::<PyModel>() {
             Ok(m) => run(py, instance, m.get().allocator.as_ref()),
             Err(_) => {

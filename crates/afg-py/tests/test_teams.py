@@ -47,14 +47,18 @@ def test_the_exact_optimum_reports_its_bound_and_gap() -> None:
     exact = afg.solve(inst, method="opt")
     assert exact.stats["gap"] == 0.0
     assert exact.stats["bound"] == pytest.approx(exact.welfare)
-    cut = afg.solve(inst, method="opt", time_limit=0.0)
+    cut = afg.solve(inst, method="opt", time_limit=1e-9)
     assert cut.welfare <= exact.welfare + 1e-9
     assert cut.stats["bound"] >= exact.welfare - 1e-9
     greedy = afg.solve(inst, method="greedy")
     assert greedy.welfare <= exact.welfare + 1e-9
     assert "bound" not in greedy.stats
-    with pytest.raises(afg.InvalidInputError, match="time_limit applies to method=\"opt\""):
+    with pytest.raises(afg.InvalidInputError, match="for the exact optimum"):
         afg.solve(inst, method="greedy", time_limit=1.0)
+    # The same door as the command line and missions: a limit must be positive.
+    for bad in (0.0, -1.0, float("nan")):
+        with pytest.raises(afg.InvalidInputError, match="finite and positive"):
+            afg.solve(inst, method="opt", time_limit=bad)
 
 
 def test_bad_team_input_and_refusals_are_clear_errors() -> None:

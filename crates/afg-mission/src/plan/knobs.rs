@@ -5,7 +5,7 @@ use afg_baseline::Network;
 use afg_game::Preference;
 use afg_graph::GraphKind;
 
-use crate::{Mission, MissionMethod};
+use crate::MissionMethod;
 
 /// The radio's knobs as the front ends spell them (`--radius`, `--knn`, `--loss`,
 /// `--burst`, `--delay`, `--activation`); [`RadioKnobs::network`] is the [`Network`] they
@@ -133,11 +133,13 @@ impl Default for SwarmKnobs {
 }
 
 impl SwarmKnobs {
-    /// The ε where none is given, for `method` on `missions`: for the auction, 0.01
-    /// where a task of any of them needs a team or a skill; the default 0.001
+    /// The ε where none is given, for `method` on games of which some task `needs_teams`
+    /// (a threshold or a skill; [`crate::Mission::needs_teams`], [`afg_game::Instance::has_teams`]):
+    /// for the auction, 0.01 where a task needs a team or a skill; the default 0.001
     /// otherwise (a method that does not use ε refuses any other). At 0.001 the
     /// auction's robots beyond the teams bid the places left up in steps too small to
-    /// settle before a team mission's horizon (docs/teams.md measures it).
+    /// settle before a team mission's horizon (docs/teams.md measures it). The one rule
+    /// for `afg mission`, `afg swarm` and Python alike.
     ///
     /// # Examples
     /// ```
@@ -147,13 +149,13 @@ impl SwarmKnobs {
     /// config.min_team = Some(afg_game::CountRange { min: 2, max: 3 });
     /// let teams = config.generate()?;
     /// let auction = MissionMethod::Auction;
-    /// assert_eq!(SwarmKnobs::default_epsilon(auction, &[plain.clone()]), 1e-3);
-    /// assert_eq!(SwarmKnobs::default_epsilon(auction, &[plain, teams.clone()]), 0.01);
-    /// assert_eq!(SwarmKnobs::default_epsilon(MissionMethod::Grape, &[teams]), 1e-3);
+    /// assert_eq!(SwarmKnobs::default_epsilon(auction, plain.needs_teams()), 1e-3);
+    /// assert_eq!(SwarmKnobs::default_epsilon(auction, teams.needs_teams()), 0.01);
+    /// assert_eq!(SwarmKnobs::default_epsilon(MissionMethod::Grape, true), 1e-3);
     /// # Ok::<(), afg_mission::MissionError>(())
     /// ```
-    pub fn default_epsilon(method: MissionMethod, missions: &[Mission]) -> f64 {
-        if method == MissionMethod::Auction && missions.iter().any(Mission::needs_teams) {
+    pub fn default_epsilon(method: MissionMethod, needs_teams: bool) -> f64 {
+        if method == MissionMethod::Auction && needs_teams {
             Self::TEAM_EPSILON
         } else {
             Self::default().epsilon

@@ -148,8 +148,7 @@ impl Sim<'_, '_> {
             Replan::Scratch(allocator) => {
                 let out = allocator.allocate(game)?;
                 let welfare = game.welfare(&out.assignment);
-                let gap = (out.stats.bound)
-                    .map(|bound| (bound - welfare).max(0.0) / welfare.abs().max(1e-12));
+                let gap = out.stats.gap(welfare);
                 Ok((out.assignment, gap))
             }
             Replan::Warm { first, .. } if !self.decided => {

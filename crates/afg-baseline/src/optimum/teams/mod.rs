@@ -82,7 +82,36 @@ impl TeamSolution {
         if self.proven {
             return 0.0;
         }
-        (self.bound - self.welfare).max(0.0) / self.welfare.abs().max(1e-12)
+        crate::certified_gap(self.bound, self.welfare)
+    }
+}
+
+impl TeamOptimum {
+    /// `opt` stopped within `seconds` (see [`TeamOptimum::time_limit`]); a limit beyond
+    /// what a clock can hold is no limit.
+    ///
+    /// # Errors
+    /// [`AllocError::InvalidParameter`] where `seconds` is not finite and positive.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::TeamOptimum;
+    /// assert!(TeamOptimum::with_time_limit(0.5)?.time_limit.is_some());
+    /// assert!(TeamOptimum::with_time_limit(1e30).is_ok());
+    /// for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+    ///     assert!(TeamOptimum::with_time_limit(bad).is_err());
+    /// }
+    /// # Ok::<(), afg_baseline::AllocError>(())
+    /// ```
+    pub fn with_time_limit(seconds: f64) -> Result<Self, AllocError> {
+        if !(seconds.is_finite() && seconds > 0.0) {
+            return Err(AllocError::InvalidParameter(format!(
+                "the time limit must be a finite and positive number of seconds (got {seconds})"
+            )));
+        }
+        Ok(TeamOptimum {
+            time_limit: Some(Duration::try_from_secs_f64(seconds).unwrap_or(Duration::MAX)),
+        })
     }
 }
 
