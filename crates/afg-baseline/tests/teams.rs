@@ -364,3 +364,28 @@ fn placing_staffings_with_skills_nearly_always_reaches_the_optimum() {
     }
     assert!(reached >= cases * 9 / 10, "{reached} of {cases}");
 }
+
+/// GRAPE (selfish, over a perfect and a lossy radio) settles on static threshold
+/// games, and where it settles every robot is satisfied: no robot prefers another
+/// task (Def. 3 with the team game's utilities).
+#[test]
+fn grape_leaves_every_robot_satisfied_on_threshold_games() {
+    use afg_baseline::{Network, Swarm};
+    use afg_game::Preference;
+    let lossy = Network {
+        loss: 0.3,
+        ..Network::default()
+    };
+    for seed in 0..4 {
+        let inst = scarce(30, 4, 70 + seed);
+        for network in [Network::default(), lossy.clone()] {
+            let run = Swarm::grape(Preference::Selfish, network, seed)
+                .run(&inst)
+                .unwrap();
+            let settled = run.assignment.expect("GRAPE settles");
+            inst.check(&settled).unwrap();
+            assert!(inst.is_stable(&settled, Preference::Selfish), "seed {seed}");
+            assert!((inst.welfare(&settled) - run.welfare).abs() < 1e-9);
+        }
+    }
+}

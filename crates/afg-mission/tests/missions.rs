@@ -257,9 +257,28 @@ fn check_run(mission: &Mission, run: &MissionRun, capacities: bool) {
             _ => {}
         }
     }
+    check_work(mission, run);
+}
+
+/// Work conserved: each task's work rebuilt from the trace alone is its workload
+/// when it is done, less when not, and adds up to the run's `work_done`; the waiting
+/// rebuilt with it is the run's.
+fn check_work(mission: &Mission, run: &MissionRun) {
     // Work conserved: each task's work rebuilt from the trace alone is its workload
     // when it is done, less when not, and adds up to the run's `work_done`.
-    let work = work_from_trace(mission, run);
+    let (work, waiting) = work_from_trace(mission, run);
+    // Waiting rebuilt the same way is the run's, task by task (missions with teams).
+    match &run.metrics.waiting {
+        Some(measured) => {
+            for (j, (w, m)) in waiting.iter().zip(&measured.by_task).enumerate() {
+                assert!(
+                    (w - m).abs() <= 1e-6 * (1.0 + m),
+                    "task {j}: waited {w}, run says {m}"
+                );
+            }
+        }
+        None => assert!(waiting.iter().all(|&w| w == 0.0), "{waiting:?}"),
+    }
     let done: Vec<bool> = (0..mission.tasks.len())
         .map(|j| {
             (run.trace.iter()).any(|e| matches!(e, TraceEvent::TaskDone { task, .. } if *task == j))
@@ -304,23 +323,41 @@ fn time_of(event: &TraceEvent) -> f64 {
     }
 }
 
-/// Each task's work, from the trace alone: between consecutive events the robots
-/// that arrived at a task and have not left it (sent elsewhere, failed, or freed by
-/// the task being done) work at `work_rate(present, eps)` until the run's end.
-fn work_from_trace(mission: &Mission, run: &MissionRun) -> Vec<f64> {
+/// Each task's work and the robot-time waited there, from the trace alone: between
+/// consecutive events the robots that arrived at a task and have not left it (sent
+/// elsewhere, failed, or freed by the task being done) work at `work_rate(present,
+/// eps)` while they meet the task's threshold and hold its skills, and wait otherwise.
+fn work_from_trace(mission: &Mission, run: &MissionRun) -> (Vec<f64>, Vec<f64>) {
     let (n, k) = (mission.robots.len(), mission.tasks.len());
     let mut at: Vec<Option<usize>> = vec![None; n];
     let mut assigned = vec![-1i64; n];
     let mut done = vec![false; k];
-    let mut work = vec![0.0; k];
+    let (mut work, mut waiting) = (vec![0.0; k], vec![0.0; k]);
     let mut last = 0.0;
     let mut work_until = |time: f64, at: &[Option<usize>], done: &[bool], work: &mut [f64]| {
         let mut present = vec![0usize; k];
-        for &j in at.iter().flatten() {
-            present[j] += 1;
+        let mut held = vec![vec![0u32; mission.num_skills()]; k];
+        for (i, &j) in at.iter().enumerate() {
+            if let Some(j) = j {
+                present[j] += 1;
+                for (h, s) in held[j].iter_mut().zip(&mission.robots[i].skills) {
+                    *h += s;
+                }
+            }
         }
-        for j in (0..k).filter(|&j| !done[j]) {
-            work[j] += work_rate(present[j], mission.tasks[j].eps) * (time - last);
+        for j in (0..k).filter(|&j| !done[j] && present[j] > 0) {
+            let spec = &mission.tasks[j];
+            let complete = present[j] >= spec.min_team
+                && spec
+                    .requires
+                    .iter()
+                    .zip(&held[j])
+                    .all(|(need, have)| have >= need);
+            if complete {
+                work[j] += work_rate(present[j], spec.eps) * (time - last);
+            } else {
+                waiting[j] += present[j] as f64 * (time - last);
+            }
         }
         last = time;
     };
@@ -349,7 +386,7 @@ fn work_from_trace(mission: &Mission, run: &MissionRun) -> Vec<f64> {
         }
     }
     work_until(run.metrics.end, &at, &done, &mut work);
-    work
+    (work, waiting)
 }
 
 proptest! {
@@ -367,7 +404,6 @@ proptest! {
         robots in 2usize..30,
         tasks in 1usize..8,
         capped in any::<bool>(),
-        rule in 0usize..5,
     ) {
         let mut config = MissionConfig::new(preset, robots, tasks, seed);
         config.horizon = 30.0;
@@ -387,30 +423,101 @@ proptest! {
             )
         };
         let auction = Decentralised { method: SwarmMethod::Auction { epsilon: 1e-3 }, ..grape.clone() };
-        let replan = match rule {
-            0 => Replan::Scratch(allocator.as_ref()),
-            1 => Replan::Warm { first: allocator.as_ref(), preference: afg_game::Preference::Balanced },
-            2 => Replan::WarmOpt,
-            3 => Replan::Scratch(&Optimum),
-            _ if seed % 2 == 0 => Replan::Decentralised(&grape),
-            _ => Replan::Decentralised(&auction),
-        };
-        let options = RunOptions { replan_every: (rule == 3).then_some(2.5), ..traced() };
-        let run = simulate(&mission, replan, options).unwrap();
-        // Robots acting on views not yet settled may crowd a task past its capacity.
-        check_run(&mission, &run, rule != 4);
-        prop_assert_eq!(run.metrics.swarm.is_some(), rule == 4);
-        let again = simulate(&mission, replan, options).unwrap();
-        let strip = |r: &MissionRun| -> Vec<TraceEvent> {
-            r.trace.iter().cloned().map(|e| match e {
-                TraceEvent::Decision { time, asked, tasks, positions, gap, .. } =>
-                    TraceEvent::Decision { time, asked, tasks, positions, compute_s: 0.0, gap },
-                e => e,
-            }).collect()
-        };
-        prop_assert_eq!(strip(&run), strip(&again));
-        prop_assert_eq!(run.metrics.reward_done, again.metrics.reward_done);
+        let swarm = if seed % 2 == 0 { &grape } else { &auction };
+        // Every replanning rule on every mission drawn.
+        let rules = [
+            Replan::Scratch(allocator.as_ref()),
+            Replan::Warm { first: allocator.as_ref(), preference: afg_game::Preference::Balanced },
+            Replan::WarmOpt,
+            Replan::Scratch(&Optimum),
+            Replan::Decentralised(swarm),
+        ];
+        for (rule, replan) in rules.into_iter().enumerate() {
+            let options = RunOptions { replan_every: (rule == 3).then_some(2.5), ..traced() };
+            let run = simulate(&mission, replan, options).unwrap();
+            // Robots acting on views not yet settled may crowd a task past its capacity.
+            check_run(&mission, &run, rule != 4);
+            prop_assert_eq!(run.metrics.swarm.is_some(), rule == 4);
+            let again = simulate(&mission, replan, options).unwrap();
+            prop_assert_eq!(strip(&run), strip(&again));
+            prop_assert_eq!(run.metrics.reward_done, again.metrics.reward_done);
+        }
     }
+
+    /// Random team and skill missions with failures that return, decided by the exact
+    /// solver under a time limit, the auction over a lossy radio and the staffing
+    /// models: the work rebuilt from the trace (done only while the present team meets
+    /// its threshold and skills) and the waiting match the run, and the rules hold.
+    #[test]
+    fn team_missions_keep_their_work_and_waiting(
+        seed in 0u64..1000,
+        preset in prop_oneof![Just(Preset::Static), Just(Preset::Waves), Just(Preset::Attrition)],
+        robots in 6usize..30,
+        tasks in 1usize..6,
+        skills in any::<bool>(),
+    ) {
+        let mut config = MissionConfig::new(preset, robots, tasks, seed);
+        config.horizon = 30.0;
+        config.min_team = Some(afg_game::CountRange { min: 1, max: 4 });
+        if skills {
+            config.skills = Some(afg_game::SkillDraw {
+                count: 2,
+                share: 0.5,
+                requires: afg_game::CountRange { min: 0, max: 1 },
+            });
+        }
+        let mut mission = config.generate().unwrap();
+        for f in &mut mission.failures {
+            f.returns = Some((f.time + 3.0).min(29.0)).filter(|&b| b > f.time);
+        }
+        let opt = afg_baseline::TeamOptimum::with_time_limit(0.05).unwrap();
+        let auction = Decentralised {
+            rounds_per_time: 20.0,
+            seed,
+            ..Decentralised::new(
+                SwarmMethod::Auction { epsilon: 0.01 },
+                Network { loss: 0.2, ..Network::default() },
+            )
+        };
+        let model = if skills { "staffing_skills" } else { "staffing_teams" };
+        let model = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/ours").join(model);
+        let staffing = afg_learn::run::load_model(&model, Default::default()).unwrap();
+        for replan in [
+            Replan::Scratch(&opt),
+            Replan::Decentralised(&auction),
+            Replan::Scratch(staffing.as_ref()),
+        ] {
+            let run = simulate(&mission, replan, traced()).unwrap();
+            prop_assert_eq!(run.metrics.waiting.is_some(), mission.has_teams());
+            check_run(&mission, &run, false);
+        }
+    }
+}
+
+/// A trace without compute times (which vary from run to run).
+fn strip(r: &MissionRun) -> Vec<TraceEvent> {
+    r.trace
+        .iter()
+        .cloned()
+        .map(|e| match e {
+            TraceEvent::Decision {
+                time,
+                asked,
+                tasks,
+                positions,
+                gap,
+                ..
+            } => TraceEvent::Decision {
+                time,
+                asked,
+                tasks,
+                positions,
+                compute_s: 0.0,
+                gap,
+            },
+            e => e,
+        })
+        .collect()
 }
 
 /// The incremental optimum is the optimum of every decision's game, with prices that

@@ -212,7 +212,7 @@ fn generated_team_missions_repeat_and_refuse_what_cannot_play_them() {
 
 #[test]
 fn the_exact_solver_in_the_loop_records_its_gap_per_decision() {
-    use afg_mission::{MissionMethod, MissionPlan, Recording, TraceEvent};
+    use afg_mission::{MissionPlan, Recording, TraceEvent};
     let mut config = MissionConfig::new(Preset::Static, 60, 6, 5);
     config.min_team = Some(afg_game::CountRange { min: 10, max: 20 });
     let mission = config.generate().unwrap();
@@ -252,11 +252,45 @@ fn the_exact_solver_in_the_loop_records_its_gap_per_decision() {
         .unwrap()
         .run(&mission, recording, |_| {})
         .unwrap();
+    // Its gap is the one the root's bound gives the assignment it took: the first
+    // game is the whole static mission at the robots' starts, and the limit leaves
+    // only the root (its dive cut short, so no better than the full dive).
+    let tasks = mission.tasks.iter().map(|t| t.task()).collect();
+    let starts = mission.robots.iter().map(|r| r.position).collect();
+    assert!(!mission.allow_void);
+    let first = afg_game::Instance::new(starts, tasks, mission.beta)
+        .unwrap()
+        .with_teams(mission.tasks.iter().map(|t| t.min_team).collect(), &[], &[])
+        .unwrap();
+    let root = afg_baseline::TeamOptimum::relax(&first).bound;
+    let (_, dived) = afg_baseline::TeamOptimum::dive(&first, |relaxed, fractional| {
+        afg_baseline::TeamOptimum::half_rounding(&first, relaxed, fractional)
+    });
+    let Some(TraceEvent::Decision { gap, tasks, .. }) = run
+        .trace
+        .iter()
+        .find(|e| matches!(e, TraceEvent::Decision { .. }))
+    else {
+        unreachable!("the mission decides")
+    };
+    let taken = (tasks.iter())
+        .map(|&j| u32::try_from(j).ok().map(afg_game::TaskId))
+        .collect();
+    let welfare = first.welfare(&afg_game::Assignment::from_tasks(&first, taken).unwrap());
+    assert!(welfare <= dived + 1e-9, "{welfare} > {dived}");
+    let expected = afg_baseline::certified_gap(root, welfare);
+    assert!(expected > 0.0);
     assert!(
-        run.metrics.gap_max.unwrap() > 0.0,
-        "{:?}",
-        run.metrics.gap_max
+        (gap.unwrap() - expected).abs() < 1e-9,
+        "{gap:?} against {expected}"
     );
+    assert!(run.metrics.gap_max.unwrap() >= expected - 1e-9);
+}
+
+/// A time limit is refused where it does not apply or is not a positive number.
+#[test]
+fn a_mission_time_limit_is_refused_where_it_does_not_apply() {
+    use afg_mission::{MissionMethod, MissionPlan};
     let refused = |plan: MissionPlan| plan.planner().err().unwrap().to_string();
     let greedy = MissionMethod::Central(afg_baseline::Method::Greedy);
     for plan in [
@@ -331,4 +365,40 @@ fn grape_and_the_auction_over_the_radio_play_thresholds_and_the_auction_skills()
     );
     let done = run(MissionMethod::Auction, &skilled).unwrap();
     assert_eq!(done.metrics.tasks_done, skilled.tasks.len());
+}
+
+/// GRAPE over the radio on the hand mission of two robots and one task that needs
+/// both: its distributed mutex lets one robot of a neighbourhood change per round, so
+/// robot 0 joins at round 0 and robot 1 at round 1 (t = 0.01 at 100 rounds per time
+/// unit); robot 1 arrives at 3.01, the pair works from then, and robot 0 waited 2.01.
+#[test]
+fn grape_on_a_hand_team_mission_joins_one_robot_per_round() {
+    use afg_mission::{MissionMethod, MissionPlan, Recording};
+    let mission = Mission::new(
+        1.0,
+        false,
+        50.0,
+        vec![robot(0.0, vec![]), robot(4.0, vec![])],
+        vec![task(3.0, 2, vec![])],
+        vec![],
+    )
+    .unwrap();
+    let plan = MissionPlan {
+        method: MissionMethod::Grape,
+        ..MissionPlan::default()
+    };
+    assert_eq!(plan.swarm.rounds_per_time, 100.0);
+    let run = plan
+        .planner()
+        .unwrap()
+        .run(&mission, Recording::default(), |_| {})
+        .unwrap();
+    let round = 0.01;
+    let makespan = run.metrics.makespan.unwrap();
+    assert!(
+        close(makespan, round + 3.0 + 3.0 / work_rate(2, 2.0)),
+        "{makespan}"
+    );
+    let waiting = run.metrics.waiting.unwrap().total;
+    assert!(close(waiting, 2.0 + round), "{waiting}");
 }
