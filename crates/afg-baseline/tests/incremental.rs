@@ -117,9 +117,24 @@ fn run(inst: &Instance, seed: u64, events: &[u8], capped: bool) -> (Vec<Option<T
                 opt.add_robots(&spots)
             }
         };
-        // Refused events (the last task, no room left) leave the game as it was.
-        if done.is_ok() {
-            (robots, tasks) = (next_robots, next_tasks);
+        // Refused events (the last task, the last robots, no room left) leave the game
+        // as it was; no other event is refused (a kept optimum that refused every
+        // event would fail here).
+        match done {
+            Ok(_) => (robots, tasks) = (next_robots, next_tasks),
+            Err(err) => {
+                let room = (next_tasks.iter())
+                    .map(|t| t.capacity.unwrap_or(usize::MAX))
+                    .fold(0usize, usize::saturating_add);
+                let crowded = !inst.allows_void() && room < next_robots.len();
+                let why = match code % 4 {
+                    1 => m == 1 || crowded,
+                    2 => next_robots.is_empty(),
+                    3 => crowded,
+                    _ => false,
+                };
+                assert!(why, "{step}: refused ({err})");
+            }
         }
         assert_eq!(
             (opt.num_robots(), opt.num_tasks()),
