@@ -64,21 +64,14 @@ fn the_static_preset_is_the_static_game() {
     }
 }
 
-/// Robot positions and task work stepped with a fine clock `dt`, replaying the run's
-/// decisions at their times: when each task is done, and every (robot, task, time)
-/// arrival.
-fn reference(mission: &Mission, run: &MissionRun, dt: f64) -> (Vec<f64>, Vec<(usize, usize, f64)>) {
-    let n = mission.robots.len();
-    let mut pos: Vec<Point> = mission.robots.iter().map(|r| r.position).collect();
-    let mut task: Vec<Option<usize>> = vec![None; n];
-    let mut remaining: Vec<f64> = mission.tasks.iter().map(|t| t.workload).collect();
-    let mut done = vec![f64::NAN; remaining.len()];
-    let mut arrived = vec![f64::NAN; n];
-    let mut arrivals: Vec<(usize, usize, f64)> = Vec::new();
-    // The run's decisions, and the mission's failures and returns, at their times.
-    let decisions: Vec<(f64, Vec<i64>)> = run
-        .trace
-        .iter()
+/// The run's decisions, and the mission's failures and returns (robot, back), at
+/// their times.
+#[allow(clippy::type_complexity)]
+fn scheduled(
+    mission: &Mission,
+    run: &MissionRun,
+) -> (Vec<(f64, Vec<i64>)>, Vec<(f64, usize, bool)>) {
+    let decisions = (run.trace.iter())
         .filter_map(|e| match e {
             TraceEvent::Decision { time, tasks, .. } => Some((*time, tasks.clone())),
             _ => None,
@@ -90,6 +83,21 @@ fn reference(mission: &Mission, run: &MissionRun, dt: f64) -> (Vec<f64>, Vec<(us
         })
         .collect();
     failures.sort_by(|a, b| a.0.total_cmp(&b.0));
+    (decisions, failures)
+}
+
+/// Robot positions and task work stepped with a fine clock `dt`, replaying the run's
+/// decisions at their times: when each task is done, and every (robot, task, time)
+/// arrival.
+fn reference(mission: &Mission, run: &MissionRun, dt: f64) -> (Vec<f64>, Vec<(usize, usize, f64)>) {
+    let n = mission.robots.len();
+    let mut pos: Vec<Point> = mission.robots.iter().map(|r| r.position).collect();
+    let mut task: Vec<Option<usize>> = vec![None; n];
+    let mut remaining: Vec<f64> = mission.tasks.iter().map(|t| t.workload).collect();
+    let mut done = vec![f64::NAN; remaining.len()];
+    let mut arrived = vec![f64::NAN; n];
+    let mut arrivals: Vec<(usize, usize, f64)> = Vec::new();
+    let (decisions, failures) = scheduled(mission, run);
     let mut alive = vec![true; n];
     let (mut t, mut next, mut next_failure) = (0.0, 0, 0);
     while t < run.metrics.end + dt {
