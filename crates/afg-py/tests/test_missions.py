@@ -32,7 +32,13 @@ def test_run_mission_gives_metrics_timeline_and_decisions() -> None:
     mission = afg.Mission.generate("attrition", robots=30, tasks=6, seed=1)
     res = afg.run_mission(mission, method="greedy", trace=True)
     m = res.metrics
-    assert m["tasks"] == 6 and 0 <= m["tasks_done"] <= 6
+    # The metrics are the trace's: the tasks it reports done, and their r_j W_j.
+    events = [json.loads(line) for line in res.trace_jsonl().splitlines()]
+    done = [e["task"] for e in events if e["event"] == "task_done"]
+    tasks = json.loads(mission.to_json())["tasks"]
+    assert m["tasks"] == 6 and m["tasks_done"] == len(done) == len(set(done)) > 0
+    worth = sum(tasks[j]["reward"] * tasks[j]["workload"] for j in done)
+    assert m["reward_done"] == pytest.approx(worth, rel=1e-12)
     assert m["reward_done"] <= m["reward_total"] + 1e-9
     t = res.timeline
     assert (np.diff(t["time"]) >= 0).all() and (np.diff(t["done"]) >= 0).all()

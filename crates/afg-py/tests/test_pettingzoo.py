@@ -114,11 +114,11 @@ def test_the_mission_environment_steps_from_any_thread() -> None:
 
     env = mission_v0.parallel_env(robots=6, tasks=3)
     env.reset(seed=0)
-    errors = []
+    errors, stepped = [], []
 
     def step() -> None:
         try:
-            env.step({a: 3 for a in env.agents})
+            stepped.append(env.step({a: 0 for a in env.agents}))
         except BaseException as e:  # a panic would be a PanicException
             errors.append(e)
 
@@ -126,6 +126,17 @@ def test_the_mission_environment_steps_from_any_thread() -> None:
     thread.start()
     thread.join()
     assert errors == []
+    # The step did what the same step does on the main thread: the robots moved.
+    twin = mission_v0.parallel_env(robots=6, tasks=3)
+    first, _ = twin.reset(seed=0)
+    here = twin.step({a: 0 for a in twin.agents})
+    (observations, rewards, *_), = stepped
+    assert rewards == here[1]
+    for agent, seen in here[0].items():
+        assert np.array_equal(observations[agent]["observation"], seen["observation"])
+    assert any(
+        not np.array_equal(first[a]["observation"], here[0][a]["observation"]) for a in first
+    )
 
 
 def _core_return(mission: afg.Mission, played: list) -> float:

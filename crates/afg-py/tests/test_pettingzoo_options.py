@@ -133,14 +133,33 @@ def test_a_mission_renders_as_an_image_that_follows_the_robots() -> None:
 
 
 def test_supersuit_vector_wrappers_run_missions_with_failures() -> None:
+    """SuperSuit's vector of two copies plays what the environment itself plays: the
+    first copy (reset with seed 0) replayed action for action on a core environment
+    gives the same rewards and observations until its episode ends."""
     ss = pytest.importorskip("supersuit")
-    env = mission_v0.parallel_env(robots=6, tasks=3, preset="attrition", fail_share=0.5, keep_failed=True)
-    vec = ss.pettingzoo_env_to_vec_env_v1(env)
+    knobs = dict(robots=6, tasks=3, preset="attrition", fail_share=0.5, keep_failed=True)
+    vec = ss.pettingzoo_env_to_vec_env_v1(mission_v0.parallel_env(**knobs))
     vec = ss.concat_vec_envs_v1(vec, 2, num_cpus=0, base_class="gymnasium")
     obs, _ = vec.reset(seed=0)
     assert obs["observation"].shape == (12, 5 + 9 * 3)
+    core = mission_v0.parallel_env(**knobs)
+    seen, _ = core.reset(seed=0)
+    agents = core.possible_agents
+    replayed, earned = 0, 0.0
     for _ in range(30):
         masks = obs["action_mask"]
         actions = np.array([int(np.flatnonzero(m)[0]) for m in masks])
         obs, rewards, terminated, truncated, _ = vec.step(actions)
         assert rewards.shape == (12,)
+        if not core.agents:
+            continue  # the first copy's episode ended: SuperSuit has reset it unseeded
+        seen, core_rewards, core_terminated, _, _ = core.step(
+            {a: int(actions[i]) for i, a in enumerate(agents) if a in core.agents}
+        )
+        assert rewards[:6].tolist() == pytest.approx([core_rewards.get(a, 0.0) for a in agents])
+        if core.agents:
+            for i, a in enumerate(agents):
+                assert np.array_equal(obs["observation"][i], seen[a]["observation"])
+        replayed += 1
+        earned += sum(core_rewards.values())
+    assert replayed >= 5 and earned > 0.0

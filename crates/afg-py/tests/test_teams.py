@@ -3,6 +3,8 @@ knobs, the exact optimum with its bound and gap, and allocators that refuse."""
 
 from __future__ import annotations
 
+import json
+import math
 import warnings
 from pathlib import Path
 
@@ -10,6 +12,8 @@ import numpy as np
 import pytest
 
 import afg
+
+ROOT = Path(__file__).resolve().parents[3]
 
 
 def test_team_instances_expose_thresholds_and_skills_as_arrays() -> None:
@@ -40,6 +44,31 @@ def test_the_generator_draws_team_games_like_afg_gen() -> None:
     plain = afg.generate(40, 5, seed=3)
     assert np.array_equal(plain.robots, inst.robots)
     assert plain.min_team.tolist() == [1] * 5 and plain.skills.shape == (40, 0)
+
+
+def test_the_exact_optimum_reaches_the_committed_optima_with_a_true_bound_and_gap() -> None:
+    """The committed team games' certified optima (proven independently by HiGHS in
+    test_teams_milp.py): the exact solver reaches each; stopped at its root, its bound
+    is above the optimum and its gap is (bound - welfare) / welfare."""
+    checked = 0
+    for game in ("thresholds", "skills", "both"):
+        lines = (ROOT / "datasets" / f"teams-{game}.jsonl").read_text().splitlines()
+        optima = json.loads((ROOT / "datasets" / f"teams-{game}.optima.json").read_text())
+        for line, optimum in zip(lines, optima):
+            if optimum["robots"] > 20:
+                continue
+            inst = afg.Instance.parse(line)
+            exact = afg.solve(inst, method="opt")
+            assert exact.welfare == pytest.approx(optimum["welfare"], rel=1e-9, abs=1e-9)
+            assert exact.stats["bound"] == pytest.approx(optimum["welfare"], rel=1e-9, abs=1e-9)
+            assert exact.stats["gap"] == 0.0
+            cut = afg.solve(inst, method="opt", time_limit=1e-9)
+            assert cut.stats["bound"] >= optimum["welfare"] - 1e-9
+            assert cut.welfare <= optimum["welfare"] + 1e-9
+            expected = (cut.stats["bound"] - cut.welfare) / abs(cut.welfare)
+            assert cut.stats["gap"] == pytest.approx(expected, rel=1e-9, abs=1e-12)
+            checked += 1
+    assert checked >= 10
 
 
 def test_the_exact_optimum_reports_its_bound_and_gap() -> None:
@@ -81,7 +110,21 @@ def test_team_missions_wait_for_their_teams_and_refuse_what_cannot_play_them() -
     metrics = afg.run_mission(mission, method="opt").metrics
     waiting = metrics["waiting"]
     assert isinstance(waiting["by_task"], np.ndarray) and waiting["by_task"].shape == (8,)
-    assert waiting["total"] == pytest.approx(waiting["by_task"].sum()) and waiting["total"] >= 0.0
+    assert waiting["total"] == pytest.approx(waiting["by_task"].sum()) and waiting["total"] > 0.0
+    # By hand: robots at x = 0 and 4, one task at x = 1 of workload 3 that needs both.
+    # Robot 0 arrives at t = 1 and waits for robot 1 (t = 3); the pair works at
+    # log2(3) per time unit from then.
+    hand = afg.Mission.parse(json.dumps({
+        "format": "afg-mission", "version": 1, "beta": 1.0, "horizon": 50.0,
+        "robots": [{"position": {"x": x, "y": 0.0}, "speed": 1.0} for x in (0.0, 4.0)],
+        "tasks": [{"position": {"x": 1.0, "y": 0.0}, "reward": 1.0, "eps": 2.0,
+                   "workload": 3.0, "appears": 0.0, "min_team": 2}],
+    }))
+    for method in ("opt", "greedy"):
+        by_hand = afg.run_mission(hand, method=method).metrics
+        assert by_hand["waiting"]["total"] == pytest.approx(2.0, abs=1e-9)
+        assert by_hand["waiting"]["by_task"].tolist() == pytest.approx([2.0], abs=1e-9)
+        assert by_hand["makespan"] == pytest.approx(3.0 + 3.0 / math.log2(3.0), abs=1e-9)
     assert afg.run_mission(mission, method="opt", time_limit=5.0).metrics["gap_max"] == 0.0
     with pytest.raises(afg.InvalidInputError, match="for the exact optimum"):
         afg.run_mission(mission, method="greedy", time_limit=1.0)
