@@ -24,6 +24,11 @@ for method in ["opt", "da-balanced", "da", "greedy", "nearest"]:
     )
 
 best = afg.solve(inst, method="opt")
+# The optimum is the optimum: no method scores above it, and it scores 100 %.
+if best.percent_of_opt != 100.0 or any(
+    afg.solve(inst, method=m).welfare > best.welfare + 1e-9 for m in ["da-balanced", "da", "greedy", "nearest"]
+):
+    raise SystemExit("a method scored above the exact optimum")
 if args.plot:
     try:
         import matplotlib

@@ -19,3 +19,6 @@ for episode in range(20):
         obs, reward, done, truncated, info = env.step(action)
     percents.append(info["percent_of_opt"])
 print(f"random agent: {np.mean(percents):.2f} % of OPT over {len(percents)} episodes")
+# A valid allocation never beats the optimum, and a random one falls short of it.
+if not (0.0 < min(percents) and max(percents) <= 100.0 + 1e-9 and np.mean(percents) < 100.0):
+    raise SystemExit(f"a random agent's % of OPT out of range: {percents}")
