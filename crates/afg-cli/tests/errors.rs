@@ -260,3 +260,82 @@ fn afg_train_staffing_keeps_an_existing_model_unless_forced() {
     assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `afg solve … | head`: a reader that closes the pipe ends the command quietly, with
+/// no panic and no stack trace (even with backtraces on).
+#[test]
+fn a_closed_pipe_ends_the_command_quietly() {
+    let dataset = concat!(env!("CARGO_MANIFEST_DIR"), "/../../datasets/n100.jsonl");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_afg"))
+        .args(["solve", "--method", "greedy", "--input", dataset, "--json"])
+        .env("RUST_BACKTRACE", "1")
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("afg runs");
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success(), "{:?}: {}", out.status, stderr(&out));
+    assert!(!stderr(&out).contains("panicked"), "{}", stderr(&out));
+}
+
+/// "% of OPT" on a team game: measured against the exact optimum within
+/// --reference-time-limit (against its certified bound, said so, where not proven),
+/// or not at all with --no-reference.
+#[test]
+fn afg_solve_measures_team_games_within_a_time_limit_or_not_at_all() {
+    let dir = std::env::temp_dir().join(format!("afg-reference-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("scarce.jsonl");
+    let file = file.to_str().unwrap();
+    let made = afg(&[
+        "gen",
+        "--robots",
+        "100",
+        "--tasks",
+        "10",
+        "--min-team",
+        "10,20",
+        "--seed",
+        "1",
+        "--out",
+        file,
+    ]);
+    assert!(made.status.success(), "{}", stderr(&made));
+    let solve = |extra: &[&str]| -> serde_json::Value {
+        let args = [
+            &["solve", "--method", "nearest", "--input", file, "--json"][..],
+            extra,
+        ]
+        .concat();
+        let out = afg(&args);
+        assert!(out.status.success(), "{}", stderr(&out));
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let exact = &solve(&[])["rows"][0];
+    assert_eq!(exact["reference"]["proven"], true);
+    let rushed = &solve(&["--reference-time-limit", "1e-9"])["rows"][0];
+    let bound = rushed["reference"]["bound"].as_f64().unwrap();
+    assert_eq!(rushed["reference"]["proven"], false);
+    assert!(bound > exact["opt_welfare"].as_f64().unwrap());
+    let percent = rushed["percent_of_opt"].as_f64().unwrap();
+    assert!((percent - 100.0 * rushed["welfare"].as_f64().unwrap() / bound).abs() < 1e-9);
+    let alone = &solve(&["--no-reference"])["rows"][0];
+    assert!(alone["percent_of_opt"].is_null() && alone.get("reference").is_none());
+    let bad = afg(&[
+        "solve",
+        "--method",
+        "nearest",
+        "--input",
+        file,
+        "--reference-time-limit",
+        "0",
+    ]);
+    assert_eq!(bad.status.code(), Some(1));
+    assert!(
+        stderr(&bad).contains("finite and positive"),
+        "{}",
+        stderr(&bad)
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}

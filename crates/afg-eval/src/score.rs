@@ -14,7 +14,10 @@ use crate::EvalError;
 pub struct Score {
     /// Welfare of the allocation.
     pub welfare: f64,
-    /// Welfare of the exact optimum.
+    /// Welfare of the exact optimum (in `afg solve`'s rows, what the allocation is
+    /// measured against: [`crate::solve::Reference::measure`]; NaN, JSON `null`,
+    /// where nothing was).
+    #[serde(deserialize_with = "nan_if_null")]
     pub opt_welfare: f64,
     /// `100 · welfare / opt_welfare` ([`percent_of_opt`]); `None` (JSON `null`) when
     /// the optimum's welfare is not positive, where a ratio means nothing.
@@ -23,6 +26,11 @@ pub struct Score {
     pub ns_rate_balanced: f64,
     /// Share of robots (0..=1) that would move under the selfish preference.
     pub ns_rate_selfish: f64,
+}
+
+/// A number that JSON may hold as `null` (serde_json's NaN).
+fn nan_if_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(<Option<f64> as serde::Deserialize>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 impl Score {
@@ -64,6 +72,20 @@ impl Score {
             ns_rate_balanced: instance.ns_rate(assignment, Preference::Balanced),
             ns_rate_selfish: instance.ns_rate(assignment, Preference::Selfish),
         })
+    }
+}
+
+impl Score {
+    /// The score of `assignment` measured against nothing: its welfare and NS rates,
+    /// `opt_welfare` NaN (JSON `null`) and no percentage.
+    pub fn unmeasured(instance: &Instance, assignment: &Assignment) -> Score {
+        Score {
+            welfare: instance.welfare(assignment),
+            opt_welfare: f64::NAN,
+            percent_of_opt: None,
+            ns_rate_balanced: instance.ns_rate(assignment, Preference::Balanced),
+            ns_rate_selfish: instance.ns_rate(assignment, Preference::Selfish),
+        }
     }
 }
 

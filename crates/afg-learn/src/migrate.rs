@@ -257,13 +257,13 @@ fn migrate_manifest(dir: &Path) -> Result<Vec<PathBuf>, LearnError> {
         let last_round = serde_json::from_value(summary["last"].clone())
             .map_err(|e| bad(&summary_path, format!("not a price-run summary: {e}")))?;
         let command = summary["command"].as_str().unwrap_or_default().to_owned();
-        let record = crate::run::RunRecord::PriceModel {
+        let record = crate::manifest::RunRecord::PriceModel {
             rounds: model.training.rounds,
             last_round: Some(last_round),
         };
-        let manifest = crate::run::RunManifest {
+        let manifest = crate::manifest::RunManifest {
             wall_time_s: summary["wall_s"].as_f64(),
-            ..crate::run::RunManifest::new(command, model.training.seed, record)
+            ..crate::manifest::RunManifest::new(command, model.training.seed, record)
         };
         run.write_manifest(&manifest)?;
         std::fs::remove_file(&summary_path).map_err(|source| LearnError::Io {

@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use afg_baseline::{Allocator, Method};
 use afg_eval::scorecard::{Scorecard, scorecard};
-use afg_eval::solve::Row;
+use afg_eval::solve::{Against, Row};
 use afg_game::Preference;
 use afg_game::realloc::PreviousAssignment;
 use afg_game::{RobotId, TaskId};
@@ -41,6 +41,14 @@ fn alloc_stats(row: &Row) -> Vec<(String, f64)> {
     if let (Some(bound), Some(gap)) = (s.bound, row.gap) {
         stats.push(("bound".into(), bound));
         stats.push(("gap".into(), gap));
+    }
+    if let Some(reference) = row.reference {
+        stats.push(("reference_welfare".into(), reference.welfare));
+        stats.push(("reference_bound".into(), reference.bound));
+        stats.push((
+            "reference_proven".into(),
+            f64::from(u8::from(reference.proven)),
+        ));
     }
     stats
 }
@@ -166,9 +174,18 @@ pub struct PyModel {
 
 #[pymethods]
 impl PyModel {
-    /// Allocates one instance (the GIL is released while it runs).
-    fn allocate(&self, py: Python<'_>, instance: &PyInstance) -> PyResult<SolveResult> {
-        run(py, instance, self.allocator.as_ref())
+    /// Allocates one instance (the GIL is released while it runs), measured against
+    /// the optimum as `afg.solve` is (`reference`, `reference_time_limit`).
+    #[pyo3(signature = (instance, reference=true, reference_time_limit=10.0))]
+    fn allocate(
+        &self,
+        py: Python<'_>,
+        instance: &PyInstance,
+        reference: bool,
+        reference_time_limit: f64,
+    ) -> PyResult<SolveResult> {
+        let against = against(reference, reference_time_limit)?;
+        run(py, instance, self.allocator.as_ref(), against)
     }
     fn __repr__(&self) -> String {
         format!("Model({:?})", self.path)
@@ -214,12 +231,30 @@ fn load_model(
     })
 }
 
-fn run(py: Python<'_>, instance: &PyInstance, allocator: &dyn Allocator) -> PyResult<SolveResult> {
+/// What a result is measured against: the optimum within `time_limit` seconds on a
+/// team game (of its bound where not proven), or nothing.
+fn against(reference: bool, time_limit: f64) -> PyResult<Against> {
+    if !reference {
+        return Ok(Against::Nothing);
+    }
+    afg_baseline::TeamOptimum::with_time_limit(time_limit)
+        .map_err(|e| crate::bad_input(format!("reference_time_limit: {e}")))?;
+    Ok(Against::Optimum {
+        time_limit: Some(time_limit),
+    })
+}
+
+fn run(
+    py: Python<'_>,
+    instance: &PyInstance,
+    allocator: &dyn Allocator,
+    against: Against,
+) -> PyResult<SolveResult> {
     let inst = instance.inner.clone();
     let start = Instant::now();
     let (row, assignment, card) = py
         .detach(|| {
-            let (row, assignment) = Row::compute(&inst, allocator)?;
+            let (row, assignment) = Row::compute(&inst, allocator, against)?;
             let card = Scorecard::with_score(&inst, &assignment, row.score);
             Ok::<_, afg_eval::EvalError>((row, assignment, card))
         })
@@ -243,9 +278,13 @@ fn method(name: &str) -> PyResult<Method> {
 /// `da-balanced`, `greedy`, `nearest`, `random`, `blind`) or a trained model (a run
 /// directory or a loaded `Model`), scored against the exact optimum. `time_limit`
 /// (seconds, `opt` only) stops the exact search with the best found; `stats` then
-/// has its proven `bound` and `gap`, as for every exact solve of a team game.
+/// has its proven `bound` and `gap`, as for every exact solve of a team game. On a
+/// team game the "% of OPT" solves the game exactly first, stopped after
+/// `reference_time_limit` seconds (the share is then of its certified bound:
+/// `stats["reference_proven"]` is 0); `reference=False` measures nothing.
 #[pyfunction]
-#[pyo3(signature = (instance, method=None, model=None, seed=0, time_limit=None))]
+#[pyo3(signature = (instance, method=None, model=None, seed=0, time_limit=None, reference=true, reference_time_limit=10.0))]
+#[allow(clippy::too_many_arguments)]
 fn solve(
     py: Python<'_>,
     instance: &PyInstance,
@@ -253,7 +292,10 @@ fn solve(
     model: Option<&Bound<'_, PyAny>>,
     seed: u64,
     time_limit: Option<f64>,
+    reference: bool,
+    reference_time_limit: f64,
 ) -> PyResult<SolveResult> {
+    let against = against(reference, reference_time_limit)?;
     if time_limit.is_some() && method.is_none() {
         return Err(crate::bad_input(
             "time_limit: a time limit is for the exact optimum (method opt) only",
@@ -264,16 +306,17 @@ fn solve(
             let allocator = self::method(name)?
                 .allocator_with(seed, time_limit)
                 .map_err(|e| crate::bad_input(format!("time_limit: {e}")))?;
-            run(py, instance, allocator.as_ref())
+            run(py, instance, allocator.as_ref(), against)
         }
         (None, Some(model)) => match model.cast::<PyModel>() {
-            Ok(m) => run(py, instance, m.get().allocator.as_ref()),
+            Ok(m) => run(py, instance, m.get().allocator.as_ref(), against),
             Err(_) => {
                 let path: PathBuf = model.extract()?;
                 run(
                     py,
                     instance,
                     load_model(path, None, false, false)?.allocator.as_ref(),
+                    against,
                 )
             }
         },

@@ -84,6 +84,18 @@ def test_the_exact_optimum_reports_its_bound_and_gap() -> None:
     assert "bound" not in greedy.stats
     with pytest.raises(afg.InvalidInputError, match="for the exact optimum"):
         afg.solve(inst, method="greedy", time_limit=1.0)
+    # "% of OPT" of another method: against the optimum within reference_time_limit
+    # (of its bound, said in the stats, where not proven), or nothing at all.
+    assert greedy.stats["reference_proven"] == 1.0
+    assert greedy.stats["reference_welfare"] == pytest.approx(exact.welfare)
+    rushed = afg.solve(inst, method="nearest", reference_time_limit=1e-9)
+    assert rushed.stats["reference_proven"] == 0.0
+    assert rushed.stats["reference_bound"] >= exact.welfare - 1e-9
+    assert rushed.percent_of_opt == pytest.approx(100 * rushed.welfare / rushed.stats["reference_bound"])
+    alone = afg.solve(inst, method="nearest", reference=False)
+    assert alone.percent_of_opt is None and "reference_bound" not in alone.stats
+    with pytest.raises(afg.InvalidInputError, match="finite and positive"):
+        afg.solve(inst, method="nearest", reference_time_limit=0.0)
     # The same door as the command line and missions: a limit must be positive.
     for bad in (0.0, -1.0, float("nan")):
         with pytest.raises(afg.InvalidInputError, match="finite and positive"):

@@ -132,7 +132,7 @@ impl PriceTrainer {
     /// [`RunDir`](crate::run_dir::RunDir) is, so that a second trainer is refused): after each
     /// round the log ([`LOG_FILE_NAME`], one [`PriceRound`] per line) is rewritten
     /// atomically and `on_round` called; at the end the run's manifest
-    /// ([`RunManifest`](crate::run::RunManifest), with `command`) and then the model
+    /// ([`RunManifest`](crate::manifest::RunManifest), with `command`) and then the model
     /// ([`PriceModel::FILE_NAME`]) are written. A run
     /// killed before its end leaves no model; the same call starts it again from round
     /// 0 and, being seeded, ends with the same weights.
@@ -145,7 +145,7 @@ impl PriceTrainer {
         dir: &Path,
         command: String,
         mut on_round: impl FnMut(&PriceRound),
-    ) -> Result<crate::run::RunManifest, LearnError> {
+    ) -> Result<crate::manifest::RunManifest, LearnError> {
         let start = std::time::Instant::now();
         std::fs::create_dir_all(dir).map_err(|source| LearnError::Io {
             path: dir.display().to_string(),
@@ -163,13 +163,13 @@ impl PriceTrainer {
             last = Some(round);
         }
         let model = self.model();
-        let record = crate::run::RunRecord::PriceModel {
+        let record = crate::manifest::RunRecord::PriceModel {
             rounds: model.training.rounds,
             last_round: last,
         };
-        let manifest = crate::run::RunManifest {
+        let manifest = crate::manifest::RunManifest {
             wall_time_s: Some(start.elapsed().as_secs_f64()),
-            ..crate::run::RunManifest::new(command, model.training.seed, record)
+            ..crate::manifest::RunManifest::new(command, model.training.seed, record)
         };
         crate::run_dir::RunDir::new(dir).write_manifest(&manifest)?;
         // The model last: a directory that holds one holds a whole run.
@@ -454,7 +454,7 @@ mod tests {
             crate::run_dir::RunDir::new(&run).manifest().unwrap(),
             manifest
         );
-        let crate::run::RunRecord::PriceModel { last_round, .. } = &manifest.record else {
+        let crate::manifest::RunRecord::PriceModel { last_round, .. } = &manifest.record else {
             unreachable!("a price run")
         };
         assert_eq!(
@@ -463,7 +463,7 @@ mod tests {
         );
         assert_eq!(
             crate::run_dir::RunDir::new(&run).kind().unwrap(),
-            crate::run::ModelKind::PriceModel
+            crate::manifest::ModelKind::PriceModel
         );
         let log = std::fs::read_to_string(run.join(LOG_FILE_NAME)).unwrap();
         let logged: Vec<PriceRound> = log

@@ -435,9 +435,9 @@ mod tests {
         let inst = GeneratorConfig::paper(12, 3, 77).generate().unwrap();
         let mlp = PriceMlp::from_burn(&t.net);
         t.collect(&inst, &mlp, 1.0).unwrap();
-        let before = crate::nets::parameter_values(&t.net);
+        let before = crate::weights::parameter_values(&t.net);
         let err = t.step().unwrap_err();
         assert!(matches!(err, LearnError::NonFiniteWeights { .. }), "{err}");
-        assert_eq!(crate::nets::parameter_values(&t.net), before);
+        assert_eq!(crate::weights::parameter_values(&t.net), before);
     }
 }

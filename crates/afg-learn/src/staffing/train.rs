@@ -428,7 +428,7 @@ impl StaffingTrainer {
         command: String,
         on_game: impl Fn(&LabelledGame) + Sync,
         mut on_epoch: impl FnMut(&StaffingEpoch),
-    ) -> Result<crate::run::RunManifest, LearnError> {
+    ) -> Result<crate::manifest::RunManifest, LearnError> {
         let start = Instant::now();
         std::fs::create_dir_all(dir).map_err(|source| LearnError::Io {
             path: dir.display().to_string(),
@@ -447,13 +447,13 @@ impl StaffingTrainer {
             last = Some(epoch);
         }
         let model = self.model();
-        let record = crate::run::RunRecord::StaffingModel {
+        let record = crate::manifest::RunRecord::StaffingModel {
             epochs: model.training.epochs,
             last_epoch: last,
         };
-        let manifest = crate::run::RunManifest {
+        let manifest = crate::manifest::RunManifest {
             wall_time_s: Some(start.elapsed().as_secs_f64()),
-            ..crate::run::RunManifest::new(command, model.training.seed, record)
+            ..crate::manifest::RunManifest::new(command, model.training.seed, record)
         };
         crate::run_dir::RunDir::new(dir).write_manifest(&manifest)?;
         model.save(&dir.join(StaffingModel::FILE_NAME))?;

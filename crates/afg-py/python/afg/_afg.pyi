@@ -97,7 +97,9 @@ class Result:
 class Model:
     """A trained model of a run directory, as an allocator."""
 
-    def allocate(self, instance: Instance) -> Result: ...
+    def allocate(
+        self, instance: Instance, reference: bool = True, reference_time_limit: float = 10.0
+    ) -> Result: ...
 
 def generate(
     robots: int,
@@ -121,6 +123,8 @@ def solve(
     model: Optional[Union[_Path, Model]] = None,
     seed: int = 0,
     time_limit: Optional[float] = None,
+    reference: bool = True,
+    reference_time_limit: float = 10.0,
 ) -> Result: ...
 def score(instance: Instance, tasks: _Tasks) -> Result: ...
 def load_model(
