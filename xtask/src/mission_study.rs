@@ -109,10 +109,13 @@ fn rows(
     planners: &[Planner],
     on_run: impl FnMut(),
 ) -> Result<Vec<CompareRow>, EvalError> {
-    Ok(compare(missions, planners, Default::default(), on_run)?
-        .into_iter()
-        .map(|(row, _)| row)
-        .collect())
+    let compared = compare(missions, planners, Default::default(), on_run)?;
+    if let Some((method, why)) = compared.refused.first() {
+        return Err(EvalError::Mission(afg_mission::MissionError::Invalid(
+            format!("{method} refused a study mission: {why}"),
+        )));
+    }
+    Ok(compared.rows.into_iter().map(|(row, _)| row).collect())
 }
 
 /// The radius at which N robots uniform in the unit square become connected (with

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use afg_eval::figures::{mission_html, mission_svg};
-use afg_eval::mission::{compare, planner, swarm_table, table, teams_table};
+use afg_eval::mission::{CompareRow, compare, planner, swarm_table, table, teams_table};
 use afg_game::fs::{write_atomic, write_atomic_making_dirs};
 use afg_game::{Named, Preference};
 use afg_mission::{
@@ -400,8 +400,16 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
         });
     }
     let bar = afg_eval::report::progress((missions.len() * planners.len()) as u64, "missions");
-    let results = compare(&missions, &planners, Recording::default(), || bar.inc(1))?;
+    let compared = compare(&missions, &planners, Recording::default(), || bar.inc(1))?;
     bar.finish_and_clear();
+    // A method that does not play the missions' rules is named, and the others shown.
+    for (method, why) in &compared.refused {
+        eprintln!("note: {method} left out: {why}");
+    }
+    if compared.rows.is_empty() {
+        bail!("every method refused the missions");
+    }
+    let results = compared.rows;
     if let Some(path) = &args.svg {
         let curves = results
             .iter()
@@ -411,25 +419,28 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
         write_atomic_making_dirs(path, mission_svg(&curves, &title)?.as_bytes())?;
     }
     let rows: Vec<_> = results.into_iter().map(|(row, _)| row).collect();
+    print_compared(&rows, missions.len(), args)
+}
+
+/// `afg mission compare`'s rows: JSON, or the tables (the radio's and the teams' where
+/// they apply).
+fn print_compared(rows: &[CompareRow], missions: usize, args: &CompareArgs) -> Result<()> {
     if args.json {
-        println!("{}", serde_json::to_string(&rows)?);
+        println!("{}", serde_json::to_string(rows)?);
+        return Ok(());
+    }
+    let measured = if args.looping.latency_factor.is_some() {
+        " (measured latency: not reproducible run to run)"
     } else {
-        println!(
-            "{} mission(s), means over them{}\n",
-            missions.len(),
-            if args.looping.latency_factor.is_some() {
-                " (measured latency: not reproducible run to run)"
-            } else {
-                ""
-            }
-        );
-        print!("{}", table(&rows));
-        if let Some(swarms) = swarm_table(&rows) {
-            println!("\nOver the radio:\n\n{swarms}");
-        }
-        if let Some(teams) = teams_table(&rows) {
-            println!("\nTeams:\n\n{teams}");
-        }
+        ""
+    };
+    println!("{missions} mission(s), means over them{measured}\n");
+    print!("{}", table(rows));
+    if let Some(swarms) = swarm_table(rows) {
+        println!("\nOver the radio:\n\n{swarms}");
+    }
+    if let Some(teams) = teams_table(rows) {
+        println!("\nTeams:\n\n{teams}");
     }
     Ok(())
 }

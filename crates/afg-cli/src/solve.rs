@@ -174,23 +174,7 @@ pub fn run(args: SolveArgs) -> Result<()> {
         }
         (None, None) => unreachable!("clap requires an allocator"),
     };
-    let against = if args.no_reference {
-        Against::Nothing
-    } else {
-        TeamOptimum::with_time_limit(args.reference_time_limit)
-            .context("--reference-time-limit")?;
-        Against::Optimum {
-            time_limit: Some(args.reference_time_limit),
-        }
-    };
-    let measuring = match against {
-        Against::Nothing => String::new(),
-        Against::Optimum { .. } if instances.iter().any(Instance::has_teams) => format!(
-            ", measured against the exact optimum (up to {} s each: --reference-time-limit, --no-reference)",
-            args.reference_time_limit
-        ),
-        Against::Optimum { .. } => ", measured against the exact optimum".to_owned(),
-    };
+    let (against, measuring) = reference(&args, &instances)?;
     let bar = afg_eval::report::progress(
         instances.len() as u64,
         &format!("{name} on {source}{measuring}"),
@@ -215,6 +199,27 @@ pub fn run(args: SolveArgs) -> Result<()> {
     }
     print!("{report}");
     Ok(())
+}
+
+/// What the rows are measured against (`--reference-time-limit`, `--no-reference`),
+/// and how the progress line says so.
+fn reference(args: &SolveArgs, instances: &[Instance]) -> Result<(Against, String)> {
+    if args.no_reference {
+        return Ok((Against::Nothing, String::new()));
+    }
+    let seconds = args.reference_time_limit;
+    TeamOptimum::with_time_limit(seconds).context("--reference-time-limit")?;
+    let saying = if instances.iter().any(Instance::has_teams) {
+        format!(
+            ", measured against the exact optimum (up to {seconds} s each: --reference-time-limit, --no-reference)"
+        )
+    } else {
+        ", measured against the exact optimum".to_owned()
+    };
+    let against = Against::Optimum {
+        time_limit: Some(seconds),
+    };
+    Ok((against, saying))
 }
 
 /// `--out` and `--svg`; written before anything is printed, atomically.

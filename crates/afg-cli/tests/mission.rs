@@ -312,6 +312,22 @@ fn the_staffing_model_decides_team_missions() {
     // The criterion can fail: nearest, on the same mission, does not meet it.
     assert!(!as_well_as_opt("opt,nearest", None));
     generate(&["--skills", "2", "--requires", "1,1"]);
+    // With its default methods, a comparison on the skill mission shows those that play
+    // it and names those that refuse it.
+    let compared = afg(&["mission", "compare", "--mission", path, "--json"]);
+    assert_eq!(compared.status.code(), Some(0), "{}", stderr(&compared));
+    let rows: Vec<serde_json::Value> = serde_json::from_slice(&compared.stdout).unwrap();
+    let shown: Vec<&str> = rows.iter().map(|r| r["method"].as_str().unwrap()).collect();
+    assert!(
+        shown.contains(&"opt") && !shown.contains(&"greedy"),
+        "{shown:?}"
+    );
+    assert!(
+        stderr(&compared)
+            .contains("note: greedy left out: greedy does not play games with skill requirements"),
+        "{}",
+        stderr(&compared)
+    );
     refused(
         &afg(&["mission", "run", "--mission", path, "--model", model]),
         "staffing does not play games with skill requirements",

@@ -47,34 +47,70 @@ pub struct CompareRow {
     pub missions: Vec<Metrics>,
 }
 
-/// Runs every planner on every mission (in order).
+/// What [`compare`] ran: each planner's row and runs, in order, and the planners that
+/// refused a mission (their name and why) — a comparison goes on without them.
+#[derive(Debug)]
+pub struct Comparison {
+    /// Each planner that played every mission: its row and its runs.
+    pub rows: Vec<(CompareRow, Vec<MissionRun>)>,
+    /// Each planner that refused a mission (a method that does not play its rules):
+    /// its name and the refusal.
+    pub refused: Vec<(String, String)>,
+}
+
+/// The refusal of a game's rules by a method (not a failure) that `error` is, if it is
+/// one.
+fn refusal(error: &afg_mission::MissionError) -> Option<&afg_baseline::AllocError> {
+    use afg_baseline::AllocError::TeamsNotSupported;
+    use afg_mission::MissionError::{Alloc, Decision};
+    match error {
+        Alloc(refused @ TeamsNotSupported { .. })
+        | Decision {
+            source: refused @ TeamsNotSupported { .. },
+            ..
+        } => Some(refused),
+        _ => None,
+    }
+}
+
+/// Runs every planner on every mission (in order); a planner that refuses a mission
+/// is left out of the rows and named in [`Comparison::refused`].
 ///
 /// # Errors
-/// The simulator's errors.
+/// The simulator's errors other than refusals.
 pub fn compare(
     missions: &[Mission],
     planners: &[Planner],
     recording: Recording,
     mut on_run: impl FnMut(),
-) -> Result<Vec<(CompareRow, Vec<MissionRun>)>, EvalError> {
-    planners
-        .iter()
-        .map(|p| {
-            let runs = missions
-                .iter()
-                .map(|m| {
-                    let run = p.run(m, recording, |_| {});
-                    on_run();
-                    run
-                })
-                .collect::<Result<Vec<_>, _>>()?;
-            let row = CompareRow {
-                method: p.name().to_string(),
-                missions: runs.iter().map(|r| r.metrics.clone()).collect(),
-            };
-            Ok((row, runs))
-        })
-        .collect()
+) -> Result<Comparison, EvalError> {
+    let mut compared = Comparison {
+        rows: Vec::new(),
+        refused: Vec::new(),
+    };
+    'planners: for p in planners {
+        let mut runs = Vec::with_capacity(missions.len());
+        for m in missions {
+            let run = p.run(m, recording, |_| {});
+            on_run();
+            match run {
+                Ok(run) => runs.push(run),
+                Err(e) => {
+                    let Some(why) = refusal(&e).map(ToString::to_string) else {
+                        return Err(e.into());
+                    };
+                    compared.refused.push((p.name().to_string(), why));
+                    continue 'planners;
+                }
+            }
+        }
+        let row = CompareRow {
+            method: p.name().to_string(),
+            missions: runs.iter().map(|r| r.metrics.clone()).collect(),
+        };
+        compared.rows.push((row, runs));
+    }
+    Ok(compared)
 }
 
 /// The Markdown table of [`compare`]'s rows: means over the missions.
@@ -89,7 +125,7 @@ pub fn compare(
 /// let warm_opt = MissionPlan { warm: true, ..MissionPlan::default() };
 /// let planners = [greedy.planner()?, warm_opt.planner()?];
 /// let rows: Vec<_> = compare(&missions, &planners, Default::default(), || {})?
-///     .into_iter().map(|(row, _)| row).collect();
+///     .rows.into_iter().map(|(row, _)| row).collect();
 /// let text = table(&rows);
 /// assert!(text.contains("| greedy |") && text.contains("| opt (warm) |"));
 /// # Ok::<(), Box<dyn std::error::Error>>(())
@@ -148,7 +184,7 @@ pub fn table(rows: &[CompareRow]) -> String {
 /// let plan = |method| MissionPlan { method, ..MissionPlan::default() };
 /// let planners = [plan(MissionMethod::Central(Method::Greedy)).planner()?, plan(MissionMethod::Grape).planner()?];
 /// let rows: Vec<_> = compare(&missions, &planners, Default::default(), || {})?
-///     .into_iter().map(|(row, _)| row).collect();
+///     .rows.into_iter().map(|(row, _)| row).collect();
 /// let text = swarm_table(&rows).expect("one row is decentralised");
 /// assert!(text.contains("| grape (swarm, 10-NN) |") && !text.contains("| greedy |"));
 /// # Ok::<(), Box<dyn std::error::Error>>(())
@@ -214,7 +250,7 @@ pub fn swarm_table(rows: &[CompareRow]) -> Option<String> {
 /// let plan = |method| MissionPlan { method, ..MissionPlan::default() };
 /// let planners = [plan(MissionMethod::Central(Method::Opt)).planner()?];
 /// let rows: Vec<_> = compare(&missions, &planners, Default::default(), || {})?
-///     .into_iter().map(|(row, _)| row).collect();
+///     .rows.into_iter().map(|(row, _)| row).collect();
 /// assert!(teams_table(&rows).expect("a mission with teams").contains("| opt | "));
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```

@@ -420,12 +420,25 @@ impl PyInstance {
     }
 
     fn __repr__(&self) -> String {
-        format!(
-            "Instance(robots={}, tasks={}, beta={})",
-            self.inner.num_robots(),
-            self.inner.num_tasks(),
-            self.inner.beta()
-        )
+        let inst = &self.inner;
+        let mut text = format!(
+            "Instance(robots={}, tasks={}, beta={}",
+            inst.num_robots(),
+            inst.num_tasks(),
+            inst.beta()
+        );
+        let thresholds: Vec<usize> = inst.task_ids().map(|j| inst.min_team(j)).collect();
+        if thresholds.iter().any(|&k| k > 1) {
+            let (lo, hi) = (thresholds.iter().min(), thresholds.iter().max());
+            text += &format!(", min_team={}..{}", lo.unwrap_or(&1), hi.unwrap_or(&1));
+        }
+        if inst.num_skills() > 0 {
+            text += &format!(", skills={}", inst.num_skills());
+        }
+        if inst.allows_void() {
+            text += ", allow_void=True";
+        }
+        text + ")"
     }
 }
 

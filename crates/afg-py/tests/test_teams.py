@@ -44,6 +44,10 @@ def test_the_generator_draws_team_games_like_afg_gen() -> None:
     plain = afg.generate(40, 5, seed=3)
     assert np.array_equal(plain.robots, inst.robots)
     assert plain.min_team.tolist() == [1] * 5 and plain.skills.shape == (40, 0)
+    # The repr shows the teams and skills (and nothing of them on the paper's game).
+    lo, hi = inst.min_team.min(), inst.min_team.max()
+    assert repr(inst) == f"Instance(robots=40, tasks=5, beta=1.0, min_team={lo}..{hi}, skills=2)"
+    assert repr(plain) == "Instance(robots=40, tasks=5, beta=1.0)"
 
 
 def test_the_exact_optimum_reaches_the_committed_optima_with_a_true_bound_and_gap() -> None:
