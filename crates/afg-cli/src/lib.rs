@@ -202,25 +202,23 @@ pub(crate) fn refuse_overwriting_inputs(
 /// (a threshold above N or the capacity, a skill nobody holds enough of): legal, they
 /// earn nothing.
 pub(crate) fn warn_unstaffable(instances: &[afg_game::Instance]) {
-    for (index, instance) in instances.iter().enumerate() {
-        let tasks = instance.unstaffable_tasks();
-        if !tasks.is_empty() {
-            let names: Vec<String> = tasks.iter().map(|j| j.index().to_string()).collect();
-            let which = if instances.len() > 1 {
-                format!("instance {index}: ")
+    let unstaffable: Vec<Vec<usize>> = (instances.iter())
+        .map(|inst| inst.unstaffable_tasks().iter().map(|j| j.index()).collect())
+        .collect();
+    warn_unstaffable_tasks("instance", &unstaffable);
+}
+
+/// Warns of the tasks no team can staff in each of several games (`unstaffable[g]`,
+/// by task index), naming the game (`what` and its index) where there are several.
+pub(crate) fn warn_unstaffable_tasks(what: &str, unstaffable: &[Vec<usize>]) {
+    for (index, tasks) in unstaffable.iter().enumerate() {
+        if let Some(warning) = afg_game::unstaffable_warning(tasks) {
+            let which = if unstaffable.len() > 1 {
+                format!("{what} {index}: ")
             } else {
                 String::new()
             };
-            eprintln!(
-                "warning: {which}no team can staff task{} {} (a threshold above the robots or the capacity, or a skill the robots lack): {} earn nothing",
-                if tasks.len() == 1 { "" } else { "s" },
-                names.join(", "),
-                if tasks.len() == 1 {
-                    "it will"
-                } else {
-                    "they will"
-                }
-            );
+            eprintln!("warning: {which}{warning}");
         }
     }
 }

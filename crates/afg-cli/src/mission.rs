@@ -275,6 +275,7 @@ fn generate(args: &GenArgs) -> Result<()> {
     };
     let config = knobs.config(args.preset, args.robots, args.tasks, args.seed);
     let mission = config.generate()?;
+    crate::warn_unstaffable_tasks("mission", &[mission.unstaffable_tasks()]);
     write_atomic(&args.out, (mission.to_json() + "\n").as_bytes())?;
     println!(
         "wrote {} ({} robots, {} tasks, {} failures, horizon {})",

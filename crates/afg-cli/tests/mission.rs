@@ -390,3 +390,48 @@ fn a_still_of_a_team_mission_is_a_png() {
     assert!(!still.exists());
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// `afg mission gen` warns of tasks no team of its robots can staff, as `afg gen`
+/// does, and writes the mission all the same.
+#[test]
+fn mission_gen_warns_of_tasks_no_team_can_staff() {
+    let (dir, _) = mission_dir("unstaffable");
+    let out = dir.join("big-teams.json");
+    let made = afg(&[
+        "mission",
+        "gen",
+        "--preset",
+        "static",
+        "--robots",
+        "4",
+        "--tasks",
+        "2",
+        "--min-team",
+        "5,5",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(made.status.code(), Some(0), "{}", stderr(&made));
+    assert!(
+        stderr(&made).contains("warning: no team can staff tasks 0, 1"),
+        "{}",
+        stderr(&made)
+    );
+    assert!(out.exists());
+    let fine = afg(&[
+        "mission",
+        "gen",
+        "--preset",
+        "static",
+        "--robots",
+        "4",
+        "--tasks",
+        "2",
+        "--min-team",
+        "2,2",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!stderr(&fine).contains("warning"), "{}", stderr(&fine));
+    std::fs::remove_dir_all(dir).unwrap();
+}

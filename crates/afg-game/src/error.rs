@@ -78,6 +78,21 @@ pub enum GameError {
         /// The task.
         task: usize,
     },
+    /// A count in a file (`min_team`, `capacity`, `skills`, `requires`) that is not a
+    /// whole number in range.
+    #[error("{what} {index}: {field} must be a whole number of at least {min}, got {value}")]
+    InvalidCount {
+        /// "robot" or "task".
+        what: &'static str,
+        /// Its index.
+        index: usize,
+        /// The field.
+        field: &'static str,
+        /// The least it may be.
+        min: u32,
+        /// What the file holds, as JSON.
+        value: String,
+    },
     /// A team list (`min_team`, `skills`, `requires`) of the wrong length.
     #[error("{what} has {len} entries, but the instance has {expected}")]
     TeamListLength {

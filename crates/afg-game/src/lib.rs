@@ -44,3 +44,4 @@ pub use ids::{RobotId, TaskId};
 pub use instance::{GOLDEN_RATIO, Instance, MAX_VALUE, Point, Task, ValueFunction};
 pub use named::Named;
 pub use stability::{Preference, TOLERANCE, strictly_better};
+pub use teams::unstaffable_warning;

@@ -43,6 +43,40 @@ fn a_misspelled_field_is_an_error_that_names_it() {
     assert!(err.to_string().contains("line 2") && err.to_string().contains("capcity"));
 }
 
+/// A team field that is not a whole number in range is named — robot or task, field,
+/// value — not left to the parser's column; good ones read back.
+#[test]
+fn a_bad_team_field_names_its_task_and_field() {
+    for (value, field) in [
+        ("-1", "min_team"),
+        ("1.5", "min_team"),
+        ("2.0", "min_team"),
+        ("\"3\"", "min_team"),
+        ("0", "min_team"),
+    ] {
+        let text = edited("\"eps\":", &format!("\"{field}\":{value},\"eps\":"));
+        let err = Instance::from_json(&text).unwrap_err().to_string();
+        let expected = format!("task 0: {field} must be a whole number of at least 1, got {value}");
+        assert_eq!(err, expected);
+    }
+    let text = edited("\"eps\":", "\"capacity\":-2,\"eps\":");
+    let err = Instance::from_json(&text).unwrap_err().to_string();
+    assert_eq!(
+        err,
+        "task 0: capacity must be a whole number of at least 0, got -2"
+    );
+    let text = edited("\"y\":", "\"skills\":[1,0.5],\"y\":");
+    let err = Instance::from_json(&text).unwrap_err().to_string();
+    assert_eq!(
+        err,
+        "robot 0: skills must be a whole number of at least 0, got 0.5"
+    );
+    let good = edited("\"eps\":", "\"min_team\":3,\"eps\":");
+    let inst = Instance::from_json(&good).unwrap();
+    assert_eq!(inst.min_team(TaskId(0)), 3);
+    assert_eq!(Instance::from_json(&inst.to_json()).unwrap(), inst);
+}
+
 #[test]
 fn costs_that_overflow_are_refused_with_the_limit() {
     let err = Instance::from_json(&edited("\"beta\":1.0", "\"beta\":1e308")).unwrap_err();

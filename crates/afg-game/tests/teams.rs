@@ -159,27 +159,27 @@ fn bad_team_fields_are_clear_errors() {
         (
             robot.to_owned(),
             format!(r#"{TASK},"min_team":0}}"#),
-            "task 0 has min_team 0",
+            "task 0: min_team must be a whole number of at least 1, got 0",
         ),
         (
             robot.to_owned(),
             format!(r#"{TASK},"min_team":2.5}}"#),
-            "expected usize",
+            "task 0: min_team must be a whole number of at least 1, got 2.5",
         ),
         (
             robot.to_owned(),
             format!(r#"{TASK},"min_team":-1}}"#),
-            "expected usize",
+            "task 0: min_team must be a whole number of at least 1, got -1",
         ),
         (
             r#"{"x":0.0,"y":0.0,"skills":[-1]}"#.to_owned(),
             format!("{TASK}}}"),
-            "expected u32",
+            "robot 0: skills must be a whole number of at least 0, got -1",
         ),
         (
             r#"{"x":0.0,"y":0.0,"skills":[1.5]}"#.to_owned(),
             format!("{TASK}}}"),
-            "expected u32",
+            "robot 0: skills must be a whole number of at least 0, got 1.5",
         ),
         (
             r#"{"x":0.0,"y":0.0,"skills":[1,0]}"#.to_owned(),

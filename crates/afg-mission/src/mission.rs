@@ -128,6 +128,34 @@ pub struct Mission {
 }
 
 impl Mission {
+    /// The tasks (by index) that no team of the mission's robots can ever staff: a
+    /// threshold above the number of robots, or an amount of a skill beyond what all
+    /// the robots hold together. They earn nothing, whoever decides.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_mission::{MissionConfig, Preset};
+    /// let mut config = MissionConfig::new(Preset::Static, 6, 3, 1);
+    /// config.min_team = Some(afg_game::CountRange { min: 7, max: 7 });
+    /// assert_eq!(config.generate()?.unstaffable_tasks(), vec![0, 1, 2]);
+    /// # Ok::<(), afg_mission::MissionError>(())
+    /// ```
+    pub fn unstaffable_tasks(&self) -> Vec<usize> {
+        let mut held = vec![0u64; self.num_skills()];
+        for robot in &self.robots {
+            for (h, &s) in held.iter_mut().zip(&robot.skills) {
+                *h += u64::from(s);
+            }
+        }
+        (self.tasks.iter().enumerate())
+            .filter(|(_, t)| {
+                t.min_team > self.robots.len()
+                    || (t.requires.iter().zip(&held)).any(|(&need, &have)| u64::from(need) > have)
+            })
+            .map(|(j, _)| j)
+            .collect()
+    }
+
     /// Whether any task needs a team (a threshold above 1) or a skill.
     pub fn needs_teams(&self) -> bool {
         (self.tasks.iter()).any(|t| t.min_team > 1 || t.requires.iter().any(|&r| r > 0))

@@ -33,6 +33,7 @@ fn write_jsonl(path: PathBuf, instances: Vec<PyRef<'_, PyInstance>>) -> PyResult
 // Python's keyword arguments, one per knob.
 #[allow(clippy::too_many_arguments)]
 fn generate(
+    py: Python<'_>,
     robots: usize,
     tasks: usize,
     seed: u64,
@@ -57,11 +58,13 @@ fn generate(
         skill_share,
         requires,
     };
-    knobs
+    let inst = knobs
         .config(robots, tasks, seed)
         .and_then(|cfg| cfg.generate())
-        .map(PyInstance::new_from)
-        .map_err(crate_error)
+        .map_err(crate_error)?;
+    let unstaffable: Vec<usize> = inst.unstaffable_tasks().iter().map(|j| j.index()).collect();
+    crate::warn(py, afg_game::unstaffable_warning(&unstaffable))?;
+    Ok(PyInstance::new_from(inst))
 }
 
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

@@ -35,6 +35,21 @@ fn afg_error(class: &str, message: String) -> PyErr {
     })
 }
 
+/// Raises `message` (where there is one) as a Python `UserWarning` pointing at the
+/// caller's line.
+pub(crate) fn warn(py: Python<'_>, message: Option<String>) -> PyResult<()> {
+    let Some(message) = message else {
+        return Ok(());
+    };
+    let message = std::ffi::CString::new(message).map_err(bad_input)?;
+    PyErr::warn(
+        py,
+        &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+        &message,
+        1,
+    )
+}
+
 /// Bad input as `afg.InvalidInputError` (also a `ValueError`) with the same message.
 pub(crate) fn bad_input(e: impl std::fmt::Display) -> PyErr {
     afg_error("InvalidInputError", e.to_string())

@@ -13,7 +13,6 @@ use afg_mission::{
 };
 use numpy::ndarray::{Array1, Array2};
 use numpy::{IntoPyArray, PyArray1, PyArray2};
-use pyo3::exceptions::PyUserWarning;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -60,6 +59,7 @@ impl PyMission {
     // Python's keyword arguments, one per knob.
     #[allow(clippy::too_many_arguments)]
     fn generate(
+        py: Python<'_>,
         preset: &str,
         robots: usize,
         tasks: usize,
@@ -97,8 +97,13 @@ impl PyMission {
             requires,
         };
         let config = knobs.config(crate::named::<Preset>(preset)?, robots, tasks, seed);
+        let mission = config.generate().map_err(bad_input)?;
+        crate::warn(
+            py,
+            afg_game::unstaffable_warning(&mission.unstaffable_tasks()),
+        )?;
         Ok(PyMission {
-            inner: Arc::new(config.generate().map_err(bad_input)?),
+            inner: Arc::new(mission),
         })
     }
 
@@ -409,10 +414,7 @@ pub(crate) fn run_mission(
         time_limit,
     };
     let planner = planner(&plan, model.as_deref()).map_err(crate::crate_error)?;
-    if let Some(advice) = plan.advice(&mission.inner) {
-        let message = std::ffi::CString::new(advice).map_err(crate::bad_input)?;
-        PyErr::warn(py, &py.get_type::<PyUserWarning>(), &message, 1)?;
-    }
+    crate::warn(py, plan.advice(&mission.inner))?;
     let inner = Arc::clone(&mission.inner);
     let recording = Recording {
         trace,

@@ -48,6 +48,15 @@ def test_the_generator_draws_team_games_like_afg_gen() -> None:
     lo, hi = inst.min_team.min(), inst.min_team.max()
     assert repr(inst) == f"Instance(robots=40, tasks=5, beta=1.0, min_team={lo}..{hi}, skills=2)"
     assert repr(plain) == "Instance(robots=40, tasks=5, beta=1.0)"
+    # A task no team can staff is drawn with a warning, as `afg gen` and `afg mission
+    # gen` give it; none where every task can be staffed.
+    with pytest.warns(UserWarning, match="no team can staff tasks 0, 1"):
+        afg.generate(4, 2, seed=1, min_team=(5, 5))
+    with pytest.warns(UserWarning, match="no team can staff tasks 0, 1"):
+        afg.Mission.generate("static", robots=4, tasks=2, seed=1, min_team=(5, 5))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        afg.generate(4, 2, seed=1, min_team=(2, 2))
 
 
 def test_the_exact_optimum_reaches_the_committed_optima_with_a_true_bound_and_gap() -> None:

@@ -30,7 +30,40 @@ struct RobotEntry {
     x: f64,
     y: f64,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    skills: Vec<u32>,
+    skills: Vec<Count>,
+}
+
+/// A whole number as a file holds it, kept as JSON until the instance is built so
+/// that a wrong one (negative, fractional, a string) is named — robot or task, field,
+/// value — instead of the parser's column.
+#[derive(Clone, Serialize, Deserialize)]
+#[serde(transparent)]
+struct Count(serde_json::Value);
+
+impl Count {
+    /// The count, checked: a JSON integer of at least `min` that fits in `u32`.
+    fn read(
+        &self,
+        of: (&'static str, usize),
+        field: &'static str,
+        min: u32,
+    ) -> Result<u32, GameError> {
+        self.0
+            .as_u64()
+            .and_then(|n| u32::try_from(n).ok())
+            .filter(|&n| n >= min)
+            .ok_or_else(|| GameError::InvalidCount {
+                what: of.0,
+                index: of.1,
+                field,
+                min,
+                value: self.0.to_string(),
+            })
+    }
+
+    fn of(n: impl Into<u64>) -> Count {
+        Count(serde_json::Value::from(n.into()))
+    }
 }
 
 /// A task as files write it: a [`Task`] and its team rules, written only when used.
@@ -41,11 +74,11 @@ struct TaskEntry {
     reward: f64,
     eps: f64,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    capacity: Option<usize>,
+    capacity: Option<Count>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    min_team: Option<usize>,
+    min_team: Option<Count>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    requires: Vec<u32>,
+    requires: Vec<Count>,
 }
 
 impl TryFrom<InstanceFile> for Instance {
@@ -53,16 +86,20 @@ impl TryFrom<InstanceFile> for Instance {
     fn try_from(f: InstanceFile) -> Result<Self, GameError> {
         check_header(&f.format, f.version, INSTANCE_FORMAT)?;
         let robots = f.robots.iter().map(|r| Point::new(r.x, r.y)).collect();
-        let tasks = f
-            .tasks
-            .iter()
-            .map(|t| Task {
-                position: t.position,
-                reward: t.reward,
-                eps: t.eps,
-                capacity: t.capacity,
+        let tasks = (f.tasks.iter().enumerate())
+            .map(|(j, t)| {
+                let capacity = t
+                    .capacity
+                    .as_ref()
+                    .map(|c| c.read(("task", j), "capacity", 0));
+                Ok(Task {
+                    position: t.position,
+                    reward: t.reward,
+                    eps: t.eps,
+                    capacity: capacity.transpose()?.map(|c| c as usize),
+                })
             })
-            .collect();
+            .collect::<Result<_, GameError>>()?;
         let inst = if f.allow_void {
             Instance::with_void(robots, tasks, f.beta)?
         } else {
@@ -74,9 +111,23 @@ impl TryFrom<InstanceFile> for Instance {
             .any(|t| t.min_team.is_some() || !t.requires.is_empty())
             || f.robots.iter().any(|r| !r.skills.is_empty())
         {
-            let min_team = f.tasks.iter().map(|t| t.min_team.unwrap_or(1)).collect();
-            let skills: Vec<Vec<u32>> = f.robots.into_iter().map(|r| r.skills).collect();
-            let requires: Vec<Vec<u32>> = f.tasks.into_iter().map(|t| t.requires).collect();
+            let amounts = |of: (&'static str, usize), field, list: &[Count]| {
+                list.iter()
+                    .map(|c| c.read(of, field, 0))
+                    .collect::<Result<Vec<u32>, _>>()
+            };
+            let min_team = (f.tasks.iter().enumerate())
+                .map(|(j, t)| match &t.min_team {
+                    Some(k) => Ok(k.read(("task", j), "min_team", 1)? as usize),
+                    None => Ok(1),
+                })
+                .collect::<Result<_, GameError>>()?;
+            let skills = (f.robots.iter().enumerate())
+                .map(|(i, r)| amounts(("robot", i), "skills", &r.skills))
+                .collect::<Result<Vec<_>, _>>()?;
+            let requires = (f.tasks.iter().enumerate())
+                .map(|(j, t)| amounts(("task", j), "requires", &t.requires))
+                .collect::<Result<Vec<_>, _>>()?;
             inst.with_teams(min_team, &skills, &requires)?
         } else {
             inst
@@ -101,7 +152,7 @@ impl From<Instance> for InstanceFile {
                     RobotEntry {
                         x: p.x,
                         y: p.y,
-                        skills: inst.skills(i).to_vec(),
+                        skills: inst.skills(i).iter().map(|&s| Count::of(s)).collect(),
                     }
                 })
                 .collect(),
@@ -113,9 +164,11 @@ impl From<Instance> for InstanceFile {
                         position: t.position,
                         reward: t.reward,
                         eps: t.eps,
-                        capacity: t.capacity,
-                        min_team: Some(inst.min_team(j)).filter(|&k| k != 1),
-                        requires: inst.requires(j).to_vec(),
+                        capacity: t.capacity.map(|c| Count::of(c as u64)),
+                        min_team: Some(inst.min_team(j))
+                            .filter(|&k| k != 1)
+                            .map(|k| Count::of(k as u64)),
+                        requires: inst.requires(j).iter().map(|&r| Count::of(r)).collect(),
                     }
                 })
                 .collect(),
