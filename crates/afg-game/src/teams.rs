@@ -273,6 +273,29 @@ impl Instance {
     }
 }
 
+/// The warning front ends give of the tasks (by index) that no team can staff
+/// ([`Instance::unstaffable_tasks`]); `None` where there are none.
+///
+/// # Examples
+/// ```
+/// assert_eq!(afg_game::unstaffable_warning(&[]), None);
+/// assert!(afg_game::unstaffable_warning(&[0, 2]).unwrap().starts_with("no team can staff tasks 0, 2 "));
+/// ```
+pub fn unstaffable_warning(tasks: &[usize]) -> Option<String> {
+    let names: Vec<String> = tasks.iter().map(ToString::to_string).collect();
+    let (plural, they) = if tasks.len() == 1 {
+        ("", "it will")
+    } else {
+        ("s", "they will")
+    };
+    (!tasks.is_empty()).then(|| {
+        format!(
+            "no team can staff task{plural} {} (a threshold above the robots or the capacity, or a skill the robots lack): {they} earn nothing",
+            names.join(", ")
+        )
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -298,27 +321,4 @@ mod tests {
             [1, 2, 0, 0, 3, 4]
         );
     }
-}
-
-/// The warning front ends give of the tasks (by index) that no team can staff
-/// ([`Instance::unstaffable_tasks`]); `None` where there are none.
-///
-/// # Examples
-/// ```
-/// assert_eq!(afg_game::unstaffable_warning(&[]), None);
-/// assert!(afg_game::unstaffable_warning(&[0, 2]).unwrap().starts_with("no team can staff tasks 0, 2 "));
-/// ```
-pub fn unstaffable_warning(tasks: &[usize]) -> Option<String> {
-    let names: Vec<String> = tasks.iter().map(ToString::to_string).collect();
-    let (plural, they) = if tasks.len() == 1 {
-        ("", "it will")
-    } else {
-        ("s", "they will")
-    };
-    (!tasks.is_empty()).then(|| {
-        format!(
-            "no team can staff task{plural} {} (a threshold above the robots or the capacity, or a skill the robots lack): {they} earn nothing",
-            names.join(", ")
-        )
-    })
 }
