@@ -225,7 +225,7 @@ pub fn migrate_run(dir: &Path) -> Result<Vec<PathBuf>, LearnError> {
         rewritten.push(config);
     }
     rewritten.extend(migrate_manifest(dir)?);
-    let log = dir.join("log.jsonl");
+    let log = dir.join(crate::run_dir::RunDir::LOG);
     if log.exists() && migrate_log(&log)? {
         rewritten.push(log);
     }

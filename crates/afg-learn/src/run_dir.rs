@@ -214,9 +214,11 @@ impl RunDir {
         Ok((run, lock))
     }
 
+    /// The training log of every kind of run: one JSON line per event or epoch.
+    pub const LOG: &'static str = "log.jsonl";
+
     /// The files any run directory holds at least one of.
-    pub const RUN_FILES: [&'static str; 4] =
-        ["config.json", "log.jsonl", "model.json", "price.json"];
+    pub const RUN_FILES: [&'static str; 4] = ["config.json", Self::LOG, "model.json", "price.json"];
 
     /// Every run directory at or below `root` (a directory holding one of
     /// [`RunDir::RUN_FILES`]; a run's own subdirectories are not searched), sorted by
@@ -277,7 +279,7 @@ impl RunDir {
 
     /// Whether the run has a log.
     pub fn has_log(&self) -> bool {
-        self.file("log.jsonl").exists()
+        self.file(Self::LOG).exists()
     }
 
     /// Whether the run has a manifest.
@@ -371,7 +373,7 @@ impl RunDir {
     /// # Errors
     /// [`LearnError::Io`] if the log cannot be written.
     pub fn append(&self, event: &LogEvent) -> Result<(), LearnError> {
-        let path = self.file("log.jsonl");
+        let path = self.file(Self::LOG);
         let io = |source| LearnError::Io {
             path: path.display().to_string(),
             source,
@@ -408,7 +410,7 @@ impl RunDir {
     /// Every non-blank line of `log.jsonl` as written, with its event, and the number of
     /// a torn last line.
     fn log_lines(&self) -> Result<LogLines, LearnError> {
-        let path = self.file("log.jsonl");
+        let path = self.file(Self::LOG);
         let text = std::fs::read_to_string(&path).map_err(|e| LearnError::RunFile {
             path: path.display().to_string(),
             reason: e.to_string(),
@@ -464,7 +466,7 @@ impl RunDir {
             kept.push_str(&line);
             kept.push('\n');
         }
-        afg_game::fs::write_atomic(&self.file("log.jsonl"), kept.as_bytes())?;
+        afg_game::fs::write_atomic(&self.file(Self::LOG), kept.as_bytes())?;
         Ok(elapsed)
     }
 }

@@ -437,7 +437,7 @@ impl PyInstance {
     fn __repr__(&self) -> String {
         let inst = &self.inner;
         let mut text = format!(
-            "Instance(robots={}, tasks={}, beta={}",
+            "Instance(robots={}, tasks={}, beta={:?}",
             inst.num_robots(),
             inst.num_tasks(),
             inst.beta()

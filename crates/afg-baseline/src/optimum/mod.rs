@@ -44,6 +44,7 @@ pub use incremental::IncrementalOptimum;
 pub use teams::{TeamOptimum, TeamRelaxation, TeamSolution};
 
 use crate::{AllocError, AllocStats, Allocation, Allocator, timed};
+use transport::assignment_of;
 
 /// The exact optimum. Deterministic.
 ///
@@ -319,16 +320,4 @@ impl Allocator for Optimum {
             },
         })
     }
-}
-
-/// The assignment of a solver's columns (M: the void).
-fn assignment_of(instance: &Instance, task_of: &[u32]) -> Assignment {
-    let m = instance.num_tasks();
-    let tasks = task_of
-        .iter()
-        .map(|&j| (j as usize) < m)
-        .zip(task_of)
-        .map(|(task, &j)| task.then_some(TaskId(j)))
-        .collect();
-    Assignment::from_tasks(instance, tasks).expect("the solver respects capacities")
 }

@@ -4,7 +4,7 @@
 //! that every robot of an optimal assignment takes `argmin_j [β d(i, j) − π_j]`;
 //! Nearest is that rule with π = 0. The model learns π as a function of the state:
 //! `Q(s, a) = π_a(s) − β d(t, a)`, where `π_a(s)` is one MLP shared by all tasks
-//! ([`PriceMlp`]) reading per-task summaries of the state ([`PriceState`]): the task's
+//! ([`TaskMlp`]) reading per-task summaries of the state ([`PriceState`]): the task's
 //! members, reward and the demand of the robots still to act. The output layer starts
 //! at zero, so the untrained model is exactly Nearest. It is trained by regression on
 //! the exact `Q*` of the sequential MDP ([`crate::regret::q_star`]), on states its own rollouts
@@ -38,7 +38,7 @@ use serde::{Deserialize, Serialize};
 use afg_graph::{PriceState, TASK_FEATURES};
 pub use config::PriceTrainConfig;
 use net::PriceScratch;
-pub use net::{PRICE_INPUTS, PriceMlp, PriceNet, PriceNetConfig};
+pub use net::{PRICE_INPUTS, PriceNet, PriceNetConfig, TaskMlp};
 pub use train::{PriceRound, PriceTrainer};
 
 use crate::LearnError;
@@ -74,7 +74,7 @@ pub struct PriceModel {
     /// The settings of the training run.
     pub training: PriceTrainConfig,
     /// The weights.
-    pub mlp: PriceMlp,
+    pub mlp: TaskMlp,
 }
 
 const PRICE_FORMAT: &str = "afg-price-model";
@@ -85,7 +85,7 @@ impl PriceModel {
     pub const FILE_NAME: &str = "price.json";
 
     /// A model with these weights, trained with `training`.
-    pub fn new(training: PriceTrainConfig, mlp: PriceMlp) -> Self {
+    pub fn new(training: PriceTrainConfig, mlp: TaskMlp) -> Self {
         PriceModel {
             format: PRICE_FORMAT.into(),
             version: PRICE_VERSION,
@@ -124,13 +124,10 @@ impl PriceModel {
     }
 }
 
-/// The file name of a price run's log, one JSON [`PriceRound`] per line.
-pub const LOG_FILE_NAME: &str = "log.jsonl";
-
 impl PriceTrainer {
     /// Trains to the end with run directory `dir` (created if needed, then locked as a
     /// [`RunDir`](crate::run_dir::RunDir) is, so that a second trainer is refused): after each
-    /// round the log ([`LOG_FILE_NAME`], one [`PriceRound`] per line) is rewritten
+    /// round the log ([`RunDir::LOG`](crate::run_dir::RunDir::LOG), one [`PriceRound`] per line) is rewritten
     /// atomically and `on_round` called; at the end the run's manifest
     /// ([`RunManifest`](crate::manifest::RunManifest), with `command`) and then the model
     /// ([`PriceModel::FILE_NAME`]) are written. A run
@@ -158,7 +155,7 @@ impl PriceTrainer {
             let round = self.round()?;
             log += &serde_json::to_string(&round).expect("a round always serialises");
             log.push('\n');
-            afg_game::fs::write_atomic(&dir.join(LOG_FILE_NAME), log.as_bytes())?;
+            afg_game::fs::write_atomic(&dir.join(crate::run_dir::RunDir::LOG), log.as_bytes())?;
             on_round(&round);
             last = Some(round);
         }
@@ -184,10 +181,10 @@ impl PriceTrainer {
 /// ```
 /// use afg_baseline::{Allocator, Nearest};
 /// use afg_game::GeneratorConfig;
-/// use afg_learn::price::{PriceMlp, PriceMode, PriceNetConfig, PricePolicy};
+/// use afg_learn::price::{TaskMlp, PriceMode, PriceNetConfig, PricePolicy};
 /// // An untrained model has every price at 0: it is Nearest.
 /// let net = PriceNetConfig { hidden: 16, seed: 0 }.init::<afg_learn::InferBackend>(&Default::default());
-/// let policy = PricePolicy::new(PriceMlp::from_burn(&net), PriceMode::Sequential);
+/// let policy = PricePolicy::new(TaskMlp::from_burn(&net), PriceMode::Sequential);
 /// let inst = GeneratorConfig::paper(50, 5, 2).generate()?;
 /// assert_eq!(
 ///     policy.allocate(&inst)?.assignment,
@@ -197,14 +194,14 @@ impl PriceTrainer {
 /// ```
 #[derive(Clone, Debug)]
 pub struct PricePolicy {
-    mlp: PriceMlp,
+    mlp: TaskMlp,
     mode: PriceMode,
     block: usize,
 }
 
 impl PricePolicy {
     /// A policy with these weights.
-    pub fn new(mlp: PriceMlp, mode: PriceMode) -> Self {
+    pub fn new(mlp: TaskMlp, mode: PriceMode) -> Self {
         PricePolicy {
             mlp,
             mode,
@@ -393,7 +390,7 @@ mod tests {
         let net = config
             .network
             .init::<crate::InferBackend>(&Default::default());
-        let model = PriceModel::new(config, PriceMlp::from_burn(&net));
+        let model = PriceModel::new(config, TaskMlp::from_burn(&net));
         let path = dir.join("model.json");
         model.save(&path).unwrap();
         assert_eq!(PriceModel::load(&path).unwrap(), model);
@@ -465,7 +462,7 @@ mod tests {
             crate::run_dir::RunDir::new(&run).kind().unwrap(),
             crate::manifest::ModelKind::PriceModel
         );
-        let log = std::fs::read_to_string(run.join(LOG_FILE_NAME)).unwrap();
+        let log = std::fs::read_to_string(run.join(crate::run_dir::RunDir::LOG)).unwrap();
         let logged: Vec<PriceRound> = log
             .lines()
             .map(|l| serde_json::from_str(l).unwrap())

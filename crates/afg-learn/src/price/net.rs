@@ -91,27 +91,28 @@ impl<B: Backend> PriceNet<B> {
     }
 }
 
-/// The price MLP as plain matrices, for inference without Burn (the only form saved).
+/// A per-task MLP as plain matrices, for inference without Burn (the only form saved):
+/// one score per task row — the price model's prices and the staffing model's worths.
 ///
 /// # Examples
 /// ```
 /// use afg_graph::TASK_FEATURES;
-/// use afg_learn::price::{PriceMlp, PriceNetConfig};
+/// use afg_learn::price::{TaskMlp, PriceNetConfig};
 /// let config = PriceNetConfig { hidden: 16, seed: 0 };
-/// let mlp = PriceMlp::from_burn(&config.init::<afg_learn::InferBackend>(&Default::default()));
+/// let mlp = TaskMlp::from_burn(&config.init::<afg_learn::InferBackend>(&Default::default()));
 /// let mut prices = vec![1.0; 5];
 /// mlp.prices(&vec![0.5; 5 * TASK_FEATURES], &mut prices);
 /// assert_eq!(prices, vec![0.0; 5]); // untrained: all prices 0 (Nearest)
 /// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct PriceMlp {
+pub struct TaskMlp {
     layers: [Dense; 3],
 }
 
-impl PriceMlp {
+impl TaskMlp {
     /// Copies the weights of a Burn network.
     pub fn from_burn<B: Backend>(net: &PriceNet<B>) -> Self {
-        PriceMlp {
+        TaskMlp {
             layers: [
                 Dense::from_burn(&net.input),
                 Dense::from_burn(&net.hidden),
@@ -170,7 +171,7 @@ impl PriceMlp {
         self.forward_rows_with(inputs, out, (&mut vec![0.0; h], &mut vec![0.0; h]));
     }
 
-    /// [`PriceMlp::forward_rows`] with two `[h]` scratch rows.
+    /// [`TaskMlp::forward_rows`] with two `[h]` scratch rows.
     fn forward_rows_with(&self, inputs: &[f32], out: &mut [f32], rows: (&mut [f32], &mut [f32])) {
         let [first, hidden, output] = &self.layers;
         task_mlp(
@@ -190,7 +191,7 @@ impl PriceMlp {
         self.prices_with(features, prices, &mut PriceScratch::default());
     }
 
-    /// [`PriceMlp::prices`] with reused scratch rows: allocates only the first time.
+    /// [`TaskMlp::prices`] with reused scratch rows: allocates only the first time.
     pub(crate) fn prices_with(
         &self,
         features: &[f32],
@@ -207,7 +208,7 @@ impl PriceMlp {
     }
 }
 
-/// Scratch rows of [`PriceMlp::prices_with`]: the network inputs and two hidden rows.
+/// Scratch rows of [`TaskMlp::prices_with`]: the network inputs and two hidden rows.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct PriceScratch {
     inputs: Vec<f32>,
@@ -228,7 +229,7 @@ mod tests {
         let mut net = config.init::<InferBackend>(&device);
         // Give the output layer weights so the comparison is not 0 = 0.
         net.output = seeded_linear(&mut ChaCha8Rng::seed_from_u64(9), 8, 1, &device);
-        let mlp = PriceMlp::from_burn(&net);
+        let mlp = TaskMlp::from_burn(&net);
         let features: Vec<f32> = (0..3 * TASK_FEATURES)
             .map(|i| (i as f32 * 0.37).sin())
             .collect();
@@ -246,7 +247,7 @@ mod tests {
         }
         assert!(plain.iter().any(|p| p.abs() > 1e-3));
         assert_eq!(
-            PriceMlp::from_burn(&mlp.to_burn::<InferBackend>(&device)),
+            TaskMlp::from_burn(&mlp.to_burn::<InferBackend>(&device)),
             mlp
         );
         assert!(mlp.has_shape(8) && !mlp.has_shape(16));

@@ -20,7 +20,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use super::config::PriceTrainConfig;
-use super::net::{PRICE_INPUTS, PriceMlp, PriceNet, PriceScratch};
+use super::net::{PRICE_INPUTS, PriceNet, PriceScratch, TaskMlp};
 use super::{PriceMode, PriceModel, PricePolicy};
 use crate::regret::q_star;
 use crate::targets::masked_argmax;
@@ -173,7 +173,7 @@ impl PriceTrainer {
 
     /// The current weights as a saveable model.
     pub fn model(&self) -> PriceModel {
-        PriceModel::new(self.config.clone(), PriceMlp::from_burn(&self.net))
+        PriceModel::new(self.config.clone(), TaskMlp::from_burn(&self.net))
     }
 
     /// One round: roll out, fit, validate.
@@ -185,7 +185,7 @@ impl PriceTrainer {
     /// instance generator.
     pub fn round(&mut self) -> Result<PriceRound, LearnError> {
         let expert_share = self.config.expert_decay.powi(self.round as i32);
-        let mlp = PriceMlp::from_burn(&self.net);
+        let mlp = TaskMlp::from_burn(&self.net);
         for _ in 0..self.config.episodes_per_round {
             let seed = training_instance_seed(self.config.seed, self.episodes);
             self.episodes += 1;
@@ -198,7 +198,7 @@ impl PriceTrainer {
             loss += self.step()?;
         }
         self.round += 1;
-        let mlp = PriceMlp::from_burn(&self.net);
+        let mlp = TaskMlp::from_burn(&self.net);
         let score = |mode| -> Result<f64, LearnError> {
             let policy = PricePolicy::new(mlp.clone(), mode);
             let mut welfare = Vec::with_capacity(self.validation.len());
@@ -225,7 +225,7 @@ impl PriceTrainer {
     fn collect(
         &mut self,
         inst: &Instance,
-        mlp: &PriceMlp,
+        mlp: &TaskMlp,
         expert_share: f64,
     ) -> Result<(), LearnError> {
         let m = inst.num_tasks();
@@ -415,7 +415,7 @@ mod tests {
         config.lr = 3e-3;
         let mut t = PriceTrainer::new(config).unwrap();
         let inst = GeneratorConfig::paper(12, 3, 77).generate().unwrap();
-        let mlp = PriceMlp::from_burn(&t.net);
+        let mlp = TaskMlp::from_burn(&t.net);
         t.collect(&inst, &mlp, 1.0).unwrap();
         let first = t.step().unwrap();
         let mut last = first;
@@ -433,7 +433,7 @@ mod tests {
         config.lr = 1e300;
         let mut t = PriceTrainer::new(config).unwrap();
         let inst = GeneratorConfig::paper(12, 3, 77).generate().unwrap();
-        let mlp = PriceMlp::from_burn(&t.net);
+        let mlp = TaskMlp::from_burn(&t.net);
         t.collect(&inst, &mlp, 1.0).unwrap();
         let before = crate::weights::parameter_values(&t.net);
         let err = t.step().unwrap_err();

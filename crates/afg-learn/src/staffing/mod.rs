@@ -50,11 +50,11 @@ use serde::{Deserialize, Serialize};
 
 pub use features::{COUNT_FEATURES, STAFF_FEATURES, staffing_features, staffing_input_width};
 pub use labels::{LABELS_FILE_NAME, LabelledGame, scarce_game};
-pub use train::{LOG_FILE_NAME, StaffingEpoch, StaffingTrainConfig, StaffingTrainer};
+pub use train::{StaffingEpoch, StaffingTrainConfig, StaffingTrainer};
 
 use crate::LearnError;
 use crate::model_file::{check_model_file, read_model_file, write_model_file};
-use crate::price::PriceMlp;
+use crate::price::TaskMlp;
 
 /// A trained staffing model and the settings it was trained with, as saved in a file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -65,7 +65,7 @@ pub struct StaffingModel {
     /// The settings of the training run.
     pub training: StaffingTrainConfig,
     /// The weights (an MLP of the price model's shape, [`staffing_input_width`] wide).
-    pub mlp: PriceMlp,
+    pub mlp: TaskMlp,
 }
 
 const STAFFING_FORMAT: &str = "afg-staffing-model";
@@ -76,7 +76,7 @@ impl StaffingModel {
     pub const FILE_NAME: &str = "staffing.json";
 
     /// A model with these weights, trained with `training`.
-    pub fn new(training: StaffingTrainConfig, mlp: PriceMlp) -> Self {
+    pub fn new(training: StaffingTrainConfig, mlp: TaskMlp) -> Self {
         StaffingModel {
             format: STAFFING_FORMAT.into(),
             version: STAFFING_VERSION,
@@ -137,7 +137,7 @@ impl StaffingModel {
 /// ```
 #[derive(Clone, Debug)]
 pub struct StaffingPolicy {
-    mlp: PriceMlp,
+    mlp: TaskMlp,
     reads_skills: bool,
 }
 
@@ -148,7 +148,7 @@ impl StaffingPolicy {
     ///
     /// # Errors
     /// [`LearnError::InvalidConfig`] if they are not a staffing network's.
-    pub fn new(mlp: PriceMlp) -> Result<Self, LearnError> {
+    pub fn new(mlp: TaskMlp) -> Result<Self, LearnError> {
         let reads = |skills| mlp.has_layers(staffing_input_width(skills), mlp.hidden());
         let reads_skills = match (reads(false), reads(true)) {
             (true, _) => false,
@@ -172,7 +172,7 @@ impl StaffingPolicy {
             &Default::default(),
         );
         StaffingPolicy {
-            mlp: PriceMlp::from_burn(&net),
+            mlp: TaskMlp::from_burn(&net),
             reads_skills,
         }
     }
@@ -200,7 +200,7 @@ impl StaffingPolicy {
 /// Each task's worth `(k_j / share) · (m_j + z_j)` from its features
 /// (`[M, STAFF_FEATURES]`) and the network's corrections, the network reading the
 /// skill features where `reads_skills`.
-pub(crate) fn values_of(mlp: &PriceMlp, features: &[f32], reads_skills: bool) -> Vec<f64> {
+pub(crate) fn values_of(mlp: &TaskMlp, features: &[f32], reads_skills: bool) -> Vec<f64> {
     let inputs = features::staffing_inputs(features, reads_skills);
     let mut corrections = vec![0.0; features.len() / STAFF_FEATURES];
     mlp.forward_rows(&inputs, &mut corrections);

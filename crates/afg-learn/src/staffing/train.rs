@@ -25,12 +25,9 @@ use serde::{Deserialize, Serialize};
 use super::features::{MARGIN, SIZE, STAFF_FEATURES, staffing_input_width, staffing_inputs};
 use super::labels::{LABELS_FILE_NAME, LabelledGame, label, lines_of, read_labels, scarce_game};
 use super::{StaffingModel, knapsack, staff_by_values, values_of};
-use crate::price::{PriceMlp, PriceNet, PriceNetConfig};
+use crate::price::{PriceNet, PriceNetConfig, TaskMlp};
 use crate::train::training_instance_seed;
 use crate::{LearnError, TrainBackend};
-
-/// The file name of a staffing run's log, one JSON [`StaffingEpoch`] per line.
-pub const LOG_FILE_NAME: &str = "log.jsonl";
 
 /// Every setting of a staffing training run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -286,7 +283,7 @@ impl StaffingTrainer {
 
     /// The current weights as a saveable model.
     pub fn model(&self) -> StaffingModel {
-        StaffingModel::new(self.config.clone(), PriceMlp::from_burn(&self.net))
+        StaffingModel::new(self.config.clone(), TaskMlp::from_burn(&self.net))
     }
 
     /// One pass over every labelled game in a seeded random order, `batch` games per
@@ -312,7 +309,7 @@ impl StaffingTrainer {
             steps += 1;
         }
         self.epoch += 1;
-        let mlp = PriceMlp::from_burn(&self.net);
+        let mlp = TaskMlp::from_burn(&self.net);
         let reads_skills = self.config.skills.is_some();
         let (mut agree, mut tasks, mut percent) = (0usize, 0usize, 0.0);
         for (inst, game) in &self.validation {
@@ -416,7 +413,7 @@ impl StaffingTrainer {
     /// Trains to the end with run directory `dir` (created if needed and locked as a
     /// [`RunDir`](crate::run_dir::RunDir) is): labels the games (resuming from
     /// [`LABELS_FILE_NAME`]), then after each epoch rewrites the log
-    /// ([`LOG_FILE_NAME`]) and calls `on_epoch`; at the end writes the manifest and
+    /// ([`RunDir::LOG`](crate::run_dir::RunDir::LOG)) and calls `on_epoch`; at the end writes the manifest and
     /// then the model ([`StaffingModel::FILE_NAME`]).
     ///
     /// # Errors
@@ -442,7 +439,7 @@ impl StaffingTrainer {
             let epoch = self.epoch()?;
             log += &serde_json::to_string(&epoch).expect("an epoch always serialises");
             log.push('\n');
-            afg_game::fs::write_atomic(&dir.join(LOG_FILE_NAME), log.as_bytes())?;
+            afg_game::fs::write_atomic(&dir.join(crate::run_dir::RunDir::LOG), log.as_bytes())?;
             on_epoch(&epoch);
             last = Some(epoch);
         }

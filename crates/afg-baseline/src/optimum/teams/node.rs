@@ -5,8 +5,7 @@ use std::cmp::Ordering;
 
 use afg_game::{Assignment, Instance, RobotId, TaskId};
 
-use super::super::assignment_of;
-use super::super::transport::{self, Column, Slots, Solution};
+use super::super::transport::{self, Column, Slots, Solution, assignment_of};
 
 mod lagrange;
 pub(super) use lagrange::MAX_PAIRS;

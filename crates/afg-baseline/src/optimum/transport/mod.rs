@@ -32,7 +32,7 @@
 
 use std::cmp::{Ordering, Reverse};
 
-use afg_game::{Instance, Point, RobotId};
+use afg_game::{Assignment, Instance, Point, RobotId, TaskId};
 use rayon::prelude::*;
 
 use super::movers::{Movers, NOWHERE};
@@ -61,6 +61,18 @@ pub(super) struct Solution {
 }
 
 /// Solves `inst` exactly.
+/// The assignment of a solver's columns (M: the void).
+pub(super) fn assignment_of(instance: &Instance, task_of: &[u32]) -> Assignment {
+    let m = instance.num_tasks();
+    let tasks = task_of
+        .iter()
+        .map(|&j| (j as usize) < m)
+        .zip(task_of)
+        .map(|(task, &j)| task.then_some(TaskId(j)))
+        .collect();
+    Assignment::from_tasks(instance, tasks).expect("the solver respects capacities")
+}
+
 pub(super) fn solve(inst: &Instance) -> Solution {
     solved(inst, 0).into_solution()
 }

@@ -15,8 +15,7 @@
 
 use afg_game::Assignment;
 
-use super::super::super::assignment_of;
-use super::super::super::transport::{self, Column, skill_rebates};
+use super::super::super::transport::{self, Column, assignment_of, skill_rebates};
 use super::{Decision, Node, Pair, Search};
 
 /// Subgradient steps at the root at most.
