@@ -21,14 +21,16 @@ from afg.pettingzoo import allocation_v0  # noqa: E402
 
 def test_pettingzoo_api_and_seed_tests_pass() -> None:
     api_test(allocation_v0.env(robots=8, tasks=3), num_cycles=20)
+    api_test(allocation_v0.env(robots=8, tasks=3, min_team=(2, 3), skills=2), num_cycles=20)
     seed_test(lambda: allocation_v0.env(robots=8, tasks=3), num_cycles=20)
     api_test(allocation_v0.env(robots=6, tasks=2, allow_void=True), num_cycles=20)
 
 
-def test_the_aec_environment_is_the_gymnasium_one_step_by_step() -> None:
+@pytest.mark.parametrize("teams", [{}, {"min_team": (2, 4), "skills": 2, "requires": (0, 1)}])
+def test_the_aec_environment_is_the_gymnasium_one_step_by_step(teams: dict) -> None:
     rng = np.random.default_rng(0)
-    aec = allocation_v0.env(robots=10, tasks=3)
-    single = gym.make("afg/Allocation-v0", robots=10, tasks=3)
+    aec = allocation_v0.env(robots=10, tasks=3, **teams)
+    single = gym.make("afg/Allocation-v0", robots=10, tasks=3, **teams)
     aec.reset(seed=5)
     obs, info = single.reset(seed=5)
     returns = {}
@@ -41,6 +43,11 @@ def test_the_aec_environment_is_the_gymnasium_one_step_by_step() -> None:
         assert agent == f"robot_{t}" and obs["actor"] == t
         assert (observation["observation"] == obs["task_features"][t]).all()
         assert (observation["action_mask"] == obs["action_mask"]).all()
+        if teams:
+            assert np.array_equal(observation["team"], obs["team"].astype(np.float32))
+            assert np.array_equal(observation["skills"], obs["skills"][t].astype(np.float32))
+        else:
+            assert "team" not in observation
         returns[agent] = returns.get(agent, 0.0) + reward
         action = int(rng.choice(np.flatnonzero(observation["action_mask"])))
         aec.step(action)

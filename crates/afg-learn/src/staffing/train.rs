@@ -215,30 +215,28 @@ impl StaffingTrainer {
         let limit = Duration::from_secs_f64(self.config.label_time_limit);
         let skills = self.config.skills;
         let games = self.training_games();
-        let mut done: Vec<LabelledGame> = match cache {
+        // The games already labelled, in whatever order a stopped run finished them.
+        let cached: Vec<LabelledGame> = match cache {
             Some(path) if path.exists() => read_labels(path)?,
             _ => Vec::new(),
         };
-        for (game, &(size, seed)) in done.iter().zip(&games) {
-            if (game.size, game.seed) != (size, seed) {
-                return Err(LearnError::InvalidConfig(format!(
-                    "{} holds another run's games (seed {} of {}x{} where this run has seed {seed} of {}x{}); remove it or choose another directory",
-                    cache.map_or_else(String::new, |p| p.display().to_string()),
-                    game.seed,
-                    game.size.robots,
-                    game.size.tasks,
-                    size.robots,
-                    size.tasks
-                )));
-            }
+        if let Some(game) = cached.iter().find(|g| !games.contains(&(g.size, g.seed))) {
+            return Err(LearnError::InvalidConfig(format!(
+                "{} holds another run's games (seed {} of {}x{}, which this run does not draw); remove it or choose another directory",
+                cache.map_or_else(String::new, |p| p.display().to_string()),
+                game.seed,
+                game.size.robots,
+                game.size.tasks,
+            )));
         }
-        done.truncate(games.len());
-        done.iter().for_each(&on_game);
-        let file = std::sync::Mutex::new(cache.map(|path| (path.to_path_buf(), lines_of(&done))));
-        let mut fresh: Vec<(usize, LabelledGame)> = games[done.len()..]
+        cached.iter().for_each(&on_game);
+        let todo: Vec<(GameSize, u64)> = (games.iter().copied())
+            .filter(|&(size, seed)| !cached.iter().any(|g| (g.size, g.seed) == (size, seed)))
+            .collect();
+        let file = std::sync::Mutex::new(cache.map(|path| (path.to_path_buf(), lines_of(&cached))));
+        let fresh: Vec<LabelledGame> = todo
             .par_iter()
-            .enumerate()
-            .map(|(at, &(size, seed))| {
+            .map(|&(size, seed)| {
                 let game = label(size, skills, seed, limit)?;
                 if let Some((path, text)) = file.lock().expect("no panics while held").as_mut() {
                     text.push_str(&serde_json::to_string(&game).expect("a game serialises"));
@@ -246,12 +244,22 @@ impl StaffingTrainer {
                     afg_game::fs::write_atomic(path, text.as_bytes())?;
                 }
                 on_game(&game);
-                Ok((at, game))
+                Ok(game)
             })
             .collect::<Result<_, LearnError>>()?;
-        fresh.sort_by_key(|(at, _)| *at);
-        done.extend(fresh.into_iter().map(|(_, g)| g));
-        // The cache was written in the order games finished; rewrite it in run order.
+        // Every game in run order; the cache (written in the order games finished) is
+        // rewritten so.
+        let mut labelled: Vec<Option<LabelledGame>> =
+            cached.into_iter().chain(fresh).map(Some).collect();
+        let done: Vec<LabelledGame> = (games.iter())
+            .map(|&(size, seed)| {
+                let at = labelled
+                    .iter()
+                    .position(|g| g.as_ref().is_some_and(|g| (g.size, g.seed) == (size, seed)));
+                at.and_then(|at| labelled[at].take())
+                    .expect("every game labelled")
+            })
+            .collect();
         if let Some(path) = cache {
             afg_game::fs::write_atomic(path, lines_of(&done).as_bytes())?;
         }

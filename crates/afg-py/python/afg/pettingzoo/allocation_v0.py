@@ -17,15 +17,20 @@ order, exactly as in ``afg/Allocation-v0`` (the same engine underneath, step for
   concatenated in index order (the whole (N, M) utility table, flattened), as
   PettingZoo's MPE environments do; ``state_space`` is its ``Box``.
 
+With the team games' knobs (``min_team``, ``skills``, ``skill_share``, ``requires``)
+the observation also holds ``team`` (M, 3 + S) — every task's threshold and team so far,
+as ``afg/Allocation-v0``'s entry of that name — and ``skills`` (S,), the agent's own.
+
 Keyword arguments as ``afg/Allocation-v0``'s: ``robots``, ``tasks``,
-``capacity_slack``, ``eps``, ``beta``, ``units``, ``allow_void``; and PettingZoo's
+``capacity_slack``, ``eps``, ``beta``, ``units``, ``allow_void``, ``min_team``,
+``skills``, ``skill_share``, ``requires``; and PettingZoo's
 ``max_cycles`` (every robot acts once, so any limit ≥ 1 is never reached) and
 ``render_mode`` (``None`` only).
 """
 
 from __future__ import annotations
 
-from typing import Any, Dict, Optional
+from typing import Any, Dict, Optional, Tuple
 
 import numpy as np
 from gymnasium import spaces
@@ -60,6 +65,10 @@ class raw_env(AECEnv):  # noqa: N801 (PettingZoo's name)
         beta: float = 1.0,
         units: str = "bounded",
         allow_void: bool = False,
+        min_team: Optional[Tuple[int, int]] = None,
+        skills: Optional[int] = None,
+        skill_share: Optional[float] = None,
+        requires: Optional[Tuple[int, int]] = None,
         max_cycles: Optional[int] = None,
         render_mode: Optional[str] = None,
     ) -> None:
@@ -69,17 +78,23 @@ class raw_env(AECEnv):  # noqa: N801 (PettingZoo's name)
         self.render_mode = render_mode
         self._game = AllocationEnv(
             robots=robots, tasks=tasks, capacity_slack=capacity_slack, eps=eps, beta=beta,
-            units=units, allow_void=allow_void,
+            units=units, allow_void=allow_void, min_team=min_team, skills=skills,
+            skill_share=skill_share, requires=requires,
         )
         self.possible_agents = [f"robot_{i}" for i in range(robots)]
         self._index = {a: i for i, a in enumerate(self.possible_agents)}
         actions = int(self._game.action_space.n)
-        self._observation_space = spaces.Dict(
-            {
-                "observation": spaces.Box(-np.inf, np.inf, shape=(tasks,), dtype=np.float32),
-                "action_mask": spaces.Box(0, 1, shape=(actions,), dtype=np.int8),
-            }
-        )
+        entries: Dict[str, spaces.Space] = {
+            "observation": spaces.Box(-np.inf, np.inf, shape=(tasks,), dtype=np.float32),
+            "action_mask": spaces.Box(0, 1, shape=(actions,), dtype=np.int8),
+        }
+        game_space = self._game.observation_space
+        self._teams = "team" in game_space.spaces
+        if self._teams:
+            entries["team"] = game_space["team"]
+            s = game_space["skills"].shape[1]
+            entries["skills"] = spaces.Box(0.0, np.inf, shape=(s,), dtype=np.float32)
+        self._observation_space = spaces.Dict(entries)
         self._action_space = spaces.Discrete(actions)
         self.state_space = spaces.Box(-np.inf, np.inf, shape=(robots * tasks,), dtype=np.float32)
         self._obs: Dict[str, Any] = {}
@@ -104,10 +119,14 @@ class raw_env(AECEnv):  # noqa: N801 (PettingZoo's name)
         i = self._index[agent]
         acting = int(self._obs["actor"]) == i
         mask = self._obs["action_mask"] if acting else np.zeros(self._action_space.n)
-        return {
+        seen = {
             "observation": np.array(self._obs["task_features"][i], dtype=np.float32),
             "action_mask": np.asarray(mask, dtype=np.int8),
         }
+        if self._teams:
+            seen["team"] = np.array(self._obs["team"], dtype=np.float32)
+            seen["skills"] = np.array(self._obs["skills"][i], dtype=np.float32)
+        return seen
 
     def state(self) -> np.ndarray:
         """The global state: every robot's observation, concatenated in index order."""
