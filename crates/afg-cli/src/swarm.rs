@@ -6,7 +6,7 @@
 use std::path::PathBuf;
 
 use afg_baseline::{Network, SwarmMethod, SwarmReport};
-use afg_eval::swarm::{SwarmGrid, table};
+use afg_eval::swarm::{SwarmGrid, summary, table};
 use afg_game::fs::write_atomic_making_dirs;
 use afg_game::io::read_instances;
 use afg_game::{GeneratorConfig, Named, Preference};
@@ -158,6 +158,9 @@ pub fn run(args: SwarmArgs) -> Result<()> {
         }
     } else {
         print!("{}", table(&cells, &reports));
+        if let Some(summary) = summary(&cells, &reports) {
+            println!("\nBy method, size and network, over the instances:\n\n{summary}");
+        }
     }
     Ok(())
 }
@@ -243,6 +246,52 @@ mod tests {
         assert_eq!(epsilon(&teams), 0.01);
         assert_eq!(epsilon(&format!("{teams} --epsilon 0.05")), 0.05);
         assert_eq!(epsilon("swarm --method auction --robots 20"), 0.001);
+    }
+
+    /// Rows that read alike (instances of one size) are summed up by size: two of the
+    /// committed threshold games at N = 20 and two at N = 100 give two lines, whose
+    /// run counts add up to every run.
+    #[test]
+    fn instances_of_one_size_are_summed_up() {
+        let teams = crate::repo_root().join("datasets/teams-thresholds.jsonl");
+        let lines: Vec<String> = std::fs::read_to_string(teams)
+            .unwrap()
+            .lines()
+            .map(str::to_owned)
+            .collect();
+        let dir = std::env::temp_dir().join(format!("afg-swarm-sizes-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("four.jsonl");
+        let four = [0, 1, 10, 11].map(|k| lines[k].clone()).join("\n");
+        std::fs::write(&file, four).unwrap();
+        let line = format!("swarm --method auction --input {}", file.display());
+        let crate::Command::Swarm(args) = crate::parse(&line).unwrap() else {
+            unreachable!("a swarm command")
+        };
+        let (cells, reports) = super::grid(&args).unwrap().run(|| (), &|_| ()).unwrap();
+        let text = super::summary(&cells, &reports).expect("a summary");
+        let lines: Vec<&str> = text.lines().skip(2).collect();
+        assert_eq!(lines.len(), 2, "{text}");
+        let runs: usize = (lines.iter())
+            .map(|l| {
+                l.split('|')
+                    .nth(2)
+                    .unwrap()
+                    .trim()
+                    .parse::<usize>()
+                    .unwrap()
+            })
+            .sum();
+        assert_eq!(runs, reports.len());
+        assert!(
+            lines[0].contains("N = 20") && lines[1].contains("N = 100"),
+            "{text}"
+        );
+        assert!(lines[0].contains(" % ("), "{text}");
+        // One instance per size: nothing to sum up.
+        let one = &cells[..1];
+        assert!(super::summary(one, &reports[..1]).is_none());
+        std::fs::remove_dir_all(dir).unwrap();
     }
 
     #[test]

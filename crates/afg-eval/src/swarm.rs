@@ -2,6 +2,7 @@
 //! loss rates × failing shares, several seeds a cell, each cell's runs summarised in
 //! one row of a Markdown table.
 
+use std::fmt::Write as _;
 use std::ops::Range;
 use std::time::Duration;
 
@@ -235,6 +236,52 @@ pub fn table(cells: &[Cell], reports: &[(usize, SwarmReport)]) -> String {
         out += &row(cell, &runs);
     }
     out
+}
+
+/// Where several instances share a method, a size and a network (the rows of
+/// [`table`] that read alike), one line per such group: its runs, how many converged,
+/// the mean % of OPT with the least and largest, and the mean rounds; `None` where no
+/// two cells share one.
+pub fn summary(cells: &[Cell], reports: &[(usize, SwarmReport)]) -> Option<String> {
+    let mut groups: Vec<(String, Vec<&SwarmReport>)> = Vec::new();
+    for (c, cell) in cells.iter().enumerate() {
+        let label = cell.label();
+        let runs = reports.iter().filter(|(k, _)| *k == c).map(|(_, r)| r);
+        match groups.iter_mut().find(|(l, _)| *l == label) {
+            Some((_, group)) => group.extend(runs),
+            None => groups.push((label, runs.collect())),
+        }
+    }
+    if groups.len() == cells.len() {
+        return None;
+    }
+    let mut out = String::from(
+        "| network | runs | converged | % of OPT, mean (least–largest) | rounds, mean |\n|---|---|---|---|---|\n",
+    );
+    for (label, runs) in &groups {
+        let percents: Option<Vec<f64>> = runs.iter().map(|r| r.percent_of_opt).collect();
+        let percent = percents
+            .filter(|p| !p.is_empty())
+            .map_or("–".to_owned(), |p| {
+                let (lo, hi) = p
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
+                        (lo.min(x), hi.max(x))
+                    });
+                format!(
+                    "{:.2} % ({lo:.2}–{hi:.2})",
+                    p.iter().sum::<f64>() / p.len() as f64
+                )
+            });
+        let rounds = runs.iter().map(|r| r.rounds as f64).sum::<f64>() / runs.len().max(1) as f64;
+        let converged = runs.iter().filter(|r| r.converged).count();
+        let _ = writeln!(
+            out,
+            "| {label} | {} | {converged} | {percent} | {rounds:.0} |",
+            runs.len()
+        );
+    }
+    Some(out)
 }
 
 /// One cell's row of [`table`].
