@@ -397,41 +397,25 @@ fn a_still_of_a_team_mission_is_a_png() {
 fn mission_gen_warns_of_tasks_no_team_can_staff() {
     let (dir, _) = mission_dir("unstaffable");
     let out = dir.join("big-teams.json");
-    let made = afg(&[
-        "mission",
-        "gen",
-        "--preset",
-        "static",
-        "--robots",
-        "4",
-        "--tasks",
-        "2",
-        "--min-team",
-        "5,5",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert_eq!(made.status.code(), Some(0), "{}", stderr(&made));
-    assert!(
-        stderr(&made).contains("warning: no team can staff tasks 0, 1"),
-        "{}",
+    let generate = |min_team: &str| {
+        let args = [
+            "mission", "gen", "--preset", "static", "--robots", "4", "--tasks", "2",
+        ];
+        let made = afg(&[
+            &args[..],
+            &["--min-team", min_team, "--out", out.to_str().unwrap()],
+        ]
+        .concat());
+        assert_eq!(made.status.code(), Some(0), "{}", stderr(&made));
         stderr(&made)
+    };
+    let warned = generate("5,5");
+    assert!(
+        warned.contains("warning: no team can staff tasks 0, 1"),
+        "{warned}"
     );
     assert!(out.exists());
-    let fine = afg(&[
-        "mission",
-        "gen",
-        "--preset",
-        "static",
-        "--robots",
-        "4",
-        "--tasks",
-        "2",
-        "--min-team",
-        "2,2",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(!stderr(&fine).contains("warning"), "{}", stderr(&fine));
+    let fine = generate("2,2");
+    assert!(!fine.contains("warning"), "{fine}");
     std::fs::remove_dir_all(dir).unwrap();
 }

@@ -35,12 +35,9 @@ fn close(a: f64, b: f64) -> bool {
     (a - b).abs() < 1e-9 * b.abs().max(1.0)
 }
 
-#[test]
-fn two_robots_needed_the_work_starts_when_the_second_arrives() {
-    // Robot 0 reaches the task at t = 1, robot 1 at t = 3; the task needs both. From
-    // t = 3 the pair works at log2(3) per time unit: done at 3 + 3 / log2(3). Robot 0
-    // waited 2 time units.
-    let mission = Mission::new(
+/// Robots at x = 0 and x = 4 and one task at x = 1 of workload 3 that needs both.
+fn pair_at_one_task() -> Mission {
+    Mission::new(
         1.0,
         false,
         50.0,
@@ -48,7 +45,15 @@ fn two_robots_needed_the_work_starts_when_the_second_arrives() {
         vec![task(3.0, 2, vec![])],
         vec![],
     )
-    .unwrap();
+    .unwrap()
+}
+
+#[test]
+fn two_robots_needed_the_work_starts_when_the_second_arrives() {
+    // Robot 0 reaches the task at t = 1, robot 1 at t = 3; the task needs both. From
+    // t = 3 the pair works at log2(3) per time unit: done at 3 + 3 / log2(3). Robot 0
+    // waited 2 time units.
+    let mission = pair_at_one_task();
     for replan in [Replan::Scratch(&Optimum), Replan::Scratch(&Greedy)] {
         let run = simulate(&mission, replan, RunOptions::default()).unwrap();
         let done = 3.0 + 3.0 / work_rate(2, 2.0);
@@ -374,15 +379,7 @@ fn grape_and_the_auction_over_the_radio_play_thresholds_and_the_auction_skills()
 #[test]
 fn grape_on_a_hand_team_mission_joins_one_robot_per_round() {
     use afg_mission::{MissionMethod, MissionPlan, Recording};
-    let mission = Mission::new(
-        1.0,
-        false,
-        50.0,
-        vec![robot(0.0, vec![]), robot(4.0, vec![])],
-        vec![task(3.0, 2, vec![])],
-        vec![],
-    )
-    .unwrap();
+    let mission = pair_at_one_task();
     let plan = MissionPlan {
         method: MissionMethod::Grape,
         ..MissionPlan::default()

@@ -286,19 +286,25 @@ mod tests {
         best
     }
 
+    /// Small games with thresholds 1–3 and two skills of `share`, tasks requiring
+    /// `requires` of each.
+    fn skill_knobs(share: f64, requires: (usize, usize)) -> GeneratorKnobs {
+        GeneratorKnobs {
+            min_team: Some((1, 3)),
+            skills: Some(2),
+            skill_share: Some(share),
+            requires: Some(requires),
+            ..GeneratorKnobs::default()
+        }
+    }
+
     /// Pricing the skills earns its keep: over small skill games whose root's envelope
     /// bound the best assignment found so far does not meet, the priced bound is strictly below the
     /// envelope's in most of them (a pricing that does nothing fails), and never below
     /// the optimum.
     #[test]
     fn pricing_skills_lowers_the_envelope_bound() {
-        let knobs = GeneratorKnobs {
-            min_team: Some((1, 3)),
-            skills: Some(2),
-            skill_share: Some(0.3),
-            requires: Some((1, 2)),
-            ..GeneratorKnobs::default()
-        };
+        let knobs = skill_knobs(0.3, (1, 2));
         let (mut open, mut lowered) = (0, 0);
         for seed in 0..60 {
             let inst = knobs.config(6, 3, seed).unwrap().generate().unwrap();
@@ -332,14 +338,7 @@ mod tests {
             m in 1usize..=3,
             raw in proptest::collection::vec(0.0f64..3.0, 6),
         ) {
-            let knobs = GeneratorKnobs {
-                min_team: Some((1, 3)),
-                skills: Some(2),
-                skill_share: Some(0.5),
-                requires: Some((0, 2)),
-                ..GeneratorKnobs::default()
-            };
-            let inst = knobs.config(n, m, seed).unwrap().generate().unwrap();
+            let inst = skill_knobs(0.5, (0, 2)).config(n, m, seed).unwrap().generate().unwrap();
             let optimum = brute_force(&inst);
             let tol = 1e-9 * optimum.abs().max(1.0);
             let mut search = Search::new(&inst);
