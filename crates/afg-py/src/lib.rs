@@ -252,7 +252,8 @@ impl PyInstance {
         let whole = |what: &str, v: i64| {
             u32::try_from(v).map_err(|_| {
                 bad_input(format!(
-                    "{what} holds {v}: amounts are whole numbers, at least 0"
+                    "{what} holds {v}: thresholds and skill amounts are whole numbers from 0 to {}",
+                    u32::MAX
                 ))
             })
         };

@@ -121,6 +121,8 @@ def test_bad_team_input_and_refusals_are_clear_errors() -> None:
         afg.Instance(robots, tasks, [1.0], [2.0], min_team=[0])
     with pytest.raises(afg.InvalidInputError, match="skills holds -1"):
         afg.Instance(robots, tasks, [1.0], [2.0], skills=[[-1], [0]])
+    with pytest.raises(afg.InvalidInputError, match="min_team holds 1000000000000: .* from 0 to 4294967295"):
+        afg.Instance(robots, tasks, [1.0], [2.0], min_team=[10**12])
     with pytest.raises(afg.InvalidInputError, match="lists 2 skills but robot 0 lists 1"):
         afg.Instance(robots, tasks, [1.0], [2.0], skills=[[1], [0]], requires=[[1, 1]])
     skills = afg.generate(20, 4, seed=2, skills=2)
