@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use afg_baseline::{Allocator, Method, TeamOptimum};
+use afg_baseline::{Allocator, Method};
 use afg_eval::solve::{Against, Report, Row};
 use afg_game::fs::write_atomic_making_dirs;
 use afg_game::io::read_instances;
@@ -208,16 +208,13 @@ fn reference(args: &SolveArgs, instances: &[Instance]) -> Result<(Against, Strin
         return Ok((Against::Nothing, String::new()));
     }
     let seconds = args.reference_time_limit;
-    TeamOptimum::with_time_limit(seconds).context("--reference-time-limit")?;
+    let against = Against::optimum_within(seconds).context("--reference-time-limit")?;
     let saying = if instances.iter().any(Instance::has_teams) {
         format!(
             ", measured against the exact optimum (up to {seconds} s each: --reference-time-limit, --no-reference)"
         )
     } else {
         ", measured against the exact optimum".to_owned()
-    };
-    let against = Against::Optimum {
-        time_limit: Some(seconds),
     };
     Ok((against, saying))
 }

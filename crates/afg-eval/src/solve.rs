@@ -27,6 +27,27 @@ impl Default for Against {
     }
 }
 
+impl Against {
+    /// The exact optimum stopped within `seconds` on a team game, the limit checked
+    /// now (before any work) by the exact solver's own rule.
+    ///
+    /// # Errors
+    /// [`EvalError::Alloc`] where `seconds` is not finite and positive.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_eval::solve::Against;
+    /// assert!(Against::optimum_within(10.0).is_ok());
+    /// assert!(Against::optimum_within(0.0).is_err());
+    /// ```
+    pub fn optimum_within(seconds: f64) -> Result<Against, EvalError> {
+        TeamOptimum::with_time_limit(seconds)?;
+        Ok(Against::Optimum {
+            time_limit: Some(seconds),
+        })
+    }
+}
+
 /// What a row was measured against: the exact solver's best welfare, its certified
 /// bound, and whether that welfare is proven optimal. Where it is not, "% of OPT" is
 /// of the bound: a lower bound on the true share.

@@ -237,11 +237,8 @@ fn against(reference: bool, time_limit: f64) -> PyResult<Against> {
     if !reference {
         return Ok(Against::Nothing);
     }
-    afg_baseline::TeamOptimum::with_time_limit(time_limit)
-        .map_err(|e| crate::bad_input(format!("reference_time_limit: {e}")))?;
-    Ok(Against::Optimum {
-        time_limit: Some(time_limit),
-    })
+    Against::optimum_within(time_limit)
+        .map_err(|e| crate::bad_input(format!("reference_time_limit: {e}")))
 }
 
 fn run(
