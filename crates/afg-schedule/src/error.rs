@@ -63,6 +63,10 @@ fn describe_waits(waiting: &[(usize, usize)]) -> String {
         .map(|(r, t)| format!("robot {r} waits at task {t}"))
         .collect();
     let more = waiting.len().saturating_sub(shown.len());
-    let tail = if more > 0 { format!(" and {more} more") } else { String::new() };
+    let tail = if more > 0 {
+        format!(" and {more} more")
+    } else {
+        String::new()
+    };
     format!("{}{tail}, whose teams never complete", shown.join(", "))
 }

@@ -53,19 +53,26 @@ pub struct ScheduleRecord {
 impl ScheduleRecord {
     /// Parses one record from JSON.
     pub fn from_json(text: &str) -> Result<Self, ScheduleError> {
-        serde_json::from_str(text).map_err(|e| ScheduleError::Parse { line: e.line(), message: e.to_string() })
+        serde_json::from_str(text).map_err(|e| ScheduleError::Parse {
+            line: e.line(),
+            message: e.to_string(),
+        })
     }
 
     /// The routes as a [`Schedule`].
     pub fn schedule(&self) -> Schedule {
-        Schedule { routes: self.routes.clone() }
+        Schedule {
+            routes: self.routes.clone(),
+        }
     }
 }
 
 /// Reads a JSON Lines file of schedule records.
 pub fn read_schedules(path: &std::path::Path) -> Result<Vec<ScheduleRecord>, ScheduleError> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|source| ScheduleError::Io { path: path.display().to_string(), source })?;
+    let text = std::fs::read_to_string(path).map_err(|source| ScheduleError::Io {
+        path: path.display().to_string(),
+        source,
+    })?;
     crate::instance::parse_lines(&text, ScheduleRecord::from_json)
 }
 
@@ -177,10 +184,16 @@ impl ScheduleInstance {
     /// A schedule that names an unknown task, leaves one out, visits a task twice or has
     /// the wrong number of routes is an error, and so is one whose robots wait for each
     /// other in a cycle ([`ScheduleError::Deadlock`], naming who waits where).
-    pub fn evaluate_with(&self, schedule: &Schedule, max_wait: f64) -> Result<Evaluation, ScheduleError> {
+    pub fn evaluate_with(
+        &self,
+        schedule: &Schedule,
+        max_wait: f64,
+    ) -> Result<Evaluation, ScheduleError> {
         self.check_schedule(schedule)?;
         if max_wait.is_nan() || max_wait <= 0.0 {
-            return Err(ScheduleError::Setting(format!("max_wait must be above 0, not {max_wait}")));
+            return Err(ScheduleError::Setting(format!(
+                "max_wait must be above 0, not {max_wait}"
+            )));
         }
         Play::new(self, schedule).run(max_wait)
     }
@@ -206,7 +219,9 @@ impl ScheduleInstance {
                     )));
                 }
                 if !mine.insert(j) {
-                    return Err(ScheduleError::BadSchedule(format!("sends robot {i} to task {j} twice")));
+                    return Err(ScheduleError::BadSchedule(format!(
+                        "sends robot {i} to task {j} twice"
+                    )));
                 }
                 seen[j] = true;
             }
@@ -215,7 +230,11 @@ impl ScheduleInstance {
             let missing = seen.iter().filter(|&&s| !s).count();
             return Err(ScheduleError::BadSchedule(format!(
                 "leaves out task {j}{}: every task needs a team",
-                if missing > 1 { format!(" and {} more", missing - 1) } else { String::new() }
+                if missing > 1 {
+                    format!(" and {} more", missing - 1)
+                } else {
+                    String::new()
+                }
             )));
         }
         Ok(())
@@ -240,7 +259,10 @@ struct Play<'a> {
 impl<'a> Play<'a> {
     fn new(inst: &'a ScheduleInstance, schedule: &'a Schedule) -> Self {
         let (n, m) = (inst.num_robots(), inst.num_tasks());
-        let empty = Forming { held: vec![0; inst.num_skills()], ..Forming::default() };
+        let empty = Forming {
+            held: vec![0; inst.num_skills()],
+            ..Forming::default()
+        };
         Play {
             inst,
             routes: &schedule.routes,
@@ -281,7 +303,13 @@ impl<'a> Play<'a> {
     fn depart(&mut self, i: usize, j: usize, t: f64) {
         let complete = self.forming[j].complete;
         if complete && self.inst.rules == Rules::Heteromrta {
-            self.visits[i].push(Visit { task: j, role: Role::Skipped, depart: t, arrive: t, leave: t });
+            self.visits[i].push(Visit {
+                task: j,
+                role: Role::Skipped,
+                depart: t,
+                arrive: t,
+                leave: t,
+            });
             self.queue.push(Reverse((Time(t), i)));
             return;
         }
@@ -291,11 +319,23 @@ impl<'a> Play<'a> {
         let arrive = t + d / self.inst.speed;
         if complete {
             let leave = self.finish[j];
-            self.visits[i].push(Visit { task: j, role: Role::Extra, depart: t, arrive, leave });
+            self.visits[i].push(Visit {
+                task: j,
+                role: Role::Extra,
+                depart: t,
+                arrive,
+                leave,
+            });
             self.queue.push(Reverse((Time(leave), i)));
             return;
         }
-        self.visits[i].push(Visit { task: j, role: Role::Team, depart: t, arrive, leave: f64::NAN });
+        self.visits[i].push(Visit {
+            task: j,
+            role: Role::Team,
+            depart: t,
+            arrive,
+            leave: f64::NAN,
+        });
         let f = &mut self.forming[j];
         f.members.push(i);
         f.latest_arrival = f.latest_arrival.max(arrive);
@@ -304,7 +344,10 @@ impl<'a> Play<'a> {
         }
         let task = &self.inst.tasks[j];
         let enough = f.members.len() >= task.team_floor()
-            && f.held.iter().enumerate().all(|(s, &h)| h >= u64::from(self.inst.task_requires(j, s)));
+            && f.held
+                .iter()
+                .enumerate()
+                .all(|(s, &h)| h >= u64::from(self.inst.task_requires(j, s)));
         if enough {
             f.complete = true;
             self.start[j] = f.latest_arrival;
@@ -330,11 +373,17 @@ impl<'a> Play<'a> {
     fn finish_up(self, max_wait: f64) -> Evaluation {
         let n = self.inst.num_robots();
         let mut latest = vec![f64::NEG_INFINITY; self.inst.num_tasks()];
-        for v in self.visits.iter().flatten().filter(|v| v.role != Role::Skipped) {
+        for v in self
+            .visits
+            .iter()
+            .flatten()
+            .filter(|v| v.role != Role::Skipped)
+        {
             latest[v.task] = latest[v.task].max(v.arrive);
         }
         let mut waited = vec![0.0; n];
-        let (mut long_waits, mut released_before_arrival, mut longest_wait) = (Vec::new(), Vec::new(), 0.0f64);
+        let (mut long_waits, mut released_before_arrival, mut longest_wait) =
+            (Vec::new(), Vec::new(), 0.0f64);
         for (i, visits) in self.visits.iter().enumerate() {
             for v in visits {
                 match v.role {
@@ -350,7 +399,11 @@ impl<'a> Play<'a> {
                         let wait = self.start[v.task] - v.arrive;
                         longest_wait = longest_wait.max(wait);
                         if wait > max_wait {
-                            long_waits.push(LongWait { robot: i, task: v.task, wait });
+                            long_waits.push(LongWait {
+                                robot: i,
+                                task: v.task,
+                                wait,
+                            });
                         }
                     }
                 }

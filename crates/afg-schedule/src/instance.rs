@@ -256,10 +256,18 @@ impl ScheduleInstance {
             finite(&format!("task {j}'s y"), t.y)?;
             finite(&format!("task {j}'s duration"), t.duration)?;
             if t.duration < 0.0 {
-                return Err(out_of_range(format!("task {j}'s duration"), t.duration, "at least 0"));
+                return Err(out_of_range(
+                    format!("task {j}'s duration"),
+                    t.duration,
+                    "at least 0",
+                ));
             }
             if t.min_team == Some(0) {
-                return Err(out_of_range(format!("task {j}'s min_team"), 0.0, "at least 1"));
+                return Err(out_of_range(
+                    format!("task {j}'s min_team"),
+                    0.0,
+                    "at least 1",
+                ));
             }
             check_len(&format!("task {j}'s requires"), t.requires.as_ref(), skills)?;
             if t.min_team.is_none() && t.requires.is_none() {
@@ -276,16 +284,24 @@ impl ScheduleInstance {
             if t.team_floor() > self.num_robots() {
                 return Err(ScheduleError::Unstaffable {
                     task: j,
-                    why: format!("it needs {} robots and there are {}", t.team_floor(), self.num_robots()),
+                    why: format!(
+                        "it needs {} robots and there are {}",
+                        t.team_floor(),
+                        self.num_robots()
+                    ),
                 });
             }
             for s in 0..self.num_skills() {
-                let held: u64 = (0..self.num_robots()).map(|i| u64::from(self.robot_skill(i, s))).sum();
+                let held: u64 = (0..self.num_robots())
+                    .map(|i| u64::from(self.robot_skill(i, s)))
+                    .sum();
                 let needed = self.task_requires(j, s);
                 if u64::from(needed) > held {
                     return Err(ScheduleError::Unstaffable {
                         task: j,
-                        why: format!("it requires {needed} of skill {s} and all the robots together hold {held}"),
+                        why: format!(
+                            "it requires {needed} of skill {s} and all the robots together hold {held}"
+                        ),
                     });
                 }
             }
@@ -295,7 +311,11 @@ impl ScheduleInstance {
 }
 
 fn out_of_range(what: String, value: f64, expected: &'static str) -> ScheduleError {
-    ScheduleError::OutOfRange { what, value, expected }
+    ScheduleError::OutOfRange {
+        what,
+        value,
+        expected,
+    }
 }
 
 fn finite(what: &str, value: f64) -> Result<(), ScheduleError> {
@@ -310,7 +330,11 @@ fn positive(what: &str, value: f64) -> Result<(), ScheduleError> {
     if value > 0.0 && value.is_finite() {
         Ok(())
     } else {
-        Err(out_of_range(what.to_string(), value, "a finite number above 0"))
+        Err(out_of_range(
+            what.to_string(),
+            value,
+            "a finite number above 0",
+        ))
     }
 }
 
@@ -343,8 +367,14 @@ pub(crate) fn parse_lines<T>(
         .filter(|(_, l)| !l.trim().is_empty())
         .map(|(n, l)| {
             parse(l).map_err(|e| match e {
-                ScheduleError::Parse { message, .. } => ScheduleError::Parse { line: n + 1, message },
-                other => ScheduleError::Parse { line: n + 1, message: other.to_string() },
+                ScheduleError::Parse { message, .. } => ScheduleError::Parse {
+                    line: n + 1,
+                    message,
+                },
+                other => ScheduleError::Parse {
+                    line: n + 1,
+                    message: other.to_string(),
+                },
             })
         })
         .collect()

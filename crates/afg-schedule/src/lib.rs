@@ -21,10 +21,19 @@
 //! # Ok::<(), afg_schedule::ScheduleError>(())
 //! ```
 
+mod anneal;
+mod bound;
+mod decode;
 mod error;
 mod evaluate;
+mod generate;
 mod instance;
+mod solve;
+mod transport;
 
+pub use bound::{Bound, TRANSPORT_LIMIT};
 pub use error::ScheduleError;
 pub use evaluate::{Evaluation, LongWait, Role, Schedule, ScheduleRecord, Visit, read_schedules};
+pub use generate::{Family, Generate, MAX_SIZE};
 pub use instance::{Metric, Place, Robot, Rules, ScheduleInstance, Task, read_instances};
+pub use solve::{SolveOptions, Solved};

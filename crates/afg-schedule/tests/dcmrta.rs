@@ -6,7 +6,9 @@ use std::path::PathBuf;
 use afg_schedule::{ScheduleInstance, read_instances, read_schedules};
 
 fn dataset(file: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../datasets/dcmrta-20a50t").join(file)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../datasets/dcmrta-20a50t")
+        .join(file)
 }
 
 fn published() -> Vec<serde_json::Value> {
@@ -43,15 +45,38 @@ fn the_published_ctas_d_routes_replay_to_the_published_numbers() {
         assert_eq!(record.index, inst.index);
         let run = inst.evaluate(&record.schedule()).unwrap();
         let ctas = &row["methods"]["CTAS-D_300s"];
-        for (ours, theirs) in [(run.makespan, "makespan"), (run.travel, "travel_dist"), (run.waiting, "waiting_time")] {
+        for (ours, theirs) in [
+            (run.makespan, "makespan"),
+            (run.travel, "travel_dist"),
+            (run.waiting, "waiting_time"),
+        ] {
             let theirs = ctas[theirs].as_f64().unwrap();
-            assert!((ours - theirs).abs() <= 1e-9, "instance {:?}: {ours} against {theirs}", inst.index);
+            assert!(
+                (ours - theirs).abs() <= 1e-9,
+                "instance {:?}: {ours} against {theirs}",
+                inst.index
+            );
         }
-        assert!(run.long_waits.is_empty(), "every published schedule keeps its waits within max_wait 100");
+        assert!(
+            run.long_waits.is_empty(),
+            "every published schedule keeps its waits within max_wait 100"
+        );
         early += run.released_before_arrival.len();
-        valid_at_10 += usize::from(inst.evaluate_with(&record.schedule(), 10.0).unwrap().is_valid());
+        valid_at_10 += usize::from(
+            inst.evaluate_with(&record.schedule(), 10.0)
+                .unwrap()
+                .is_valid(),
+        );
     }
-    assert!(valid_at_10 < 50, "some published schedules wait longer than 10");
-    assert!(early > 0, "some published schedules rely on an extra released before it arrives");
-    println!("valid at max_wait 10: {valid_at_10} of 50; extras released before they arrive: {early}");
+    assert!(
+        valid_at_10 < 50,
+        "some published schedules wait longer than 10"
+    );
+    assert!(
+        early > 0,
+        "some published schedules rely on an extra released before it arrives"
+    );
+    println!(
+        "valid at max_wait 10: {valid_at_10} of 50; extras released before they arrive: {early}"
+    );
 }

@@ -1,0 +1,184 @@
+//! A certified lower bound on the makespan.
+//!
+//! Every robot is busy until it is back: working, driving or waiting. Summed over the
+//! robots, the makespan times N is at least the work every team must do (each task's
+//! fewest robots times its duration) plus the least total driving that could bring those
+//! teams in and the robots home. That least driving is a transportation problem: every
+//! task sends as many robots on as it receives, each robot leaves its start once and
+//! reaches its depot once, and no task feeds itself. Its optimum, found exactly by
+//! successive shortest paths, lies below the driving of any schedule (it drops only
+//! the order in time). The bound is the larger of that load and the longest single
+//! trip (a round trip to one task and its duration).
+
+use serde::{Deserialize, Serialize};
+
+use crate::{Place, ScheduleInstance};
+
+/// The most tasks for which the bound solves its transportation problem (about a second
+/// at 2 000 tasks on one core).
+pub const TRANSPORT_LIMIT: usize = 2_000;
+
+/// The lower bound and its parts.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Bound {
+    /// No schedule of the instance finishes earlier.
+    pub makespan: f64,
+    /// The load bound: (work + least driving time) / N.
+    pub load: f64,
+    /// The longest single trip: out to a task, its duration, and back.
+    pub trip: f64,
+    /// The least total driving time of the transportation problem.
+    pub driving: f64,
+    /// The total work: Σ_j (fewest robots of j) × duration_j.
+    pub work: f64,
+}
+
+impl ScheduleInstance {
+    /// The fewest robots that can make up task j's team: its `min_team`, and enough
+    /// robots to hold each skill it requires (counting the most any one robot holds).
+    pub fn fewest_robots(&self, task: usize) -> usize {
+        let mut fewest = self.tasks[task].team_floor();
+        for s in 0..self.num_skills() {
+            let most = (0..self.num_robots())
+                .map(|i| self.robot_skill(i, s))
+                .max()
+                .unwrap_or(0);
+            let need = self.task_requires(task, s);
+            if need > 0 && most > 0 {
+                fewest = fewest.max(need.div_ceil(most) as usize);
+            }
+        }
+        fewest
+    }
+
+    /// A certified lower bound on the makespan of every schedule of this instance.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_schedule::ScheduleInstance;
+    /// let inst = ScheduleInstance::from_json(r#"{"speed":1,"max_wait":10,"depots":[[0,0]],
+    ///   "robots":[{"x":0,"y":0,"depot":0},{"x":0,"y":0,"depot":0}],
+    ///   "tasks":[{"x":3,"y":4,"min_team":2,"duration":1}]}"#)?;
+    /// let bound = inst.lower_bound();
+    /// assert_eq!(bound.makespan, 11.0); // both must go out, work and come back
+    /// # Ok::<(), afg_schedule::ScheduleError>(())
+    /// ```
+    pub fn lower_bound(&self) -> Bound {
+        let (n, m) = (self.num_robots(), self.num_tasks());
+        let team: Vec<usize> = (0..m).map(|j| self.fewest_robots(j)).collect();
+        let work: f64 = (0..m)
+            .map(|j| team[j] as f64 * self.tasks[j].duration)
+            .sum();
+        let driving = self.least_driving(&team);
+        let trip = (0..m)
+            .map(|j| {
+                let out = (0..n).map(|i| self.travel_time(Place::Start(i), Place::Task(j)));
+                let back = (0..n).map(|i| {
+                    if self.return_to_depot {
+                        self.travel_time(Place::Task(j), self.depot_place(i))
+                    } else {
+                        0.0
+                    }
+                });
+                out.fold(f64::INFINITY, f64::min)
+                    + self.tasks[j].duration
+                    + back.fold(f64::INFINITY, f64::min)
+            })
+            .fold(0.0, f64::max);
+        let load = (work + driving) / n as f64;
+        Bound {
+            makespan: load.max(trip),
+            load,
+            trip,
+            driving,
+            work,
+        }
+    }
+
+    /// The transportation problem's optimum (see the module's text); above
+    /// [`TRANSPORT_LIMIT`] tasks, the cheaper and weaker sum of each visit's shortest leg in.
+    fn least_driving(&self, team: &[usize]) -> f64 {
+        if self.num_tasks() > TRANSPORT_LIMIT {
+            return self.shortest_legs(team);
+        }
+        let m = self.num_tasks();
+        // Robots that start at one place and go home to one depot form one source and one sink.
+        let mut starts: Vec<([f64; 2], usize)> = Vec::new();
+        for r in &self.robots {
+            match starts.iter_mut().find(|(p, _)| *p == [r.x, r.y]) {
+                Some(s) => s.1 += 1,
+                None => starts.push(([r.x, r.y], 1)),
+            }
+        }
+        let mut homes = vec![0usize; self.depots.len()];
+        for r in &self.robots {
+            homes[r.depot] += 1;
+        }
+        let point = |j: usize| [self.tasks[j].x, self.tasks[j].y];
+        let time = |a: [f64; 2], b: [f64; 2]| {
+            ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt() / self.speed
+        };
+        let left: Vec<([f64; 2], usize, Option<usize>)> = (0..m)
+            .map(|j| (point(j), team[j], Some(j)))
+            .chain(starts.iter().map(|&(p, c)| (p, c, None)))
+            .collect();
+        let right: Vec<([f64; 2], usize, Option<usize>, bool)> = (0..m)
+            .map(|j| (point(j), team[j], Some(j), false))
+            .chain(
+                homes
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, c)| **c > 0)
+                    .map(|(d, &c)| (self.depots[d], c, None, true)),
+            )
+            .collect();
+        let cost: Vec<Vec<f64>> = left
+            .iter()
+            .map(|&(a, _, lj)| {
+                right
+                    .iter()
+                    .map(|&(b, _, rj, home)| match (lj, rj) {
+                        (Some(x), Some(y)) if x == y => f64::INFINITY,
+                        _ if home && !self.return_to_depot => 0.0,
+                        _ => time(a, b),
+                    })
+                    .collect()
+            })
+            .collect();
+        debug_assert_eq!(
+            left.iter().map(|l| l.1).sum::<usize>(),
+            right.iter().map(|r| r.1).sum::<usize>()
+        );
+        crate::transport::min_cost(
+            &left.iter().map(|l| l.1).collect::<Vec<_>>(),
+            &right.iter().map(|r| r.1).collect::<Vec<_>>(),
+            &cost,
+        )
+    }
+}
+
+impl ScheduleInstance {
+    /// Each visit's shortest leg in (from a start or another task) and each robot's
+    /// shortest way home from a task or its start: a weaker bound on all driving.
+    fn shortest_legs(&self, team: &[usize]) -> f64 {
+        let (n, m) = (self.num_robots(), self.num_tasks());
+        let into = (0..m).map(|j| {
+            let from_tasks = (0..m)
+                .filter(|&a| a != j)
+                .map(|a| self.travel_time(Place::Task(a), Place::Task(j)));
+            let from_starts = (0..n).map(|i| self.travel_time(Place::Start(i), Place::Task(j)));
+            team[j] as f64 * from_tasks.chain(from_starts).fold(f64::INFINITY, f64::min)
+        });
+        let home = (0..n).map(|i| {
+            if !self.return_to_depot {
+                return 0.0;
+            }
+            let d = self.depot_place(i);
+            (0..m)
+                .map(|j| self.travel_time(Place::Task(j), d))
+                .chain(std::iter::once(self.travel_time(Place::Start(i), d)))
+                .fold(f64::INFINITY, f64::min)
+        });
+        into.sum::<f64>() + home.sum::<f64>()
+    }
+}

@@ -1,0 +1,280 @@
+//! From an order of the tasks to a schedule: each task in turn gets the team that can
+//! start it soonest without anyone waiting longer than `max_wait`.
+//!
+//! Every route then follows one global order, so no two robots can wait for each other
+//! in a cycle, and each task is staffed by exactly its team (no extras): the timing below
+//! is the evaluator's, task by task.
+
+use crate::ScheduleInstance;
+
+/// How much more a minute of driving weighs than a minute of arrival time when a task
+/// without skills picks its team (0: the earliest arrivals, whoever they are).
+const TRAVEL_WEIGHT: f64 = 0.3;
+
+/// The most travel times kept in a table (128 MiB); larger instances compute them.
+const TABLE_LIMIT: usize = 1 << 24;
+
+fn straight(u: [f64; 2], v: [f64; 2]) -> f64 {
+    ((u[0] - v[0]).powi(2) + (u[1] - v[1]).powi(2)).sqrt()
+}
+
+/// The instance, precomputed for decoding: travel times, durations, team needs.
+pub(crate) struct Decoder {
+    pub(crate) num_robots: usize,
+    pub(crate) num_tasks: usize,
+    /// Places: tasks `0..M`, robot starts `M..M+N`, depots `M+N..`.
+    points: Vec<[f64; 2]>,
+    speed: f64,
+    /// All travel times, place by place, where they fit in [`TABLE_LIMIT`] entries.
+    table: Option<Vec<f64>>,
+    home: Vec<usize>,
+    pub(crate) duration: Vec<f64>,
+    team_floor: Vec<usize>,
+    /// `robot_skills[i * S + s]`, `requires[j * S + s]`.
+    robot_skills: Vec<u32>,
+    requires: Vec<u32>,
+    num_skills: usize,
+    pub(crate) max_wait: f64,
+    return_to_depot: bool,
+}
+
+/// Where the robots are between two tasks of the order.
+#[derive(Clone, PartialEq, Debug)]
+pub(crate) struct Fleet {
+    /// When each robot is free to leave.
+    pub(crate) free: Vec<f64>,
+    /// The place it leaves from.
+    pub(crate) at: Vec<usize>,
+}
+
+impl Decoder {
+    pub(crate) fn new(inst: &ScheduleInstance, max_wait: f64) -> Self {
+        let (n, m, s) = (inst.num_robots(), inst.num_tasks(), inst.num_skills());
+        let mut points: Vec<[f64; 2]> = inst.tasks.iter().map(|t| [t.x, t.y]).collect();
+        points.extend(inst.robots.iter().map(|r| [r.x, r.y]));
+        points.extend(inst.depots.iter().copied());
+        let p = points.len();
+        let table = (p * p <= TABLE_LIMIT).then(|| {
+            let mut table = Vec::with_capacity(p * p);
+            for a in 0..p {
+                table.extend((0..p).map(|b| straight(points[a], points[b]) / inst.speed));
+            }
+            table
+        });
+        Decoder {
+            table,
+            num_robots: n,
+            num_tasks: m,
+            points,
+            speed: inst.speed,
+            home: inst.robots.iter().map(|r| m + n + r.depot).collect(),
+            duration: inst.tasks.iter().map(|t| t.duration).collect(),
+            team_floor: inst.tasks.iter().map(|t| t.team_floor()).collect(),
+            robot_skills: (0..n)
+                .flat_map(|i| (0..s).map(move |k| (i, k)))
+                .map(|(i, k)| inst.robot_skill(i, k))
+                .collect(),
+            requires: (0..m)
+                .flat_map(|j| (0..s).map(move |k| (j, k)))
+                .map(|(j, k)| inst.task_requires(j, k))
+                .collect(),
+            num_skills: s,
+            max_wait,
+            return_to_depot: inst.return_to_depot,
+        }
+    }
+
+    /// The travel time between two places.
+    pub(crate) fn time(&self, from: usize, to: usize) -> f64 {
+        match &self.table {
+            Some(table) => table[from * self.points.len() + to],
+            None => straight(self.points[from], self.points[to]) / self.speed,
+        }
+    }
+
+    /// The fleet at time 0.
+    pub(crate) fn start(&self) -> Fleet {
+        Fleet {
+            free: vec![0.0; self.num_robots],
+            at: (0..self.num_robots).map(|i| self.num_tasks + i).collect(),
+        }
+    }
+
+    /// When each robot would arrive at task j.
+    fn ready(&self, fleet: &Fleet, j: usize, ready: &mut Vec<(f64, usize)>) {
+        ready.clear();
+        ready.extend((0..self.num_robots).map(|i| (fleet.free[i] + self.time(fleet.at[i], j), i)));
+        ready.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    }
+
+    /// The k robots that arrive first when driving counts [`TRAVEL_WEIGHT`] times more:
+    /// a team drawn from robots nearby rather than from anyone who could arrive a little
+    /// earlier from far away. None when that team would wait longer than `max_wait`.
+    fn staff_near(
+        &self,
+        fleet: &Fleet,
+        j: usize,
+        ready: &mut Vec<(f64, usize)>,
+        team: &mut Vec<usize>,
+    ) -> Option<f64> {
+        let k = self.team_floor[j];
+        let arrive = |i: usize| fleet.free[i] + self.time(fleet.at[i], j);
+        ready.clear();
+        ready.extend(
+            (0..self.num_robots)
+                .map(|i| (arrive(i) + TRAVEL_WEIGHT * self.time(fleet.at[i], j), i)),
+        );
+        ready.select_nth_unstable_by(k - 1, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        team.clear();
+        team.extend(ready[..k].iter().map(|r| r.1));
+        let start = team.iter().map(|&i| arrive(i)).fold(f64::MIN, f64::max);
+        let first = team.iter().map(|&i| arrive(i)).fold(f64::MAX, f64::min);
+        (start - first <= self.max_wait).then_some(start)
+    }
+
+    /// Staffs task j: its team into `team`; returns when it starts and how far its first
+    /// member waits beyond `max_wait` (0 unless no team can gather in time, when the team
+    /// that starts soonest is taken and the search pays for the excess).
+    pub(crate) fn staff(
+        &self,
+        fleet: &Fleet,
+        j: usize,
+        ready: &mut Vec<(f64, usize)>,
+        team: &mut Vec<usize>,
+    ) -> (f64, f64) {
+        if self.num_skills == 0
+            && let Some(start) = self.staff_near(fleet, j, ready, team)
+        {
+            return (start, 0.0);
+        }
+        self.ready(fleet, j, ready);
+        let in_time = if self.num_skills == 0 {
+            self.staff_by_count(j, ready, team)
+        } else {
+            self.staff_by_skills(j, ready, team, self.max_wait)
+        };
+        if let Some(start) = in_time {
+            return (start, 0.0);
+        }
+        let start = if self.num_skills == 0 {
+            let k = self.team_floor[j];
+            team.clear();
+            team.extend(ready[..k].iter().map(|r| r.1));
+            ready[k - 1].0
+        } else {
+            self.staff_by_skills(j, ready, team, f64::INFINITY)
+                .expect("a validated instance can staff every task")
+        };
+        let first = team
+            .iter()
+            .map(|&i| ready.iter().find(|r| r.1 == i).expect("ready").0)
+            .fold(f64::INFINITY, f64::min);
+        (start, start - first - self.max_wait)
+    }
+
+    fn staff_by_count(
+        &self,
+        j: usize,
+        ready: &[(f64, usize)],
+        team: &mut Vec<usize>,
+    ) -> Option<f64> {
+        let k = self.team_floor[j];
+        let mut lo = 0;
+        for e in k - 1..ready.len() {
+            let latest = ready[e].0;
+            while ready[lo].0 < latest - self.max_wait {
+                lo += 1;
+            }
+            if e + 1 - lo >= k {
+                team.clear();
+                team.extend(ready[e + 1 - k..=e].iter().map(|r| r.1));
+                return Some(latest);
+            }
+        }
+        None
+    }
+
+    /// The soonest team that covers task j's skills and count with no member waiting
+    /// longer than `max_wait`.
+    fn staff_by_skills(
+        &self,
+        j: usize,
+        ready: &[(f64, usize)],
+        team: &mut Vec<usize>,
+        max_wait: f64,
+    ) -> Option<f64> {
+        let s = self.num_skills;
+        let need = &self.requires[j * s..(j + 1) * s];
+        let mut lacking = vec![0u32; s];
+        for e in 0..ready.len() {
+            let latest = ready[e].0;
+            lacking.copy_from_slice(need);
+            let mut count_left = self.team_floor[j];
+            team.clear();
+            for &(r, i) in ready[..=e].iter().rev() {
+                if r < latest - max_wait {
+                    break;
+                }
+                let skills = &self.robot_skills[i * s..(i + 1) * s];
+                let helps =
+                    count_left > 0 || lacking.iter().zip(skills).any(|(&l, &h)| l > 0 && h > 0);
+                if i != ready[e].1 && !helps {
+                    continue;
+                }
+                team.push(i);
+                count_left = count_left.saturating_sub(1);
+                for (l, &h) in lacking.iter_mut().zip(skills) {
+                    *l = l.saturating_sub(h);
+                }
+                if count_left == 0 && lacking.iter().all(|&l| l == 0) {
+                    return Some(latest);
+                }
+            }
+        }
+        None
+    }
+
+    /// Sends `team` to task j starting at `start`.
+    pub(crate) fn assign(&self, fleet: &mut Fleet, j: usize, start: f64, team: &[usize]) {
+        for &i in team {
+            fleet.free[i] = start + self.duration[j];
+            fleet.at[i] = j;
+        }
+    }
+
+    /// When each robot is back, given the fleet after its last task.
+    pub(crate) fn back(&self, fleet: &Fleet, i: usize) -> f64 {
+        let ret = if self.return_to_depot {
+            self.time(fleet.at[i], self.home[i])
+        } else {
+            0.0
+        };
+        fleet.free[i] + ret
+    }
+
+    /// The makespan of a finished fleet and the mean of the robots' return times.
+    pub(crate) fn score(&self, fleet: &Fleet) -> (f64, f64) {
+        let (mut makespan, mut sum) = (0.0f64, 0.0);
+        for i in 0..self.num_robots {
+            let b = self.back(fleet, i);
+            makespan = makespan.max(b);
+            sum += b;
+        }
+        (makespan, sum / self.num_robots as f64)
+    }
+
+    /// Decodes a whole order into routes.
+    pub(crate) fn routes(&self, order: &[usize]) -> Vec<Vec<usize>> {
+        let mut fleet = self.start();
+        let (mut ready, mut team) = (Vec::new(), Vec::new());
+        let mut routes = vec![Vec::new(); self.num_robots];
+        for &j in order {
+            let (start, _) = self.staff(&fleet, j, &mut ready, &mut team);
+            self.assign(&mut fleet, j, start, &team);
+            for &i in &team {
+                routes[i].push(j);
+            }
+        }
+        routes
+    }
+}

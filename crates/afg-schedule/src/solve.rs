@@ -1,0 +1,121 @@
+//! The scheduler: an order of the tasks, decoded into teams and routes, improved by
+//! simulated annealing on the order (move a task, swap two, move a block) under a time
+//! limit or a number of steps. Seeded and, for a number of steps, deterministic.
+
+use std::time::{Duration, Instant};
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::anneal::{Plan, anneal};
+use crate::decode::Decoder;
+use crate::{Schedule, ScheduleError, ScheduleInstance};
+
+/// How long and how the scheduler searches.
+///
+/// # Examples
+/// ```
+/// use afg_schedule::{SolveOptions, ScheduleInstance};
+/// let inst = ScheduleInstance::from_json(r#"{"speed":1,"max_wait":10,"depots":[[0,0]],
+///   "robots":[{"x":0,"y":0,"depot":0},{"x":0,"y":0,"depot":0}],
+///   "tasks":[{"x":0,"y":1,"min_team":2,"duration":1},{"x":1,"y":0,"min_team":1,"duration":1},
+///            {"x":-1,"y":0,"min_team":1,"duration":1}]}"#)?;
+/// let found = inst.solve(&SolveOptions { steps: Some(2_000), ..SolveOptions::default() })?;
+/// // Together to task 0 (t = 1, done at 2), then one robot to each side task.
+/// assert!((found.makespan - (2.0 + 2f64.sqrt() + 2.0)).abs() < 1e-9);
+/// assert!(inst.evaluate(&found.schedule)?.is_valid());
+/// # Ok::<(), afg_schedule::ScheduleError>(())
+/// ```
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct SolveOptions {
+    /// Stop after this many seconds (the default when neither limit is set: 1 s).
+    pub time_limit: Option<f64>,
+    /// Stop after this many search steps (deterministic for a seed).
+    pub steps: Option<u64>,
+    /// The random seed.
+    pub seed: u64,
+    /// The longest any robot may wait for its team (default: the instance's `max_wait`).
+    pub max_wait: Option<f64>,
+}
+
+/// What the scheduler found.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Solved {
+    /// The schedule: one route per robot.
+    pub schedule: Schedule,
+    /// Its makespan (the evaluator's).
+    pub makespan: f64,
+    /// The order of the tasks it was decoded from.
+    pub order: Vec<usize>,
+    /// Search steps taken.
+    pub steps: u64,
+    /// Seconds spent.
+    pub seconds: f64,
+}
+
+impl ScheduleInstance {
+    /// Plans a whole schedule (see [`SolveOptions`]); every schedule it returns is valid
+    /// under the `max_wait` asked for.
+    pub fn solve(&self, options: &SolveOptions) -> Result<Solved, ScheduleError> {
+        let max_wait = options.max_wait.unwrap_or(self.max_wait);
+        if max_wait.is_nan() || max_wait <= 0.0 {
+            return Err(ScheduleError::Setting(format!(
+                "max_wait must be above 0, not {max_wait}"
+            )));
+        }
+        if let Some(t) = options.time_limit.filter(|t| !(t.is_finite() && *t > 0.0)) {
+            return Err(ScheduleError::Setting(format!(
+                "the time limit must be a finite number of seconds above 0, not {t}"
+            )));
+        }
+        let clock = Instant::now();
+        let decoder = Decoder::new(self, max_wait);
+        let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
+        let mut plan = first_plan(self, &decoder, &mut rng);
+        let limit = match (options.time_limit, options.steps) {
+            (None, None) => Some(Duration::from_secs(1)),
+            (t, _) => t.map(Duration::from_secs_f64),
+        };
+        let steps = anneal(&mut plan, &mut rng, limit.map(|l| clock + l), options.steps);
+        if plan.cost().overwait > 0.0 {
+            return Err(ScheduleError::Setting(format!(
+                "found no schedule whose teams all gather within max_wait {max_wait} in the search given \
+                 (the best keeps robots waiting {:.3} beyond it in all): allow longer waits or search longer",
+                plan.cost().overwait
+            )));
+        }
+        let routes = decoder.routes(&plan.order);
+        let schedule = Schedule { routes };
+        let makespan = self.evaluate_with(&schedule, max_wait)?.makespan;
+        Ok(Solved {
+            schedule,
+            makespan,
+            order: plan.order,
+            steps,
+            seconds: clock.elapsed().as_secs_f64(),
+        })
+    }
+}
+
+/// The best of a few orders: nearest task first from the depot, by distance, and shuffles.
+fn first_plan<'a>(inst: &ScheduleInstance, decoder: &'a Decoder, rng: &mut ChaCha8Rng) -> Plan<'a> {
+    let m = inst.num_tasks();
+    let home = [inst.depots[0][0], inst.depots[0][1]];
+    let far = |j: usize| (inst.tasks[j].x - home[0]).hypot(inst.tasks[j].y - home[1]);
+    let mut by_distance: Vec<usize> = (0..m).collect();
+    by_distance.sort_by(|&a, &b| far(a).total_cmp(&far(b)));
+    let mut candidates = vec![by_distance];
+    for _ in 0..4 {
+        let mut o: Vec<usize> = (0..m).collect();
+        for k in (1..m).rev() {
+            o.swap(k, rng.random_range(0..=k));
+        }
+        candidates.push(o);
+    }
+    candidates
+        .into_iter()
+        .map(|o| Plan::new(decoder, o))
+        .reduce(|a, b| if b.cost().better_than(a.cost()) { b } else { a })
+        .expect("five candidates")
+}

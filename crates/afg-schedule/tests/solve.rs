@@ -1,0 +1,243 @@
+//! The scheduler and the bound against brute force on small instances, on random
+//! instances of both families, and on DCMRTA's published set.
+
+use std::path::PathBuf;
+
+use afg_schedule::{Family, Generate, Schedule, ScheduleInstance, SolveOptions, read_instances};
+use proptest::prelude::*;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+fn steps(n: u64, seed: u64) -> SolveOptions {
+    SolveOptions {
+        steps: Some(n),
+        seed,
+        ..SolveOptions::default()
+    }
+}
+
+/// Robots at a random depot, tasks needing 1 or 2 robots, speed 0.2, max_wait 10.
+fn small(robots: usize, tasks: usize, seed: u64) -> ScheduleInstance {
+    let mut inst = Generate {
+        family: Family::Dcmrta,
+        robots,
+        tasks,
+        seed,
+    }
+    .instance()
+    .unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    for t in &mut inst.tasks {
+        t.min_team = Some(rng.random_range(1..=2));
+    }
+    inst
+}
+
+/// Every ordering of `items`.
+fn orderings(items: &[usize]) -> Vec<Vec<usize>> {
+    if items.len() <= 1 {
+        return vec![items.to_vec()];
+    }
+    let mut all = Vec::new();
+    for k in 0..items.len() {
+        let mut rest = items.to_vec();
+        let first = rest.remove(k);
+        for mut tail in orderings(&rest) {
+            tail.insert(0, first);
+            all.push(tail);
+        }
+    }
+    all
+}
+
+/// The least makespan over every schedule with exactly `min_team` robots per task, every
+/// order of each robot's tasks, valid under the instance's `max_wait`.
+fn brute_force(inst: &ScheduleInstance) -> f64 {
+    let (n, m) = (inst.num_robots(), inst.num_tasks());
+    let teams: Vec<Vec<u32>> = (0..m)
+        .map(|j| {
+            (0..1u32 << n)
+                .filter(|s| s.count_ones() as usize == inst.tasks[j].team_floor())
+                .collect()
+        })
+        .collect();
+    let mut best = f64::INFINITY;
+    let mut choice = vec![0usize; m];
+    loop {
+        let mine: Vec<Vec<usize>> = (0..n)
+            .map(|i| {
+                (0..m)
+                    .filter(|&j| teams[j][choice[j]] >> i & 1 == 1)
+                    .collect()
+            })
+            .collect();
+        let orders: Vec<Vec<Vec<usize>>> = mine.iter().map(|t| orderings(t)).collect();
+        let mut pick = vec![0usize; n];
+        loop {
+            let schedule = Schedule {
+                routes: (0..n).map(|i| orders[i][pick[i]].clone()).collect(),
+            };
+            if let Ok(run) = inst.evaluate(&schedule)
+                && run.is_valid()
+            {
+                best = best.min(run.makespan);
+            }
+            if !odometer(&mut pick, |i| orders[i].len()) {
+                break;
+            }
+        }
+        if !odometer(&mut choice, |j| teams[j].len()) {
+            return best;
+        }
+    }
+}
+
+fn odometer(digits: &mut [usize], base: impl Fn(usize) -> usize) -> bool {
+    for (k, d) in digits.iter_mut().enumerate() {
+        *d += 1;
+        if *d < base(k) {
+            return true;
+        }
+        *d = 0;
+    }
+    false
+}
+
+#[test]
+fn the_bound_lies_below_the_optimum_and_the_scheduler_finds_it_on_small_instances() {
+    let (mut found, mut cases) = (0, 0);
+    for seed in 0..24 {
+        let inst = small(3, 4, seed);
+        let optimum = brute_force(&inst);
+        let bound = inst.lower_bound().makespan;
+        let solved = inst.solve(&steps(3_000, seed)).unwrap();
+        assert!(
+            bound <= optimum + 1e-9,
+            "seed {seed}: bound {bound} above the optimum {optimum}"
+        );
+        assert!(
+            solved.makespan >= optimum - 1e-9,
+            "seed {seed}: {} below the optimum {optimum}",
+            solved.makespan
+        );
+        found += usize::from(solved.makespan <= optimum + 1e-9);
+        cases += 1;
+        println!(
+            "seed {seed}: bound {bound:.3} optimum {optimum:.3} found {:.3}",
+            solved.makespan
+        );
+    }
+    println!("the scheduler found the optimum on {found} of {cases}");
+    assert!(
+        found * 10 >= cases * 9,
+        "found the optimum on {found} of {cases}"
+    );
+}
+
+#[test]
+fn one_seed_and_step_budget_gives_one_schedule() {
+    let inst = Generate {
+        family: Family::Dcmrta,
+        robots: 8,
+        tasks: 20,
+        seed: 3,
+    }
+    .instance()
+    .unwrap();
+    let a = inst.solve(&steps(2_000, 11)).unwrap();
+    let b = inst.solve(&steps(2_000, 11)).unwrap();
+    assert_eq!(a.schedule, b.schedule);
+    assert_eq!(a.makespan, b.makespan);
+    assert_eq!(a.steps, 2_000);
+    let other = inst.solve(&steps(2_000, 12)).unwrap();
+    assert_ne!(a.order, other.order, "another seed searches another way");
+}
+
+#[test]
+fn a_smaller_max_wait_is_kept_and_a_bad_setting_is_refused() {
+    let inst = Generate {
+        family: Family::Dcmrta,
+        robots: 10,
+        tasks: 30,
+        seed: 5,
+    }
+    .instance()
+    .unwrap();
+    let tight = inst
+        .solve(&SolveOptions {
+            max_wait: Some(2.0),
+            ..steps(3_000, 0)
+        })
+        .unwrap();
+    let run = inst.evaluate_with(&tight.schedule, 2.0).unwrap();
+    assert!(
+        run.is_valid() && run.longest_wait <= 2.0,
+        "{}",
+        run.longest_wait
+    );
+    for bad in [
+        SolveOptions {
+            max_wait: Some(0.0),
+            ..steps(10, 0)
+        },
+        SolveOptions {
+            time_limit: Some(f64::NAN),
+            ..steps(10, 0)
+        },
+    ] {
+        assert!(inst.solve(&bad).is_err());
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+    #[test]
+    fn every_schedule_is_valid_and_its_makespan_is_the_evaluators_and_above_the_bound(
+        seed in 0u64..1_000, robots in 1usize..12, tasks in 1usize..25, skills in any::<bool>(),
+    ) {
+        let family = if skills { Family::Heteromrta } else { Family::Dcmrta };
+        let inst = Generate { family, robots, tasks, seed }.instance().unwrap();
+        let solved = inst.solve(&steps(300, seed)).unwrap();
+        let run = inst.evaluate(&solved.schedule).unwrap();
+        prop_assert!(run.is_valid());
+        prop_assert!(run.long_waits.is_empty() && run.longest_wait <= inst.max_wait);
+        prop_assert_eq!(run.makespan, solved.makespan);
+        prop_assert!(run.visits.iter().flatten().all(|v| v.role == afg_schedule::Role::Team), "no robot is sent where it is not needed");
+        prop_assert!(inst.lower_bound().makespan <= run.makespan + 1e-9);
+    }
+}
+
+#[test]
+fn on_dcmrtas_set_every_schedule_keeps_waits_within_10_and_beats_the_best_published() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../datasets/dcmrta-20a50t");
+    let instances = read_instances(&root.join("dcmrta-20a50t.jsonl")).unwrap();
+    let published: Vec<serde_json::Value> =
+        std::fs::read_to_string(root.join("dcmrta-20a50t-published.jsonl"))
+            .unwrap()
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect();
+    for (inst, row) in instances.iter().zip(&published).take(3) {
+        let solved = inst
+            .solve(&SolveOptions {
+                max_wait: Some(10.0),
+                ..steps(20_000, 0)
+            })
+            .unwrap();
+        let run = inst.evaluate_with(&solved.schedule, 10.0).unwrap();
+        assert!(run.is_valid());
+        let best_published = row["methods"]
+            .as_object()
+            .unwrap()
+            .values()
+            .map(|m| m["makespan"].as_f64().unwrap())
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            run.makespan < best_published,
+            "instance {:?}: {} against {best_published}",
+            inst.index,
+            run.makespan
+        );
+        assert!(inst.lower_bound().makespan <= run.makespan);
+    }
+}
