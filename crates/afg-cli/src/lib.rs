@@ -34,6 +34,7 @@ pub mod migrate;
 pub mod mission;
 pub mod price;
 pub mod realloc;
+pub mod schedule;
 pub mod score;
 pub mod settings;
 pub mod solve;
@@ -72,6 +73,9 @@ pub enum Command {
     /// Missions over time: tasks appear and are worked off, robots travel and fail, an allocator decides at every event.
     #[command(subcommand)]
     Mission(mission::MissionCommand),
+    /// Schedules over time: robots perform sequences of team and skill tasks from depots, scored by the makespan (DCMRTA's test set).
+    #[command(subcommand)]
+    Schedule(schedule::ScheduleCommand),
     /// Train a Q network with DQN or Double DQN (resumable, seeded, with validation curves).
     Train(train::TrainArgs),
     /// Train the price-structured model (ours) by regression on the exact Q* (DAgger).
@@ -98,6 +102,7 @@ impl Command {
             Command::Gen(args) => generate::run(args),
             Command::Swarm(args) => swarm::run(args),
             Command::Mission(command) => mission::run(command),
+            Command::Schedule(command) => schedule::run(command),
             Command::Train(args) => train::run(args, "afg train"),
             Command::TrainPrice(args) => price::run(args),
             Command::TrainStaffing(args) => staffing::run(args),

@@ -18,6 +18,7 @@ pub mod mission;
 pub mod realloc;
 pub mod report;
 pub mod runs;
+pub mod schedule_figure;
 mod score;
 pub mod scorecard;
 pub mod solve;

@@ -7,8 +7,10 @@
 //! task sends as many robots on as it receives, each robot leaves its start once and
 //! reaches its depot once, and no task feeds itself. Its optimum, found exactly by
 //! successive shortest paths, lies below the driving of any schedule (it drops only
-//! the order in time). The bound is the larger of that load and the longest single
-//! trip (a round trip to one task and its duration).
+//! the order in time). With skills the same holds for the robots that hold each skill
+//! alone: they must bring every unit of it that the tasks require. The bound is the
+//! largest of these loads and the longest single trip (a round trip to one task and its
+//! duration).
 
 use serde::{Deserialize, Serialize};
 
@@ -25,12 +27,28 @@ pub struct Bound {
     pub makespan: f64,
     /// The load bound: (work + least driving time) / N.
     pub load: f64,
+    /// Per skill, the load bound of the robots that hold it (empty without skills).
+    pub skill_loads: Vec<f64>,
     /// The longest single trip: out to a task, its duration, and back.
     pub trip: f64,
     /// The least total driving time of the transportation problem.
     pub driving: f64,
     /// The total work: Σ_j (fewest robots of j) × duration_j.
     pub work: f64,
+}
+
+impl Bound {
+    /// The certified gap of a schedule with this makespan: how far above the optimum it
+    /// can be, as a share of its makespan (Gurobi's MIPGap for a minimisation).
+    ///
+    /// # Examples
+    /// ```
+    /// let bound = afg_schedule::Bound { makespan: 9.0, load: 9.0, skill_loads: vec![], trip: 4.0, driving: 3.0, work: 15.0 };
+    /// assert_eq!(bound.gap(10.0), 0.1);
+    /// ```
+    pub fn gap(&self, makespan: f64) -> f64 {
+        ((makespan - self.makespan) / makespan.max(1e-12)).max(0.0)
+    }
 }
 
 impl ScheduleInstance {
@@ -66,10 +84,26 @@ impl ScheduleInstance {
     pub fn lower_bound(&self) -> Bound {
         let (n, m) = (self.num_robots(), self.num_tasks());
         let team: Vec<usize> = (0..m).map(|j| self.fewest_robots(j)).collect();
-        let work: f64 = (0..m)
-            .map(|j| team[j] as f64 * self.tasks[j].duration)
-            .sum();
-        let driving = self.least_driving(&team);
+        let all: Vec<usize> = (0..n).collect();
+        let (work, driving) = self.crew_load(&team, &all);
+        let skill_loads = (0..self.num_skills())
+            .map(|s| {
+                let crew: Vec<usize> = (0..n).filter(|&i| self.robot_skill(i, s) > 0).collect();
+                let most = crew
+                    .iter()
+                    .map(|&i| self.robot_skill(i, s))
+                    .max()
+                    .unwrap_or(0);
+                if most == 0 {
+                    return 0.0;
+                }
+                let need: Vec<usize> = (0..m)
+                    .map(|j| self.task_requires(j, s).div_ceil(most) as usize)
+                    .collect();
+                let (work, driving) = self.crew_load(&need, &crew);
+                (work + driving) / crew.len() as f64
+            })
+            .collect::<Vec<f64>>();
         let trip = (0..m)
             .map(|j| {
                 let out = (0..n).map(|i| self.travel_time(Place::Start(i), Place::Task(j)));
@@ -87,8 +121,9 @@ impl ScheduleInstance {
             .fold(0.0, f64::max);
         let load = (work + driving) / n as f64;
         Bound {
-            makespan: load.max(trip),
+            makespan: skill_loads.iter().copied().fold(load.max(trip), f64::max),
             load,
+            skill_loads,
             trip,
             driving,
             work,
@@ -97,32 +132,33 @@ impl ScheduleInstance {
 
     /// The transportation problem's optimum (see the module's text); above
     /// [`TRANSPORT_LIMIT`] tasks, the cheaper and weaker sum of each visit's shortest leg in.
-    fn least_driving(&self, team: &[usize]) -> f64 {
+    fn least_driving(&self, team: &[usize], crew: &[usize]) -> f64 {
         if self.num_tasks() > TRANSPORT_LIMIT {
-            return self.shortest_legs(team);
+            return self.shortest_legs(team, crew);
         }
         let m = self.num_tasks();
         // Robots that start at one place and go home to one depot form one source and one sink.
         let mut starts: Vec<([f64; 2], usize)> = Vec::new();
-        for r in &self.robots {
+        for r in crew.iter().map(|&i| &self.robots[i]) {
             match starts.iter_mut().find(|(p, _)| *p == [r.x, r.y]) {
                 Some(s) => s.1 += 1,
                 None => starts.push(([r.x, r.y], 1)),
             }
         }
         let mut homes = vec![0usize; self.depots.len()];
-        for r in &self.robots {
-            homes[r.depot] += 1;
+        for &i in crew {
+            homes[self.robots[i].depot] += 1;
         }
         let point = |j: usize| [self.tasks[j].x, self.tasks[j].y];
         let time = |a: [f64; 2], b: [f64; 2]| {
             ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt() / self.speed
         };
-        let left: Vec<([f64; 2], usize, Option<usize>)> = (0..m)
+        let needed = || (0..m).filter(|&j| team[j] > 0);
+        let left: Vec<([f64; 2], usize, Option<usize>)> = needed()
             .map(|j| (point(j), team[j], Some(j)))
             .chain(starts.iter().map(|&(p, c)| (p, c, None)))
             .collect();
-        let right: Vec<([f64; 2], usize, Option<usize>, bool)> = (0..m)
+        let right: Vec<([f64; 2], usize, Option<usize>, bool)> = needed()
             .map(|j| (point(j), team[j], Some(j), false))
             .chain(
                 homes
@@ -158,23 +194,36 @@ impl ScheduleInstance {
 }
 
 impl ScheduleInstance {
+    /// The work `team[j]` robots of `crew` must do at every task, and their least driving.
+    fn crew_load(&self, team: &[usize], crew: &[usize]) -> (f64, f64) {
+        let work = team
+            .iter()
+            .zip(&self.tasks)
+            .map(|(&k, t)| k as f64 * t.duration)
+            .sum();
+        (work, self.least_driving(team, crew))
+    }
+
     /// Each visit's shortest leg in (from a start or another task) and each robot's
     /// shortest way home from a task or its start: a weaker bound on all driving.
-    fn shortest_legs(&self, team: &[usize]) -> f64 {
-        let (n, m) = (self.num_robots(), self.num_tasks());
-        let into = (0..m).map(|j| {
+    fn shortest_legs(&self, team: &[usize], crew: &[usize]) -> f64 {
+        let m = self.num_tasks();
+        let into = (0..m).filter(|&j| team[j] > 0).map(|j| {
             let from_tasks = (0..m)
-                .filter(|&a| a != j)
+                .filter(|&a| a != j && team[a] > 0)
                 .map(|a| self.travel_time(Place::Task(a), Place::Task(j)));
-            let from_starts = (0..n).map(|i| self.travel_time(Place::Start(i), Place::Task(j)));
+            let from_starts = crew
+                .iter()
+                .map(|&i| self.travel_time(Place::Start(i), Place::Task(j)));
             team[j] as f64 * from_tasks.chain(from_starts).fold(f64::INFINITY, f64::min)
         });
-        let home = (0..n).map(|i| {
+        let home = crew.iter().map(|&i| {
             if !self.return_to_depot {
                 return 0.0;
             }
             let d = self.depot_place(i);
             (0..m)
+                .filter(|&j| team[j] > 0)
                 .map(|j| self.travel_time(Place::Task(j), d))
                 .chain(std::iter::once(self.travel_time(Place::Start(i), d)))
                 .fold(f64::INFINITY, f64::min)

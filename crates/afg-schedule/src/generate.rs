@@ -68,6 +68,37 @@ pub struct Generate {
 }
 
 impl Generate {
+    /// One task: uniform in the unit square, a duration in (0, 5), and its team's needs.
+    fn task(&self, rng: &mut ChaCha8Rng, species: usize) -> Task {
+        let (x, y) = (rng.random::<f64>(), rng.random::<f64>());
+        let duration = 5.0 * rng.random::<f64>();
+        let (min_team, requires) = match self.family {
+            Family::Dcmrta => (
+                Some(rng.random_range(1..=5u32.min(self.robots as u32))),
+                None,
+            ),
+            Family::Heteromrta => {
+                let count = rng.random_range(1..=species);
+                let mut skills: Vec<usize> = (0..species).collect();
+                for k in 0..count {
+                    skills.swap(k, rng.random_range(k..species));
+                }
+                let mut requires = vec![0; species];
+                for &s in &skills[..count] {
+                    requires[s] = 1;
+                }
+                (None, Some(requires))
+            }
+        };
+        Task {
+            x,
+            y,
+            min_team,
+            requires,
+            duration,
+        }
+    }
+
     /// Draws the instance.
     pub fn instance(&self) -> Result<ScheduleInstance, ScheduleError> {
         if self.robots == 0 || self.tasks == 0 || self.robots > MAX_SIZE || self.tasks > MAX_SIZE {
@@ -99,40 +130,7 @@ impl Generate {
             })
             .collect();
         let tasks = (0..self.tasks)
-            .map(|_| {
-                let [x, y] = point(&mut rng);
-                let duration = 5.0 * rng.random::<f64>();
-                match self.family {
-                    Family::Dcmrta => {
-                        let min_team = Some(rng.random_range(1..=5u32.min(self.robots as u32)));
-                        Task {
-                            x,
-                            y,
-                            min_team,
-                            requires: None,
-                            duration,
-                        }
-                    }
-                    Family::Heteromrta => {
-                        let count = rng.random_range(1..=species);
-                        let mut skills: Vec<usize> = (0..species).collect();
-                        for k in 0..count {
-                            skills.swap(k, rng.random_range(k..species));
-                        }
-                        let mut requires = vec![0; species];
-                        for &s in &skills[..count] {
-                            requires[s] = 1;
-                        }
-                        Task {
-                            x,
-                            y,
-                            min_team: None,
-                            requires: Some(requires),
-                            duration,
-                        }
-                    }
-                }
-            })
+            .map(|_| self.task(&mut rng, species))
             .collect();
         let inst = ScheduleInstance {
             source: Some(format!(
