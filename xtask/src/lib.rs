@@ -14,6 +14,7 @@
 
 pub mod bench;
 pub mod bench_opt;
+pub mod bench_schedule;
 pub mod bench_staffing;
 pub mod bench_teams;
 pub mod crash;

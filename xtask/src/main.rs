@@ -5,8 +5,8 @@
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use xtask::{
-    bench, bench_opt, bench_staffing, bench_teams, crash, datasets, grape_fig7, mission_study,
-    realloc_study, regret_study, run_manifests, scale, tables, train_all,
+    bench, bench_opt, bench_schedule, bench_staffing, bench_teams, crash, datasets, grape_fig7,
+    mission_study, realloc_study, regret_study, run_manifests, scale, tables, train_all,
 };
 
 /// See the `mimalloc` feature in Cargo.toml.
@@ -40,6 +40,8 @@ enum Command {
     BenchOpt(bench_opt::BenchOptArgs),
     /// The team-threshold game on scarce instances: afg's exact solver (bound and gap) beside CP-SAT and HiGHS, and every allocator that plays it.
     BenchTeams(bench_teams::BenchTeamsArgs),
+    /// afg's scheduler and bound on DCMRTA's published test set, HeteroMRTA's skill family and at scale; CP-SAT beside it.
+    BenchSchedule(bench_schedule::BenchScheduleArgs),
     /// The staffing model (ours) on held-out team games: against the optimum, every hand-written allocator, and afg, CP-SAT and HiGHS given its time.
     BenchStaffing(bench_staffing::BenchStaffingArgs),
     /// The optimum re-solved after one event against from scratch; whole missions with allocators in the loop.
@@ -84,6 +86,7 @@ impl Command {
             Command::BenchModels(args) => bench::run_models(args),
             Command::BenchOpt(args) => bench_opt::run(args),
             Command::BenchTeams(args) => bench_teams::run(args),
+            Command::BenchSchedule(args) => bench_schedule::run(args),
             Command::BenchStaffing(args) => bench_staffing::run(args),
             Command::BenchMission(args) => bench::mission_loop::run(args),
             Command::BenchScale(args) => scale::run(args),
