@@ -18,6 +18,7 @@ mod dataset;
 mod env;
 mod mission;
 mod mission_env;
+mod schedule;
 mod solve;
 
 /// One of afg's own exceptions (`afg/_errors.py`: `AfgError` and its subclasses),
@@ -480,5 +481,6 @@ fn _afg(m: &Bound<'_, PyModule>) -> PyResult<()> {
     env::register(m)?;
     mission::register(m)?;
     mission_env::register(m)?;
+    schedule::register(m)?;
     Ok(())
 }

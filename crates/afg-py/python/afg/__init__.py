@@ -3,7 +3,9 @@
 A thin Python layer over the Rust crates of https://example.invalid/afg: instances and
 their generator, every allocator (the exact optimum, GRAPE DA, balanced DA, greedy,
 nearest, random, trained models), warm-start reallocation, the exact action values Q*,
-missions over time (``afg.Mission``, ``afg.run_mission``, ``afg.MissionEnv``), (in
+missions over time (``afg.Mission``, ``afg.run_mission``, ``afg.MissionEnv``),
+schedules of team and skill tasks scored by the makespan (``afg.ScheduleInstance``,
+``afg.schedule``, ``afg.score_schedule``), (in
 ``afg.gym``) the paper's sequential MDP as a Gymnasium environment, and (in
 ``afg.pettingzoo``) both as PettingZoo environments.
 
@@ -25,6 +27,7 @@ from ._afg import (
     MissionResult,
     Model,
     Result,
+    ScheduleInstance,
     VecEnvCore,
     generate,
     load_model,
@@ -34,7 +37,9 @@ from ._afg import (
     reallocate,
     mission_defaults,
     run_mission,
+    schedule,
     score,
+    score_schedule,
     solve,
     write_jsonl,
 )
@@ -51,6 +56,7 @@ __all__ = [
     "MissionResult",
     "Model",
     "Result",
+    "ScheduleInstance",
     "VecEnvCore",
     "generate",
     "load_model",
@@ -60,7 +66,9 @@ __all__ = [
     "reallocate",
     "mission_defaults",
     "run_mission",
+    "schedule",
     "score",
+    "score_schedule",
     "solve",
     "write_jsonl",
 ]

@@ -329,3 +329,46 @@ def run_mission(
 def mission_defaults() -> Dict[str, Dict[str, Any]]:
     """The defaults of the knobs left at None, by keyword: ``{"run": ...}`` for
     ``run_mission``'s swarm knobs, ``{"generate": ...}`` for ``Mission.generate``."""
+
+class ScheduleInstance:
+    """A scheduling instance: depots, robots, tasks that need teams (``min_team`` or
+    skills), speed and ``max_wait`` (validated); DCMRTA's layout."""
+
+    @staticmethod
+    def read(path: _Path) -> List["ScheduleInstance"]: ...
+    @staticmethod
+    def parse(text: str) -> "ScheduleInstance": ...
+    @staticmethod
+    def generate(family: str = "dcmrta", robots: int = 20, tasks: int = 50, seed: int = 0) -> "ScheduleInstance": ...
+    def to_json(self) -> str: ...
+    @property
+    def num_robots(self) -> int: ...
+    @property
+    def num_tasks(self) -> int: ...
+    @property
+    def max_wait(self) -> float: ...
+    @property
+    def task_positions(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def durations(self) -> npt.NDArray[np.float64]: ...
+    def lower_bound(self) -> float: ...
+
+def schedule(
+    instance: ScheduleInstance,
+    time_limit: Optional[float] = None,
+    steps: Optional[int] = None,
+    seed: int = 0,
+    max_wait: Optional[float] = None,
+) -> Dict[str, Any]:
+    """Plans a schedule: ``routes`` (one int64 array per robot), ``makespan``, ``bound``,
+    ``gap``, ``travel``, ``waiting``, ``longest_wait``, ``start``/``finish`` per task,
+    ``steps``, ``seconds``."""
+
+def score_schedule(
+    instance: ScheduleInstance,
+    routes: Sequence[Union[npt.NDArray[np.int64], Sequence[int]]],
+    max_wait: Optional[float] = None,
+) -> Dict[str, Any]:
+    """Plays anyone's routes under the instance's rules: ``makespan``, ``travel``,
+    ``waiting``, ``longest_wait``, ``valid``, ``long_waits`` (robot, task, wait rows),
+    ``start``/``finish`` per task."""
