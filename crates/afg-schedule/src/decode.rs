@@ -216,9 +216,13 @@ impl Decoder {
                     break;
                 }
                 let skills = &self.robot_skills[i * s..(i + 1) * s];
-                let helps =
-                    count_left > 0 || lacking.iter().zip(skills).any(|(&l, &h)| l > 0 && h > 0);
-                if i != ready[e].1 && !helps {
+                let covered = lacking.iter().all(|&l| l == 0);
+                let helps = lacking.iter().zip(skills).any(|(&l, &h)| l > 0 && h > 0)
+                    || (covered && count_left > 0);
+                if !helps {
+                    if i == ready[e].1 {
+                        break; // the latest must be needed, or an earlier team starts sooner
+                    }
                     continue;
                 }
                 team.push(i);
@@ -227,11 +231,43 @@ impl Decoder {
                     *l = l.saturating_sub(h);
                 }
                 if count_left == 0 && lacking.iter().all(|&l| l == 0) {
+                    self.prune(j, team);
                     return Some(latest);
                 }
             }
         }
         None
+    }
+
+    /// Whether `team` holds task j's count and every skill it requires.
+    fn covers(&self, j: usize, team: &[usize]) -> bool {
+        let s = self.num_skills;
+        team.len() >= self.team_floor[j]
+            && (0..s).all(|k| {
+                team.iter()
+                    .map(|&i| self.robot_skills[i * s + k])
+                    .sum::<u32>()
+                    >= self.requires[j * s + k]
+            })
+    }
+
+    /// Drops members the team can do without, earliest arrivals first (they would wait
+    /// longest): a team with a member to spare would complete before that member commits,
+    /// and the simulator would treat it as an extra.
+    fn prune(&self, j: usize, team: &mut Vec<usize>) {
+        let mut k = team.len();
+        while k > 1 {
+            k -= 1;
+            let without: Vec<usize> = team
+                .iter()
+                .enumerate()
+                .filter(|&(x, _)| x != k)
+                .map(|(_, &i)| i)
+                .collect();
+            if self.covers(j, &without) {
+                team.remove(k);
+            }
+        }
     }
 
     /// Sends `team` to task j starting at `start`.

@@ -87,7 +87,18 @@ impl ScheduleInstance {
         }
         let routes = decoder.routes(&plan.order);
         let schedule = Schedule { routes };
-        let makespan = self.evaluate_with(&schedule, max_wait)?.makespan;
+        let run = self.evaluate_with(&schedule, max_wait)?;
+        // The decoder's times are the evaluator's; a difference would be a bug, never a result.
+        if !run.is_valid()
+            || (run.makespan - plan.cost().makespan).abs() > 1e-9 * run.makespan.max(1.0)
+        {
+            return Err(ScheduleError::Setting(format!(
+                "afg's scheduler and its evaluator disagree on this instance (makespan {} against {}): please report it",
+                plan.cost().makespan,
+                run.makespan
+            )));
+        }
+        let makespan = run.makespan;
         Ok(Solved {
             schedule,
             makespan,

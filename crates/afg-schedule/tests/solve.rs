@@ -50,14 +50,28 @@ fn orderings(items: &[usize]) -> Vec<Vec<usize>> {
     all
 }
 
-/// The least makespan over every schedule with exactly `min_team` robots per task, every
-/// order of each robot's tasks, valid under the instance's `max_wait`.
+/// Whether the robots in `set` (a bit mask) staff task j: enough of them, every skill covered.
+fn staffs(inst: &ScheduleInstance, j: usize, set: u32) -> bool {
+    let members: Vec<usize> = (0..inst.num_robots())
+        .filter(|&i| set >> i & 1 == 1)
+        .collect();
+    members.len() >= inst.tasks[j].team_floor()
+        && (0..inst.num_skills()).all(|s| {
+            members.iter().map(|&i| inst.robot_skill(i, s)).sum::<u32>() >= inst.task_requires(j, s)
+        })
+}
+
+/// The least makespan over every schedule whose teams staff their tasks with no member to
+/// spare, every order of each robot's tasks, valid under the instance's `max_wait`.
 fn brute_force(inst: &ScheduleInstance) -> f64 {
     let (n, m) = (inst.num_robots(), inst.num_tasks());
     let teams: Vec<Vec<u32>> = (0..m)
         .map(|j| {
-            (0..1u32 << n)
-                .filter(|s| s.count_ones() as usize == inst.tasks[j].team_floor())
+            (1..1u32 << n)
+                .filter(|&set| {
+                    staffs(inst, j, set)
+                        && (0..n).all(|i| set >> i & 1 == 0 || !staffs(inst, j, set & !(1 << i)))
+                })
                 .collect()
         })
         .collect();
@@ -132,6 +146,47 @@ fn the_bound_lies_below_the_optimum_and_the_scheduler_finds_it_on_small_instance
         found * 10 >= cases * 9,
         "found the optimum on {found} of {cases}"
     );
+}
+
+#[test]
+fn with_skills_too() {
+    // Three robots of three species at three depots; an instance without any schedule
+    // within max_wait must be refused, not answered.
+    let (mut solved_count, mut none) = (0, 0);
+    for seed in 0..16 {
+        let inst = Generate {
+            family: Family::Heteromrta,
+            robots: 3,
+            tasks: 4,
+            seed,
+        }
+        .instance()
+        .unwrap();
+        let optimum = brute_force(&inst);
+        let solved = inst.solve(&steps(3_000, seed));
+        if optimum.is_infinite() {
+            let message = solved.expect_err("no schedule exists").to_string();
+            assert!(
+                message.contains("found no schedule whose teams all gather within max_wait"),
+                "{message}"
+            );
+            none += 1;
+            continue;
+        }
+        let bound = inst.lower_bound().makespan;
+        let found = solved.unwrap().makespan;
+        assert!(
+            bound <= optimum + 1e-9,
+            "seed {seed}: bound {bound} above the optimum {optimum}"
+        );
+        assert!(
+            (found - optimum).abs() < 1e-9,
+            "seed {seed}: found {found} against the optimum {optimum}"
+        );
+        solved_count += 1;
+    }
+    println!("{solved_count} solved to the optimum, {none} with no valid schedule");
+    assert!(solved_count >= 12, "{solved_count} solved");
 }
 
 #[test]
