@@ -5,7 +5,10 @@ use std::path::PathBuf;
 use std::process::{Command, Output};
 
 fn afg(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_afg")).args(args).output().expect("afg runs")
+    Command::new(env!("CARGO_BIN_EXE_afg"))
+        .args(args)
+        .output()
+        .expect("afg runs")
 }
 
 fn stdout(out: &Output) -> String {
@@ -35,16 +38,39 @@ fn dataset(file: &str) -> String {
 fn gen_solve_score_and_show_agree_with_each_other() {
     let dir = fresh("round");
     let (inst, plans, svg) = (dir.join("i.jsonl"), dir.join("s.jsonl"), dir.join("g.svg"));
-    let (inst, plans, svg) = (inst.to_str().unwrap(), plans.to_str().unwrap(), svg.to_str().unwrap());
+    let (inst, plans, svg) = (
+        inst.to_str().unwrap(),
+        plans.to_str().unwrap(),
+        svg.to_str().unwrap(),
+    );
     for family in ["dcmrta", "heteromrta"] {
-        let out = afg(&["schedule", "gen", "--family", family, "--robots", "9", "--tasks", "20", "--count", "2", "--out", inst]);
+        let out = afg(&[
+            "schedule", "gen", "--family", family, "--robots", "9", "--tasks", "20", "--count",
+            "2", "--out", inst,
+        ]);
         assert!(out.status.success(), "{}", stderr(&out));
-        let out = afg(&["schedule", "solve", "--input", inst, "--steps", "2000", "--json", "--out", plans]);
+        let out = afg(&[
+            "schedule", "solve", "--input", inst, "--steps", "2000", "--json", "--out", plans,
+        ]);
         assert!(out.status.success(), "{}", stderr(&out));
-        let solved: Vec<serde_json::Value> = stdout(&out).lines().map(|l| serde_json::from_str(l).unwrap()).collect();
-        let out = afg(&["schedule", "score", "--input", inst, "--schedule", plans, "--json"]);
+        let solved: Vec<serde_json::Value> = stdout(&out)
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect();
+        let out = afg(&[
+            "schedule",
+            "score",
+            "--input",
+            inst,
+            "--schedule",
+            plans,
+            "--json",
+        ]);
         assert!(out.status.success(), "{}", stderr(&out));
-        let scored: Vec<serde_json::Value> = stdout(&out).lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+        let scored: Vec<serde_json::Value> = stdout(&out)
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect();
         assert_eq!(solved.len(), 2);
         for (s, c) in solved.iter().zip(&scored) {
             assert_eq!(s["makespan"], c["makespan"]);
@@ -53,23 +79,60 @@ fn gen_solve_score_and_show_agree_with_each_other() {
             let gap = 1.0 - s["bound"].as_f64().unwrap() / s["makespan"].as_f64().unwrap();
             assert!((s["gap"].as_f64().unwrap() - gap).abs() < 1e-12);
         }
-        let out = afg(&["schedule", "show", "--input", inst, "--schedule", plans, "--line", "1", "--out", svg]);
+        let out = afg(&[
+            "schedule",
+            "show",
+            "--input",
+            inst,
+            "--schedule",
+            plans,
+            "--line",
+            "1",
+            "--out",
+            svg,
+        ]);
         assert!(out.status.success(), "{}", stderr(&out));
         let drawn = std::fs::read_to_string(svg).unwrap();
-        assert!(drawn.starts_with("<svg") && drawn.contains(&format!("makespan {:.2}", solved[1]["makespan"].as_f64().unwrap())));
+        assert!(
+            drawn.starts_with("<svg")
+                && drawn.contains(&format!(
+                    "makespan {:.2}",
+                    solved[1]["makespan"].as_f64().unwrap()
+                ))
+        );
     }
 }
 
 #[test]
 fn the_published_routes_score_as_published_and_their_long_waits_are_named() {
-    let (inst, routes) = (dataset("dcmrta-20a50t.jsonl"), dataset("dcmrta-20a50t-routes.jsonl"));
+    let (inst, routes) = (
+        dataset("dcmrta-20a50t.jsonl"),
+        dataset("dcmrta-20a50t-routes.jsonl"),
+    );
     let out = afg(&["schedule", "score", "--input", &inst, "--schedule", &routes]);
     assert!(out.status.success(), "{}", stderr(&out));
-    assert!(stdout(&out).starts_with("line 0: makespan 41.898399  travel 44.977347  mean wait 7.616267"), "{}", stdout(&out));
-    let out = afg(&["schedule", "score", "--input", &inst, "--schedule", &routes, "--max-wait", "10"]);
+    assert!(
+        stdout(&out)
+            .starts_with("line 0: makespan 41.898399  travel 44.977347  mean wait 7.616267"),
+        "{}",
+        stdout(&out)
+    );
+    let out = afg(&[
+        "schedule",
+        "score",
+        "--input",
+        &inst,
+        "--schedule",
+        &routes,
+        "--max-wait",
+        "10",
+    ]);
     let text = stdout(&out);
     assert!(text.contains("line 0: makespan 41.898399") && text.contains("INVALID"));
-    assert!(text.contains("robot 9 waits 12.145 at task 48, longer than max_wait 10"), "{text}");
+    assert!(
+        text.contains("robot 9 waits 12.145 at task 48, longer than max_wait 10"),
+        "{text}"
+    );
 }
 
 #[test]
@@ -84,22 +147,59 @@ fn bad_input_is_refused_in_one_line() {
     .unwrap();
     let deadlock = dir.join("d.jsonl");
     std::fs::write(&deadlock, "{\"routes\":[[0,1],[1,0]]}\n").unwrap();
-    let out = afg(&["schedule", "score", "--input", inst, "--schedule", deadlock.to_str().unwrap()]);
+    let out = afg(&[
+        "schedule",
+        "score",
+        "--input",
+        inst,
+        "--schedule",
+        deadlock.to_str().unwrap(),
+    ]);
     assert_eq!(out.status.code(), Some(1));
-    assert!(stderr(&out).contains("deadlocks: robot 0 waits at task 0, robot 1 waits at task 1"), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("deadlocks: robot 0 waits at task 0, robot 1 waits at task 1"),
+        "{}",
+        stderr(&out)
+    );
     let left_out = dir.join("l.jsonl");
     std::fs::write(&left_out, "{\"routes\":[[0],[0]]}\n").unwrap();
-    let out = afg(&["schedule", "score", "--input", inst, "--schedule", left_out.to_str().unwrap()]);
-    assert!(stderr(&out).contains("leaves out task 1"), "{}", stderr(&out));
+    let out = afg(&[
+        "schedule",
+        "score",
+        "--input",
+        inst,
+        "--schedule",
+        left_out.to_str().unwrap(),
+    ]);
+    assert!(
+        stderr(&out).contains("leaves out task 1"),
+        "{}",
+        stderr(&out)
+    );
     for (args, says) in [
-        (vec!["schedule", "solve", "--input", inst, "--time-limit", "-1"], "time limit"),
-        (vec!["schedule", "solve", "--input", inst, "--max-wait", "nan"], "max_wait"),
-        (vec!["schedule", "gen", "--family", "swarm", "--out", inst], "unknown family"),
-        (vec!["schedule", "gen", "--robots", "0", "--out", inst], "1 to"),
+        (
+            vec!["schedule", "solve", "--input", inst, "--time-limit", "-1"],
+            "time limit",
+        ),
+        (
+            vec!["schedule", "solve", "--input", inst, "--max-wait", "nan"],
+            "max_wait",
+        ),
+        (
+            vec!["schedule", "gen", "--family", "swarm", "--out", inst],
+            "unknown family",
+        ),
+        (
+            vec!["schedule", "gen", "--robots", "0", "--out", inst],
+            "1 to",
+        ),
     ] {
         let out = afg(&args);
         assert_eq!(out.status.code(), Some(1), "{args:?}");
         let err = stderr(&out);
-        assert!(err.contains(says) && err.lines().count() == 1, "{args:?}: {err}");
+        assert!(
+            err.contains(says) && err.lines().count() == 1,
+            "{args:?}: {err}"
+        );
     }
 }
