@@ -181,7 +181,7 @@ pub(crate) fn anneal(
             }
             progress = step as f64 / n as f64;
         }
-        if let (0, Some(d), Some(t)) = (step % 64, deadline, total) {
+        if let (0, Some(d), Some(t)) = (step % 8, deadline, total) {
             let now = Instant::now();
             if now >= d {
                 break;

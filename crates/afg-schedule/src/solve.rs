@@ -77,7 +77,11 @@ impl ScheduleInstance {
             (None, None) => Some(Duration::from_secs(1)),
             (t, _) => t.map(Duration::from_secs_f64),
         };
-        let steps = anneal(&mut plan, &mut rng, limit.map(|l| clock + l), options.steps);
+        // What is left after the search (a decode, the routes, the evaluator's replay)
+        // costs less than the five decodes of the first plan: keep that much back.
+        let reserve = clock.elapsed();
+        let deadline = limit.map(|l| clock + l.saturating_sub(reserve));
+        let steps = anneal(&mut plan, &mut rng, deadline, options.steps);
         if plan.cost().overwait > 0.0 {
             return Err(ScheduleError::Setting(format!(
                 "found no schedule whose teams all gather within max_wait {max_wait} in the search given \
