@@ -29,6 +29,7 @@ mod assignment;
 mod error;
 pub mod fs;
 mod generate;
+mod generator_config;
 mod ids;
 mod instance;
 pub mod io;
@@ -39,7 +40,8 @@ mod teams;
 
 pub use assignment::Assignment;
 pub use error::GameError;
-pub use generate::{CountRange, GameSize, GeneratorConfig, GeneratorKnobs, SkillDraw};
+pub use generate::{GameSize, GeneratorKnobs};
+pub use generator_config::{CountRange, GeneratorConfig, SkillDraw};
 pub use ids::{RobotId, TaskId};
 pub use instance::{GOLDEN_RATIO, Instance, MAX_VALUE, Point, Task, ValueFunction};
 pub use named::Named;

@@ -37,11 +37,13 @@
 
 mod generate;
 mod mission;
+mod mission_config;
 mod plan;
 mod sim;
 
-pub use generate::{MissionConfig, MissionKnobs, Preset};
+pub use generate::MissionKnobs;
 pub use mission::{Failure, MISSION_FORMAT, MISSION_VERSION, Mission, RobotSpec, TaskSpec};
+pub use mission_config::{MissionConfig, Preset};
 pub use plan::{MissionMethod, MissionPlan, Planner, RadioKnobs, Recording, SwarmKnobs};
 pub use sim::{
     Decentralised, EnvStep, Frame, Latency, Metrics, MissionEnv, MissionRun, Perception,
