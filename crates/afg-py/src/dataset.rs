@@ -6,6 +6,8 @@ use std::path::PathBuf;
 use afg_game::{GeneratorKnobs, Instance};
 use pyo3::prelude::*;
 
+use crate::args::{FloatPair, Whole, WholePair};
+
 use crate::{PyInstance, crate_error};
 
 /// Reads a JSON Lines dataset (or one instance document): a list of instances.
@@ -29,37 +31,37 @@ fn write_jsonl(path: PathBuf, instances: Vec<PyRef<'_, PyInstance>>) -> PyResult
 /// `min_team=(lo, hi)`, `skills=S`, `skill_share=p` and `requires=(lo, hi)` draw the
 /// team games (as `afg gen`'s flags of the same names).
 #[pyfunction]
-#[pyo3(signature = (robots, tasks=5, seed=0, capacity_slack=None, eps=None, beta=1.0, rewards=None, allow_void=false, min_team=None, skills=None, skill_share=None, requires=None))]
+#[pyo3(signature = (robots, tasks=Whole(5), seed=Whole(0), capacity_slack=None, eps=None, beta=1.0, rewards=None, allow_void=false, min_team=None, skills=None, skill_share=None, requires=None))]
 // Python's keyword arguments, one per knob.
 #[allow(clippy::too_many_arguments)]
 fn generate(
     py: Python<'_>,
-    robots: usize,
-    tasks: usize,
-    seed: u64,
+    robots: Whole,
+    tasks: Whole,
+    seed: Whole,
     capacity_slack: Option<f64>,
     eps: Option<f64>,
     beta: f64,
-    rewards: Option<(f64, f64)>,
+    rewards: Option<FloatPair>,
     allow_void: bool,
-    min_team: Option<(usize, usize)>,
-    skills: Option<usize>,
+    min_team: Option<WholePair>,
+    skills: Option<Whole>,
     skill_share: Option<f64>,
-    requires: Option<(usize, usize)>,
+    requires: Option<WholePair>,
 ) -> PyResult<PyInstance> {
     let knobs = GeneratorKnobs {
         capacity_slack,
         eps,
         beta: Some(beta),
-        rewards,
+        rewards: rewards.map(|FloatPair(lo, hi)| (lo, hi)),
         allow_void,
-        min_team,
-        skills,
+        min_team: min_team.map(|WholePair(lo, hi)| (lo, hi)),
+        skills: skills.map(|s| s.count()).transpose()?,
         skill_share,
-        requires,
+        requires: requires.map(|WholePair(lo, hi)| (lo, hi)),
     };
     let inst = knobs
-        .config(robots, tasks, seed)
+        .config(robots.count()?, tasks.count()?, seed.0)
         .and_then(|cfg| cfg.generate())
         .map_err(crate_error)?;
     let unstaffable: Vec<usize> = inst.unstaffable_tasks().iter().map(|j| j.index()).collect();

@@ -14,6 +14,7 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2}
 use pyo3::prelude::*;
 use pyo3::types::PyType;
 
+mod args;
 mod dataset;
 mod env;
 mod mission;
@@ -207,10 +208,15 @@ impl PyInstance {
         capacities: Option<IntVector<'_>>,
         beta: f64,
         allow_void: bool,
-        min_team: Option<Vec<i64>>,
-        skills: Option<Vec<Vec<i64>>>,
-        requires: Option<Vec<Vec<i64>>>,
+        min_team: Option<args::Integers>,
+        skills: Option<args::IntegerRows>,
+        requires: Option<args::IntegerRows>,
     ) -> PyResult<Self> {
+        let (min_team, skills, requires) = (
+            min_team.map(|v| v.0),
+            skills.map(|r| r.0),
+            requires.map(|r| r.0),
+        );
         let positions = points(&tasks, "tasks")?;
         let m = positions.len();
         let capacities = capacities

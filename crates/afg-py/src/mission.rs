@@ -16,6 +16,7 @@ use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
+use crate::args::{FloatPair, Whole, WholePair};
 use crate::bad_input;
 
 /// A mission: robots (positions, speeds), tasks that appear with a workload, failures,
@@ -55,48 +56,53 @@ impl PyMission {
     /// knob as `afg mission gen` has it, under the same name; a knob left at None
     /// takes its default (`afg.mission_defaults()["generate"]`).
     #[staticmethod]
-    #[pyo3(signature = (preset, robots, tasks, seed=0, workload=None, speed=None, arena=None, horizon=None, waves=None, interval=None, rate=None, fail_share=None, capacity_slack=None, allow_void=false, min_team=None, skills=None, skill_share=None, requires=None))]
+    #[pyo3(signature = (preset, robots, tasks, seed=Whole(0), workload=None, speed=None, arena=None, horizon=None, waves=None, interval=None, rate=None, fail_share=None, capacity_slack=None, allow_void=false, min_team=None, skills=None, skill_share=None, requires=None))]
     // Python's keyword arguments, one per knob.
     #[allow(clippy::too_many_arguments)]
     fn generate(
         py: Python<'_>,
         preset: &str,
-        robots: usize,
-        tasks: usize,
-        seed: u64,
-        workload: Option<(f64, f64)>,
+        robots: Whole,
+        tasks: Whole,
+        seed: Whole,
+        workload: Option<FloatPair>,
         speed: Option<f64>,
         arena: Option<f64>,
         horizon: Option<f64>,
-        waves: Option<usize>,
+        waves: Option<Whole>,
         interval: Option<f64>,
         rate: Option<f64>,
         fail_share: Option<f64>,
         capacity_slack: Option<f64>,
         allow_void: bool,
-        min_team: Option<(usize, usize)>,
-        skills: Option<usize>,
+        min_team: Option<WholePair>,
+        skills: Option<Whole>,
         skill_share: Option<f64>,
-        requires: Option<(usize, usize)>,
+        requires: Option<WholePair>,
     ) -> PyResult<Self> {
         let d = MissionKnobs::default();
         let knobs = MissionKnobs {
-            workload: workload.unwrap_or(d.workload),
+            workload: workload.map_or(d.workload, |FloatPair(lo, hi)| (lo, hi)),
             speed: speed.unwrap_or(d.speed),
             arena: arena.unwrap_or(d.arena),
             horizon: horizon.unwrap_or(d.horizon),
-            waves: waves.unwrap_or(d.waves),
+            waves: waves.map(|w| w.count()).transpose()?.unwrap_or(d.waves),
             interval: interval.unwrap_or(d.interval),
             rate,
             fail_share: fail_share.unwrap_or(d.fail_share),
             capacity_slack,
             allow_void,
-            min_team,
-            skills,
+            min_team: min_team.map(|WholePair(lo, hi)| (lo, hi)),
+            skills: skills.map(|s| s.count()).transpose()?,
             skill_share,
-            requires,
+            requires: requires.map(|WholePair(lo, hi)| (lo, hi)),
         };
-        let config = knobs.config(crate::named::<Preset>(preset)?, robots, tasks, seed);
+        let config = knobs.config(
+            crate::named::<Preset>(preset)?,
+            robots.count()?,
+            tasks.count()?,
+            seed.0,
+        );
         let mission = config.generate().map_err(bad_input)?;
         crate::warn(
             py,

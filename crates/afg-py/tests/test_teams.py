@@ -259,3 +259,33 @@ def test_the_staffing_models_play_their_games_or_refuse() -> None:
         assert 0.95 * exact.welfare <= learned.welfare <= exact.welfare + 1e-9
     with pytest.raises(afg.InvalidInputError, match="trained without skills"):
         afg.solve(inst, model=str(root / "models" / "ours" / "staffing_teams"))
+
+
+def test_arguments_are_read_as_python_writes_them_and_refused_as_afg_errors():
+    # Pairs as lists or numpy arrays, not only tuples.
+    a = afg.generate(robots=30, tasks=3, seed=1, min_team=[2, 4], skills=2, requires=np.array([1, 1]))
+    b = afg.generate(robots=30, tasks=3, seed=1, min_team=(2, 4), skills=2, requires=(1, 1))
+    np.testing.assert_array_equal(a.min_team, b.min_team)
+    mission = afg.Mission.generate("waves", robots=10, tasks=4, workload=[1.0, 2.0], min_team=np.array([1, 2]))
+    assert mission.num_tasks == 4
+    # Whole numbers as numpy integers, whole floats and bools, in vectors and matrices.
+    robots = np.array([[0.0, 0.0], [1.0, 0.0]])
+    tasks = np.array([[0.5, 0.5]])
+    inst = afg.Instance(robots, tasks, [2.0], [2.0], min_team=np.array([2.0]),
+                        skills=np.array([[True], [False]]), requires=np.array([[1]], dtype=np.int32))
+    np.testing.assert_array_equal(inst.min_team, [2])
+    np.testing.assert_array_equal(inst.skills, [[1], [0]])
+    # Everything else is an afg.InvalidInputError naming the value, never a TypeError or OverflowError.
+    for call, says in [
+        (lambda: afg.generate(robots=-1), "got -1"),
+        (lambda: afg.generate(robots=10, min_team="ab"), "string"),
+        (lambda: afg.generate(robots=10, min_team=(1, 2, 3)), "3 values"),
+        (lambda: afg.generate(robots=10, rewards=[1.0, "x"]), "expected a number"),
+        (lambda: afg.generate(robots=2.5), "whole number"),
+        (lambda: afg.Mission.generate("waves", robots=10, tasks=4, seed=-3), "got -3"),
+        (lambda: afg.Instance(robots, tasks, [2.0], [2.0], min_team=[1.5]), "whole number"),
+        (lambda: afg.Instance(robots, tasks, [2.0], [2.0], skills=np.array([[0.5], [1.0]]), requires=[[1]]), "whole number"),
+        (lambda: afg.Instance(robots, tasks, [2.0], [2.0], min_team=[10**30]), "out of range"),
+    ]:
+        with pytest.raises(afg.InvalidInputError, match=says):
+            call()
