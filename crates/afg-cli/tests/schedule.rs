@@ -145,32 +145,27 @@ fn bad_input_is_refused_in_one_line() {
         r#"{"speed":1,"max_wait":10,"depots":[[0,0]],"robots":[{"x":0,"y":0,"depot":0},{"x":0,"y":0,"depot":0}],"tasks":[{"x":1,"y":0,"min_team":2,"duration":1},{"x":0,"y":1,"min_team":2,"duration":1}]}"#,
     )
     .unwrap();
-    let deadlock = dir.join("d.jsonl");
-    std::fs::write(&deadlock, "{\"routes\":[[0,1],[1,0]]}\n").unwrap();
-    let out = afg(&[
-        "schedule",
-        "score",
-        "--input",
-        inst,
-        "--schedule",
-        deadlock.to_str().unwrap(),
-    ]);
+    // Scores the one-line schedule `routes` against the instance.
+    let score = |name: &str, routes: &str| {
+        let file = dir.join(name);
+        std::fs::write(&file, format!("{{\"routes\":{routes}}}\n")).unwrap();
+        afg(&[
+            "schedule",
+            "score",
+            "--input",
+            inst,
+            "--schedule",
+            file.to_str().unwrap(),
+        ])
+    };
+    let out = score("d.jsonl", "[[0,1],[1,0]]");
     assert_eq!(out.status.code(), Some(1));
     assert!(
         stderr(&out).contains("deadlocks: robot 0 waits at task 0, robot 1 waits at task 1"),
         "{}",
         stderr(&out)
     );
-    let left_out = dir.join("l.jsonl");
-    std::fs::write(&left_out, "{\"routes\":[[0],[0]]}\n").unwrap();
-    let out = afg(&[
-        "schedule",
-        "score",
-        "--input",
-        inst,
-        "--schedule",
-        left_out.to_str().unwrap(),
-    ]);
+    let out = score("l.jsonl", "[[0],[0]]");
     assert!(
         stderr(&out).contains("leaves out task 1"),
         "{}",
