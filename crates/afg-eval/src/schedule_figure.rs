@@ -24,7 +24,8 @@ const WAITING: RGBColor = RGBColor(240, 150, 40);
 ///   "tasks":[{"x":0,"y":1,"min_team":2,"duration":1},{"x":1,"y":1,"min_team":1,"duration":2}]}"#)?;
 /// let run = inst.evaluate(&Schedule { routes: vec![vec![0, 1], vec![0]] })?;
 /// let svg = afg_eval::schedule_figure::schedule_svg(&inst, &run, "two robots")?;
-/// assert!(svg.starts_with("<svg") && svg.contains("makespan 5.41"));
+/// // Both at task 0 at 1, done at 2; robot 0 at task 1 at 3, done at 5, home at 5 + √2.
+/// assert!(svg.starts_with("<svg") && svg.contains("makespan 6.41"));
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn schedule_svg(
