@@ -150,9 +150,7 @@ impl ScheduleInstance {
             homes[self.robots[i].depot] += 1;
         }
         let point = |j: usize| [self.tasks[j].x, self.tasks[j].y];
-        let time = |a: [f64; 2], b: [f64; 2]| {
-            ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt() / self.speed
-        };
+        let time = |a: [f64; 2], b: [f64; 2]| crate::instance::straight(a, b) / self.speed;
         let needed = || (0..m).filter(|&j| team[j] > 0);
         let left: Vec<([f64; 2], usize, Option<usize>)> = needed()
             .map(|j| (point(j), team[j], Some(j)))

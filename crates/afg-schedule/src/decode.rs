@@ -6,6 +6,7 @@
 //! is the evaluator's, task by task.
 
 use crate::ScheduleInstance;
+use crate::instance::straight;
 
 /// How much more a minute of driving weighs than a minute of arrival time when a task
 /// without skills picks its team (0: the earliest arrivals, whoever they are).
@@ -14,27 +15,23 @@ const TRAVEL_WEIGHT: f64 = 0.3;
 /// The most travel times kept in a table (128 MiB); larger instances compute them.
 const TABLE_LIMIT: usize = 1 << 24;
 
-fn straight(u: [f64; 2], v: [f64; 2]) -> f64 {
-    ((u[0] - v[0]).powi(2) + (u[1] - v[1]).powi(2)).sqrt()
-}
-
 /// The instance, precomputed for decoding: travel times, durations, team needs.
 pub(crate) struct Decoder {
-    pub(crate) num_robots: usize,
-    pub(crate) num_tasks: usize,
+    num_robots: usize,
+    num_tasks: usize,
     /// Places: tasks `0..M`, robot starts `M..M+N`, depots `M+N..`.
     points: Vec<[f64; 2]>,
     speed: f64,
     /// All travel times, place by place, where they fit in [`TABLE_LIMIT`] entries.
     table: Option<Vec<f64>>,
     home: Vec<usize>,
-    pub(crate) duration: Vec<f64>,
+    duration: Vec<f64>,
     team_floor: Vec<usize>,
     /// `robot_skills[i * S + s]`, `requires[j * S + s]`.
     robot_skills: Vec<u32>,
     requires: Vec<u32>,
     num_skills: usize,
-    pub(crate) max_wait: f64,
+    max_wait: f64,
     return_to_depot: bool,
 }
 

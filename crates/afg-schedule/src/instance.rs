@@ -140,6 +140,12 @@ fn yes() -> bool {
     true
 }
 
+/// The straight-line distance between two points: the one formula of every distance in
+/// this crate (the evaluator, the decoder's table, the bound).
+pub(crate) fn straight(u: [f64; 2], v: [f64; 2]) -> f64 {
+    ((u[0] - v[0]).powi(2) + (u[1] - v[1]).powi(2)).sqrt()
+}
+
 /// A place a robot can be: a task or a depot.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Place {
@@ -213,8 +219,7 @@ impl ScheduleInstance {
 
     /// The straight-line distance between two places.
     pub fn distance(&self, a: Place, b: Place) -> f64 {
-        let (p, q) = (self.point(a), self.point(b));
-        ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt()
+        straight(self.point(a), self.point(b))
     }
 
     /// The time a robot takes from one place to another.
