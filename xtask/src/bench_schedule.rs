@@ -6,7 +6,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use afg_schedule::{Family, Generate, Schedule, ScheduleInstance, SolveOptions, read_instances};
+use afg_schedule::{
+    Family, Generate, Schedule, ScheduleInstance, SolveOptions, Solved, read_instances,
+};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use serde::Deserialize;
@@ -134,17 +136,14 @@ pub fn run(args: BenchScheduleArgs) -> Result<()> {
     Ok(())
 }
 
-fn solve(inst: &ScheduleInstance, seconds: f64, max_wait: f64) -> Result<(Schedule, f64)> {
-    let solved = inst.solve(&SolveOptions {
+/// afg's schedule within `seconds`, valid under `max_wait` (the scheduler checks it with
+/// the evaluator before returning it).
+fn solve(inst: &ScheduleInstance, seconds: f64, max_wait: f64) -> Result<Solved> {
+    Ok(inst.solve(&SolveOptions {
         time_limit: Some(seconds),
         max_wait: Some(max_wait),
         ..SolveOptions::default()
-    })?;
-    let run = inst.evaluate_with(&solved.schedule, max_wait)?;
-    if !run.is_valid() {
-        bail!("afg returned a schedule that breaks max_wait {max_wait}: a bug");
-    }
-    Ok((solved.schedule, run.makespan))
+    })?)
 }
 
 fn measure(
@@ -157,7 +156,7 @@ fn measure(
     let afg = args
         .times
         .iter()
-        .map(|&t| solve(inst, t, args.max_wait).map(|s| s.1))
+        .map(|&t| solve(inst, t, args.max_wait).map(|s| s.makespan()))
         .collect::<Result<_>>()?;
     let cpsat = match &args.python {
         Some(python) if line < args.cpsat_instances => args
@@ -227,11 +226,10 @@ fn cpsat(
 
 fn draw(inst: &ScheduleInstance, args: &BenchScheduleArgs, figure: &Path) -> Result<()> {
     let seconds = args.times[args.times.len() / 2];
-    let (schedule, _) = solve(inst, seconds, args.max_wait)?;
-    let run = inst.evaluate_with(&schedule, args.max_wait)?;
+    let solved = solve(inst, seconds, args.max_wait)?;
     let svg = afg_eval::schedule_figure::schedule_svg(
         inst,
-        &run,
+        &solved.run,
         &format!("afg ({seconds} s), DCMRTA instance 0"),
     )?;
     afg_game::fs::write_atomic_making_dirs(figure, svg.as_bytes())?;
@@ -380,7 +378,7 @@ fn scale_table(args: &BenchScheduleArgs) -> Result<String> {
                     args.scale_time
                 );
             }
-            let (_, makespan) = solve(&inst, left, args.max_wait)?;
+            let makespan = solve(&inst, left, args.max_wait)?.makespan();
             let total = clock.elapsed().as_secs_f64();
             out += &format!(
                 "| {} | {robots} × {tasks} | {makespan:.3} | {:.3} | {:.1} % | {bound_seconds:.2} s | {total:.2} s |\n",

@@ -190,8 +190,8 @@ fn solve(args: &SolveArgs) -> Result<()> {
         let solved = inst
             .solve(&options)
             .with_context(|| format!("{} line {}", args.input.display(), line + 1))?;
-        let max_wait = args.max_wait.unwrap_or(inst.max_wait);
-        let run = inst.evaluate_with(&solved.schedule, max_wait)?;
+        let run = &solved.run;
+        let max_wait = run.max_wait;
         let bound = inst.lower_bound();
         let out = SolvedLine {
             line,

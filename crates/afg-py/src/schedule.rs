@@ -215,14 +215,10 @@ fn schedule<'py>(
         seed,
         max_wait,
     };
-    let (solved, run, bound) = py
-        .detach(|| -> Result<_, ScheduleError> {
-            let solved = inst.solve(&options)?;
-            let run = inst.evaluate_with(&solved.schedule, max_wait.unwrap_or(inst.max_wait))?;
-            Ok((solved, run, inst.lower_bound()))
-        })
+    let (solved, bound) = py
+        .detach(|| -> Result<_, ScheduleError> { Ok((inst.solve(&options)?, inst.lower_bound())) })
         .map_err(schedule_error)?;
-    let d = evaluation_dict(py, &run)?;
+    let d = evaluation_dict(py, &solved.run)?;
     let routes: Vec<Bound<'py, PyArray1<i64>>> = solved
         .schedule
         .routes
@@ -236,7 +232,7 @@ fn schedule<'py>(
         .collect();
     d.set_item("routes", routes)?;
     d.set_item("bound", bound.makespan)?;
-    d.set_item("gap", bound.gap(run.makespan))?;
+    d.set_item("gap", bound.gap(solved.makespan()))?;
     d.set_item("steps", solved.steps)?;
     d.set_item("seconds", solved.seconds)?;
     Ok(d)

@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::anneal::{Plan, anneal};
 use crate::decode::Decoder;
-use crate::{Schedule, ScheduleError, ScheduleInstance};
+use crate::{Evaluation, Schedule, ScheduleError, ScheduleInstance};
 
 /// How long and how the scheduler searches.
 ///
@@ -23,7 +23,7 @@ use crate::{Schedule, ScheduleError, ScheduleInstance};
 ///            {"x":-1,"y":0,"min_team":1,"duration":1}]}"#)?;
 /// let found = inst.solve(&SolveOptions { steps: Some(2_000), ..SolveOptions::default() })?;
 /// // Together to task 0 (t = 1, done at 2), then one robot to each side task.
-/// assert!((found.makespan - (2.0 + 2f64.sqrt() + 2.0)).abs() < 1e-9);
+/// assert!((found.makespan() - (2.0 + 2f64.sqrt() + 2.0)).abs() < 1e-9);
 /// assert!(inst.evaluate(&found.schedule)?.is_valid());
 /// # Ok::<(), afg_schedule::ScheduleError>(())
 /// ```
@@ -44,14 +44,21 @@ pub struct SolveOptions {
 pub struct Solved {
     /// The schedule: one route per robot.
     pub schedule: Schedule,
-    /// Its makespan (the evaluator's).
-    pub makespan: f64,
+    /// The schedule played by the evaluator under the `max_wait` asked for (valid).
+    pub run: Evaluation,
     /// The order of the tasks it was decoded from.
     pub order: Vec<usize>,
     /// Search steps taken.
     pub steps: u64,
     /// Seconds spent.
     pub seconds: f64,
+}
+
+impl Solved {
+    /// The schedule's makespan (the evaluator's).
+    pub fn makespan(&self) -> f64 {
+        self.run.makespan
+    }
 }
 
 impl ScheduleInstance {
@@ -102,10 +109,9 @@ impl ScheduleInstance {
                 run.makespan
             )));
         }
-        let makespan = run.makespan;
         Ok(Solved {
             schedule,
-            makespan,
+            run,
             order: plan.order,
             steps,
             seconds: clock.elapsed().as_secs_f64(),

@@ -130,15 +130,15 @@ fn the_bound_lies_below_the_optimum_and_the_scheduler_finds_it_on_small_instance
             "seed {seed}: bound {bound} above the optimum {optimum}"
         );
         assert!(
-            solved.makespan >= optimum - 1e-9,
+            solved.makespan() >= optimum - 1e-9,
             "seed {seed}: {} below the optimum {optimum}",
-            solved.makespan
+            solved.makespan()
         );
-        found += usize::from(solved.makespan <= optimum + 1e-9);
+        found += usize::from(solved.makespan() <= optimum + 1e-9);
         cases += 1;
         println!(
             "seed {seed}: bound {bound:.3} optimum {optimum:.3} found {:.3}",
-            solved.makespan
+            solved.makespan()
         );
     }
     println!("the scheduler found the optimum on {found} of {cases}");
@@ -174,7 +174,7 @@ fn with_skills_too() {
             continue;
         }
         let bound = inst.lower_bound().makespan;
-        let found = solved.unwrap().makespan;
+        let found = solved.unwrap().makespan();
         assert!(
             bound <= optimum + 1e-9,
             "seed {seed}: bound {bound} above the optimum {optimum}"
@@ -202,7 +202,7 @@ fn one_seed_and_step_budget_gives_one_schedule() {
     let a = inst.solve(&steps(2_000, 11)).unwrap();
     let b = inst.solve(&steps(2_000, 11)).unwrap();
     assert_eq!(a.schedule, b.schedule);
-    assert_eq!(a.makespan, b.makespan);
+    assert_eq!(a.makespan(), b.makespan());
     assert_eq!(a.steps, 2_000);
     let other = inst.solve(&steps(2_000, 12)).unwrap();
     assert_ne!(a.order, other.order, "another seed searches another way");
@@ -256,7 +256,7 @@ proptest! {
         let run = inst.evaluate(&solved.schedule).unwrap();
         prop_assert!(run.is_valid());
         prop_assert!(run.long_waits.is_empty() && run.longest_wait <= inst.max_wait);
-        prop_assert_eq!(run.makespan, solved.makespan);
+        prop_assert_eq!(run.makespan, solved.makespan());
         prop_assert!(run.visits.iter().flatten().all(|v| v.role == afg_schedule::Role::Team), "no robot is sent where it is not needed");
         prop_assert!(inst.lower_bound().makespan <= run.makespan + 1e-9);
     }
