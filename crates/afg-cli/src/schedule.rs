@@ -271,13 +271,13 @@ fn score(args: &ScoreArgs) -> Result<()> {
             .evaluate_with(&record.schedule(), args.max_wait.unwrap_or(inst.max_wait))
             .with_context(where_)?;
         if args.json {
-            let mut value = serde_json::json!({
+            let value = serde_json::json!({
                 "line": line, "index": inst.index, "valid": run.is_valid(), "makespan": run.makespan,
+                "bound": inst.lower_bound().makespan,
                 "travel": run.travel, "waiting": run.waiting, "longest_wait": run.longest_wait,
                 "max_wait": run.max_wait, "long_waits": run.long_waits,
                 "released_before_arrival": run.released_before_arrival,
             });
-            value["bound"] = serde_json::json!(inst.lower_bound().makespan);
             println!("{value}");
             continue;
         }
@@ -287,11 +287,7 @@ fn score(args: &ScoreArgs) -> Result<()> {
             run.travel,
             run.waiting,
             run.longest_wait,
-            if run.is_valid() {
-                "valid".to_string()
-            } else {
-                "INVALID".to_string()
-            }
+            if run.is_valid() { "valid" } else { "INVALID" }
         );
         for w in &run.long_waits {
             println!(
