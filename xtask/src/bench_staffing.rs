@@ -139,6 +139,7 @@ fn measure(
             Ok(Some(
                 TeamOptimum {
                     time_limit: Some(equal),
+                    ..TeamOptimum::default()
                 }
                 .solve(&inst)?
                 .welfare,

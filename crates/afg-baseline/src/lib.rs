@@ -36,8 +36,8 @@ use thiserror::Error;
 
 pub use dynamics::{CentralisedDa, DecentralisedDa, DecentralisedRun};
 pub use optimum::{
-    Certificate, IncrementalOptimum, Optimum, TeamOptimum, TeamRelaxation, TeamSolution,
-    verify_optimal,
+    Certificate, IncrementalOptimum, Optimum, TeamOptimum, TeamProgress, TeamRelaxation,
+    TeamSolution, verify_optimal,
 };
 pub use simple::{Blind, Greedy, Nearest, RandomAllocator};
 pub use swarm::{
@@ -375,35 +375,33 @@ impl Method {
         }
     }
 
-    /// The allocator, stopped within `time_limit` seconds where one is given: the one
-    /// place a user's time limit becomes a solver (the command line, Python, missions
-    /// and the benchmarks all come here). Only the exact optimum takes one
-    /// ([`TeamOptimum::with_time_limit`]).
+    /// The allocator, with `exact`'s limits (time, gap, stop, progress: see
+    /// [`TeamOptimum::stopping`]) where they are given: the one place a user's limits
+    /// become a solver (the command line, Python, missions and the benchmarks all come
+    /// here). Only the exact optimum takes them.
     ///
     /// # Errors
-    /// [`AllocError::InvalidParameter`] where a time limit is given to another method,
-    /// or is not a finite, positive number of seconds.
+    /// [`AllocError::InvalidParameter`] where limits are given to another method.
     ///
     /// # Examples
     /// ```
-    /// use afg_baseline::Method;
-    /// assert_eq!(Method::Opt.allocator_with(0, Some(2.5))?.name(), "opt");
-    /// assert!(Method::Greedy.allocator_with(0, Some(1.0)).is_err());
-    /// assert!(Method::Opt.allocator_with(0, Some(0.0)).is_err());
+    /// use afg_baseline::{Method, TeamOptimum};
+    /// let limited = TeamOptimum::with_time_limit(2.5)?;
+    /// assert_eq!(Method::Opt.allocator_with(0, Some(limited.clone()))?.name(), "opt");
+    /// assert!(Method::Greedy.allocator_with(0, Some(limited)).is_err());
+    /// assert_eq!(Method::Greedy.allocator_with(0, None)?.name(), "greedy");
     /// # Ok::<(), afg_baseline::AllocError>(())
     /// ```
     pub fn allocator_with(
         self,
         seed: u64,
-        time_limit: Option<f64>,
+        exact: Option<TeamOptimum>,
     ) -> Result<Box<dyn Allocator>, AllocError> {
-        match time_limit {
+        match exact {
             None => Ok(self.allocator(seed)),
-            Some(seconds) if self == Method::Opt => {
-                Ok(Box::new(TeamOptimum::with_time_limit(seconds)?))
-            }
+            Some(exact) if self == Method::Opt => Ok(Box::new(exact)),
             Some(_) => Err(AllocError::InvalidParameter(
-                "a time limit is for the exact optimum (method opt) only".into(),
+                "a time limit or a gap is for the exact optimum (method opt) only".into(),
             )),
         }
     }

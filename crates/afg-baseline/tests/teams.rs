@@ -155,6 +155,7 @@ fn a_time_limit_returns_the_best_found_with_a_certified_bound() {
         assert!(exact.proven);
         let cut = TeamOptimum {
             time_limit: Some(Duration::ZERO),
+            ..TeamOptimum::default()
         }
         .solve(&inst)
         .unwrap();
@@ -176,6 +177,68 @@ fn a_time_limit_returns_the_best_found_with_a_certified_bound() {
             cut.gap()
         );
         assert!(cut.gap() > 0.0);
+    }
+}
+
+/// The states the progress hook was told, in order (the hook is a plain `fn`).
+static TOLD: std::sync::Mutex<Vec<afg_baseline::TeamProgress>> = std::sync::Mutex::new(Vec::new());
+
+fn remember(p: &afg_baseline::TeamProgress) {
+    TOLD.lock().unwrap().push(*p);
+}
+
+#[test]
+fn a_gap_target_a_stop_flag_and_the_progress_hook_do_what_they_say() {
+    for inst in [scarce(100, 10, 3), hard_skill_game()] {
+        let exact = TeamOptimum {
+            progress: Some(remember),
+            ..TeamOptimum::default()
+        }
+        .solve(&inst)
+        .unwrap();
+        // The hook hears every node the search pops: the best found only rises, the
+        // bound only falls, and the last state told is no better than the optimum.
+        let told = std::mem::take(&mut *TOLD.lock().unwrap());
+        assert!(
+            told.len() as u64 >= exact.nodes / 3,
+            "{} of {}",
+            told.len(),
+            exact.nodes
+        );
+        for pair in told.windows(2) {
+            assert!(pair[1].welfare >= pair[0].welfare && pair[1].bound <= pair[0].bound + 1e-9);
+            assert!(pair[1].seconds >= pair[0].seconds && pair[1].nodes >= pair[0].nodes);
+        }
+        let last = told.last().unwrap();
+        assert!(last.welfare <= exact.welfare + 1e-9 && last.bound >= exact.welfare - 1e-9);
+
+        // A gap target stops as soon as the certified gap reaches it: a loose one
+        // before the proof, with a true bound.
+        let loose = 0.5 * told.iter().map(|p| p.gap()).fold(0.0, f64::max);
+        let near = TeamOptimum::default()
+            .stopping(None, Some(loose))
+            .unwrap()
+            .solve(&inst)
+            .unwrap();
+        assert!(
+            near.nodes < exact.nodes,
+            "{} vs {}",
+            near.nodes,
+            exact.nodes
+        );
+        assert!(near.gap() <= loose && near.bound >= exact.welfare - 1e-9);
+        assert!((inst.welfare(&near.assignment) - near.welfare).abs() < 1e-9);
+
+        // A stop flag already set: the root and its dive only, as a spent time limit.
+        let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(true));
+        let stopped = TeamOptimum {
+            stop: Some(stop),
+            ..TeamOptimum::default()
+        }
+        .solve(&inst)
+        .unwrap();
+        assert_eq!(stopped.nodes, 1);
+        assert!(!stopped.proven && stopped.bound >= exact.welfare - 1e-9);
     }
 }
 

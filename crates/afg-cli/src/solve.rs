@@ -2,7 +2,9 @@
 
 use std::path::PathBuf;
 
-use afg_baseline::{Allocator, Method};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use afg_baseline::{Allocator, Method, TeamOptimum, TeamProgress};
 use afg_eval::solve::{Against, Report, Row};
 use afg_game::fs::write_atomic_making_dirs;
 use afg_game::io::read_instances;
@@ -68,6 +70,12 @@ pub struct SolveArgs {
     /// without a limit it runs until optimality is proven).
     #[arg(long, value_name = "SECS", allow_negative_numbers = true)]
     pub(crate) time_limit: Option<f64>,
+    /// The exact optimum (--method opt) stops as soon as its certified gap (the bound
+    /// over the best found, less 1) is at most FRACTION, e.g. 0.001 for 0.1 %. While
+    /// it searches a team game, it prints the best found, the bound and the gap to
+    /// stderr every second.
+    #[arg(long, value_name = "FRACTION", allow_negative_numbers = true)]
+    pub(crate) gap: Option<f64>,
     /// "% of OPT" on a team game solves the game exactly first, which can cost far more
     /// than the method: the exact solver stops after SECS seconds per instance, and the
     /// share is then of its certified bound (said beside it). The paper's game is
@@ -151,29 +159,7 @@ pub fn run(args: SolveArgs) -> Result<()> {
         return crate::realloc::run(args.method, from, &instances, &out);
     }
     crate::warn_unstaffable(&instances);
-    let (name, method): (String, Box<dyn Allocator>) = match (&args.method, &args.model) {
-        (Some(m), _) => (
-            m.to_string(),
-            m.allocator_with(args.seed, args.time_limit)
-                .context("--time-limit")?,
-        ),
-        _ if args.time_limit.is_some() => {
-            anyhow::bail!("--time-limit: a time limit is for the exact optimum (method opt) only")
-        }
-        (None, Some(dir)) => {
-            let options = ModelOptions {
-                block: args.block,
-                repair: args.repair,
-                one_shot: args.one_shot,
-                exact_burn: args.exact_burn,
-            };
-            (
-                dir.display().to_string(),
-                load_model(dir, options).map_err(with_flags)?,
-            )
-        }
-        (None, None) => unreachable!("clap requires an allocator"),
-    };
+    let (name, method) = allocator(&args)?;
     let (against, measuring) = reference(&args, &instances)?;
     let bar = afg_eval::report::progress(
         instances.len() as u64,
@@ -203,6 +189,69 @@ pub fn run(args: SolveArgs) -> Result<()> {
 
 /// What the rows are measured against (`--reference-time-limit`, `--no-reference`),
 /// and how the progress line says so.
+/// The allocator `args` name and its label: a method (the exact one with the limits
+/// and a progress line) or a trained model.
+fn allocator(args: &SolveArgs) -> Result<(String, Box<dyn Allocator>)> {
+    Ok(match (&args.method, &args.model) {
+        (Some(m), _) => {
+            let limits =
+                TeamOptimum::limits(args.time_limit, args.gap).context("--time-limit / --gap")?;
+            let exact = match *m {
+                Method::Opt => Some(TeamOptimum {
+                    progress: Some(print_progress),
+                    ..limits.unwrap_or_default()
+                }),
+                _ => limits,
+            };
+            let allocator = m
+                .allocator_with(args.seed, exact)
+                .context("--time-limit / --gap")?;
+            (m.to_string(), allocator)
+        }
+        _ if args.time_limit.is_some() || args.gap.is_some() => {
+            anyhow::bail!(
+                "--time-limit / --gap: a time limit or a gap is for the exact optimum (method opt) only"
+            )
+        }
+        (None, Some(dir)) => {
+            let options = ModelOptions {
+                block: args.block,
+                repair: args.repair,
+                one_shot: args.one_shot,
+                exact_burn: args.exact_burn,
+            };
+            (
+                dir.display().to_string(),
+                load_model(dir, options).map_err(with_flags)?,
+            )
+        }
+        (None, None) => unreachable!("clap requires an allocator"),
+    })
+}
+
+/// The exact search's progress on stderr, once a second after its first: the best
+/// found, the bound, the gap and the nodes.
+fn print_progress(p: &TeamProgress) {
+    // the next whole second to print at; a new solve starts again from 1
+    static NEXT: AtomicU64 = AtomicU64::new(1);
+    let next = NEXT.load(Ordering::Relaxed);
+    let second = p.seconds as u64;
+    if second + 1 < next {
+        NEXT.store(second.max(1), Ordering::Relaxed);
+    } else if second >= next {
+        NEXT.store(second + 1, Ordering::Relaxed);
+        eprintln!(
+            "opt {:>6.1} s  best {:.4}  bound {:.4}  gap {:.3} %  nodes {}  open {}",
+            p.seconds,
+            p.welfare,
+            p.bound,
+            100.0 * p.gap(),
+            p.nodes,
+            p.open
+        );
+    }
+}
+
 fn reference(args: &SolveArgs, instances: &[Instance]) -> Result<(Against, String)> {
     if args.no_reference {
         return Ok((Against::Nothing, String::new()));
@@ -348,6 +397,7 @@ mod tests {
         .unwrap();
         let out = format!("{dir}/opt.jsonl");
         solve(&format!("--method opt --input {file} --out {out}")).unwrap();
+        solve(&format!("--method opt --gap 0 --input {file}")).unwrap();
         let lines = std::fs::read_to_string(&out).unwrap();
         let instances = afg_game::io::read_dataset(std::path::Path::new(&file)).unwrap();
         for (line, inst) in lines.lines().zip(&instances) {
@@ -360,6 +410,9 @@ mod tests {
             ("--method opt --time-limit -1", "finite and positive"),
             ("--method opt --time-limit 0", "finite and positive"),
             ("--method opt --time-limit nan", "finite and positive"),
+            ("--method nearest --gap 0.01", "for the exact optimum"),
+            ("--method opt --gap -0.01", "finite, non-negative"),
+            ("--method opt --gap inf", "finite, non-negative"),
         ] {
             let err = solve(&format!("{flags} --input {file}")).unwrap_err();
             assert!(format!("{err:#}").contains(needle), "{flags}: {err:#}");

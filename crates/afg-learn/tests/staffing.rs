@@ -333,6 +333,7 @@ fn the_committed_staffing_models_reach_98_percent_of_the_optimum() {
                 let inst = scarce_game(size, skills, seed).unwrap();
                 let best = TeamOptimum {
                     time_limit: Some(limit),
+                    ..TeamOptimum::default()
                 }
                 .solve(&inst)
                 .unwrap();

@@ -2,9 +2,11 @@
 
 use std::path::PathBuf;
 use std::str::FromStr;
-use std::time::Instant;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, PoisonError, mpsc};
+use std::time::{Duration, Instant};
 
-use afg_baseline::{Allocator, Method};
+use afg_baseline::{Allocator, Method, TeamOptimum};
 use afg_eval::scorecard::{Scorecard, scorecard};
 use afg_eval::solve::{Against, Row};
 use afg_game::Preference;
@@ -185,7 +187,13 @@ impl PyModel {
         reference_time_limit: f64,
     ) -> PyResult<SolveResult> {
         let against = against(reference, reference_time_limit)?;
-        run(py, instance, self.allocator.as_ref(), against)
+        run(
+            py,
+            instance,
+            self.allocator.as_ref(),
+            against,
+            &AtomicBool::default(),
+        )
     }
     fn __repr__(&self) -> String {
         format!("Model({:?})", self.path)
@@ -241,21 +249,23 @@ fn against(reference: bool, time_limit: f64) -> PyResult<Against> {
         .map_err(|e| crate::bad_input(format!("reference_time_limit: {e}")))
 }
 
+/// Allocates and scores `instance` off the interpreter's lock; Ctrl-C sets `stop`
+/// (which the exact solver reads: see [`interruptible`]).
 fn run(
     py: Python<'_>,
     instance: &PyInstance,
     allocator: &dyn Allocator,
     against: Against,
+    stop: &AtomicBool,
 ) -> PyResult<SolveResult> {
-    let inst = instance.inner.clone();
+    let inst = &instance.inner;
     let start = Instant::now();
-    let (row, assignment, card) = py
-        .detach(|| {
-            let (row, assignment) = Row::compute(&inst, allocator, against)?;
-            let card = Scorecard::with_score(&inst, &assignment, row.score);
-            Ok::<_, afg_eval::EvalError>((row, assignment, card))
-        })
-        .map_err(bad_input)?;
+    let (row, assignment, card) = interruptible(py, stop, || {
+        let (row, assignment) = Row::compute(inst, allocator, against)?;
+        let card = Scorecard::with_score(inst, &assignment, row.score);
+        Ok::<_, afg_eval::EvalError>((row, assignment, card))
+    })?
+    .map_err(bad_input)?;
     let mut stats = alloc_stats(&row);
     // The crates' whole part of the call (the method, the optimum it is scored
     // against, and its stability and NS rates), for measuring what the binding adds.
@@ -267,6 +277,46 @@ fn run(
     })
 }
 
+/// Runs `work` on another thread, the interpreter's lock released, while this one
+/// answers signals: Ctrl-C sets `stop` (the exact search ends at its next step with
+/// the best found; other work runs to its end) and `KeyboardInterrupt` is raised once
+/// `work` has returned. Work that ends first returns at once.
+fn interruptible<T: Send>(
+    py: Python<'_>,
+    stop: &AtomicBool,
+    work: impl FnOnce() -> T + Send,
+) -> PyResult<T> {
+    let (done, finished) = mpsc::sync_channel(1);
+    let finished = Mutex::new(finished); // shared with the thread that waits on it
+    std::thread::scope(|scope| {
+        scope.spawn(move || {
+            // the receiver waits on this scope, so it is there to take the result
+            let _ = done.send(work());
+        });
+        let mut interrupted = None;
+        loop {
+            match py.detach(|| {
+                let finished = finished.lock().unwrap_or_else(PoisonError::into_inner);
+                finished.recv_timeout(Duration::from_millis(50))
+            }) {
+                Ok(out) => return interrupted.map_or(Ok(out), Err),
+                Err(mpsc::RecvTimeoutError::Timeout) => {}
+                Err(mpsc::RecvTimeoutError::Disconnected) => {
+                    return Err(pyo3::exceptions::PyRuntimeError::new_err(
+                        "afg: the solve panicked (a bug: please report it)",
+                    ));
+                }
+            }
+            if interrupted.is_none()
+                && let Err(signal) = py.check_signals()
+            {
+                stop.store(true, Ordering::Relaxed);
+                interrupted = Some(signal);
+            }
+        }
+    })
+}
+
 fn method(name: &str) -> PyResult<Method> {
     Method::from_str(name).map_err(crate::bad_input)
 }
@@ -274,13 +324,15 @@ fn method(name: &str) -> PyResult<Method> {
 /// Solves one instance by a built-in method (`opt`, `da`, `da-decentralised`,
 /// `da-balanced`, `greedy`, `nearest`, `random`, `blind`) or a trained model (a run
 /// directory or a loaded `Model`), scored against the exact optimum. `time_limit`
-/// (seconds, `opt` only) stops the exact search with the best found; `stats` then
-/// has its proven `bound` and `gap`, as for every exact solve of a team game. On a
+/// (seconds, `opt` only) stops the exact search with the best found, and so does a
+/// certified `gap` target (`opt` only; 0.001: within 0.1 % of the bound) or Ctrl-C
+/// (at the search's next step, then `KeyboardInterrupt`); `stats` then has its
+/// proven `bound` and `gap`, as for every exact solve of a team game. On a
 /// team game the "% of OPT" solves the game exactly first, stopped after
 /// `reference_time_limit` seconds (the share is then of its certified bound:
 /// `stats["reference_proven"]` is 0); `reference=False` measures nothing.
 #[pyfunction]
-#[pyo3(signature = (instance, method=None, model=None, seed=0, time_limit=None, reference=true, reference_time_limit=10.0))]
+#[pyo3(signature = (instance, method=None, model=None, seed=0, time_limit=None, gap=None, reference=true, reference_time_limit=10.0))]
 #[allow(clippy::too_many_arguments)]
 fn solve(
     py: Python<'_>,
@@ -289,24 +341,41 @@ fn solve(
     model: Option<&Bound<'_, PyAny>>,
     seed: u64,
     time_limit: Option<f64>,
+    gap: Option<f64>,
     reference: bool,
     reference_time_limit: f64,
 ) -> PyResult<SolveResult> {
     let against = against(reference, reference_time_limit)?;
-    if time_limit.is_some() && method.is_none() {
+    if (time_limit.is_some() || gap.is_some()) && method.is_none() {
         return Err(crate::bad_input(
-            "time_limit: a time limit is for the exact optimum (method opt) only",
+            "time_limit / gap: a time limit or a gap is for the exact optimum (method opt) only",
         ));
     }
     match (method, model) {
         (Some(name), None) => {
-            let allocator = self::method(name)?
-                .allocator_with(seed, time_limit)
-                .map_err(|e| crate::bad_input(format!("time_limit: {e}")))?;
-            run(py, instance, allocator.as_ref(), against)
+            let method = self::method(name)?;
+            let stop = Arc::new(AtomicBool::new(false));
+            let exact = TeamOptimum::limits(time_limit, gap)
+                .map(|limits| match method {
+                    // opt answers Ctrl-C, limited or not
+                    Method::Opt => Some(TeamOptimum {
+                        stop: Some(Arc::clone(&stop)),
+                        ..limits.unwrap_or_default()
+                    }),
+                    _ => limits,
+                })
+                .and_then(|exact| method.allocator_with(seed, exact))
+                .map_err(|e| crate::bad_input(format!("time_limit / gap: {e}")))?;
+            run(py, instance, exact.as_ref(), against, &stop)
         }
         (None, Some(model)) => match model.cast::<PyModel>() {
-            Ok(m) => run(py, instance, m.get().allocator.as_ref(), against),
+            Ok(m) => run(
+                py,
+                instance,
+                m.get().allocator.as_ref(),
+                against,
+                &AtomicBool::default(),
+            ),
             Err(_) => {
                 let path: PathBuf = model.extract()?;
                 run(
@@ -314,6 +383,7 @@ fn solve(
                     instance,
                     load_model(path, None, false, false)?.allocator.as_ref(),
                     against,
+                    &AtomicBool::default(),
                 )
             }
         },

@@ -113,6 +113,37 @@ def test_the_exact_optimum_reports_its_bound_and_gap() -> None:
     for bad in (0.0, -1.0, float("nan")):
         with pytest.raises(afg.InvalidInputError, match="finite and positive"):
             afg.solve(inst, method="opt", time_limit=bad)
+    with pytest.raises(afg.InvalidInputError, match="finite, non-negative"):
+        afg.solve(inst, method="opt", gap=-0.01)
+    with pytest.raises(afg.InvalidInputError, match="for the exact optimum"):
+        afg.solve(inst, method="nearest", gap=0.01)
+
+
+def _slow_skill_game() -> afg.Instance:
+    """A skill game whose proof takes the exact search far more than a minute."""
+    return afg.generate(60, 12, seed=1, min_team=(1, 4), skills=4, skill_share=0.3, requires=(0, 3))
+
+
+def test_a_gap_target_stops_the_exact_search_with_a_certified_gap() -> None:
+    inst = _slow_skill_game()
+    near = afg.solve(inst, method="opt", gap=0.1, reference=False)
+    assert 0.0 < near.stats["gap"] <= 0.1
+    assert near.stats["bound"] == pytest.approx(near.welfare * (1 + near.stats["gap"]))
+
+
+def test_ctrl_c_stops_the_exact_search_at_its_next_step() -> None:
+    import _thread
+    import threading
+    import time
+
+    inst = _slow_skill_game()
+    timer = threading.Timer(0.5, _thread.interrupt_main)
+    start = time.monotonic()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        afg.solve(inst, method="opt", reference=False)
+    timer.join()
+    assert time.monotonic() - start < 10.0
 
 
 def test_bad_team_input_and_refusals_are_clear_errors() -> None:

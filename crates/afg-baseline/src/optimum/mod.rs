@@ -41,7 +41,7 @@ use afg_game::{Assignment, Instance, RobotId, TaskId};
 
 pub use certificate::{Certificate, verify_optimal};
 pub use incremental::IncrementalOptimum;
-pub use teams::{TeamOptimum, TeamRelaxation, TeamSolution};
+pub use teams::{TeamOptimum, TeamProgress, TeamRelaxation, TeamSolution};
 
 use crate::{AllocError, AllocStats, Allocation, Allocator, timed};
 use transport::assignment_of;

@@ -67,6 +67,7 @@ pub(super) fn label(
     let inst = scarce_game(size, skills, seed)?;
     let best = TeamOptimum {
         time_limit: Some(limit),
+        ..TeamOptimum::default()
     }
     .solve(&inst)
     .map_err(|e| LearnError::InvalidConfig(e.to_string()))?;

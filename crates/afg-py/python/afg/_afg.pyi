@@ -123,6 +123,7 @@ def solve(
     model: Optional[Union[_Path, Model]] = None,
     seed: int = 0,
     time_limit: Optional[float] = None,
+    gap: Optional[float] = None,
     reference: bool = True,
     reference_time_limit: float = 10.0,
 ) -> Result: ...

@@ -25,14 +25,17 @@
 
 use std::cell::Cell;
 use std::collections::BinaryHeap;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use afg_game::{Assignment, Instance, TaskId};
 
+use super::Optimum;
 use crate::{AllocError, AllocStats, Allocation, Allocator, timed};
 
 mod node;
-use node::{Decision, Search};
+use node::{Decision, Node, Search};
 
 /// The exact optimum of a game with team thresholds (or the paper's game), with a
 /// proven upper bound: branch and bound over which tasks are staffed (see the module
@@ -51,12 +54,50 @@ use node::{Decision, Search};
 /// assert!((inst.welfare(&best.assignment) - best.welfare).abs() < 1e-9);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub struct TeamOptimum {
     /// Stop within this long with the best found and its gap (`None`: until proven):
     /// the search starts no step that its longest step so far says would end later
     /// (the root's relaxation is always solved, however long it takes).
     pub time_limit: Option<Duration>,
+    /// Stop as soon as the certified gap ([`TeamSolution::gap`]) is at most this
+    /// (`Some(0.001)`: within 0.1 % of the bound; `None`: until proven).
+    pub gap: Option<f64>,
+    /// Stop, with the best found, once this is set (from another thread: a Ctrl-C
+    /// handler, a user's cancel button). Checked between the search's steps.
+    pub stop: Option<Arc<AtomicBool>>,
+    /// Told the search's state after the dive and after every node (at most every
+    /// millisecond or so: rate-limit what it prints).
+    pub progress: Option<fn(&TeamProgress)>,
+}
+
+/// Where [`TeamOptimum`]'s search stands, as [`TeamOptimum::progress`] is told.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TeamProgress {
+    /// Seconds since the solve began.
+    pub seconds: f64,
+    /// The best welfare found so far.
+    pub welfare: f64,
+    /// The highest bound of the nodes still open (proven: no assignment is worth more).
+    pub bound: f64,
+    /// Nodes whose relaxation was solved.
+    pub nodes: u64,
+    /// Nodes still open.
+    pub open: usize,
+}
+
+impl TeamProgress {
+    /// The certified relative gap of the best found ([`crate::certified_gap`]).
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::TeamProgress;
+    /// let p = TeamProgress { seconds: 1.0, welfare: 100.0, bound: 101.0, nodes: 7, open: 3 };
+    /// assert!((p.gap() - 0.01).abs() < 1e-12);
+    /// ```
+    pub fn gap(&self) -> f64 {
+        crate::certified_gap(self.bound, self.welfare)
+    }
 }
 
 /// What [`TeamOptimum::solve`] found.
@@ -104,13 +145,68 @@ impl TeamOptimum {
     /// # Ok::<(), afg_baseline::AllocError>(())
     /// ```
     pub fn with_time_limit(seconds: f64) -> Result<Self, AllocError> {
-        if !(seconds.is_finite() && seconds > 0.0) {
+        TeamOptimum::default().stopping(Some(seconds), None)
+    }
+
+    /// The exact solver a user's `time_limit` and `gap` ask for (see
+    /// [`TeamOptimum::stopping`]), `None` where neither is given: what
+    /// [`Method::allocator_with`](crate::Method::allocator_with) takes.
+    ///
+    /// # Errors
+    /// As [`TeamOptimum::stopping`].
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::TeamOptimum;
+    /// assert!(TeamOptimum::limits(None, None)?.is_none());
+    /// assert_eq!(TeamOptimum::limits(None, Some(0.01))?.unwrap().gap, Some(0.01));
+    /// assert!(TeamOptimum::limits(Some(f64::NAN), None).is_err());
+    /// # Ok::<(), afg_baseline::AllocError>(())
+    /// ```
+    pub fn limits(time_limit: Option<f64>, gap: Option<f64>) -> Result<Option<Self>, AllocError> {
+        if time_limit.is_none() && gap.is_none() {
+            return Ok(None);
+        }
+        TeamOptimum::default().stopping(time_limit, gap).map(Some)
+    }
+
+    /// This solver with a time limit in seconds (see [`TeamOptimum::time_limit`]) and
+    /// a gap target (see [`TeamOptimum::gap`]), each `None` for none: the one place
+    /// both are checked.
+    ///
+    /// # Errors
+    /// [`AllocError::InvalidParameter`] where the time limit is not finite and positive
+    /// or the gap is not finite and non-negative.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::TeamOptimum;
+    /// let exact = TeamOptimum::default().stopping(None, Some(0.001))?;
+    /// assert_eq!((exact.time_limit, exact.gap), (None, Some(0.001)));
+    /// assert!(TeamOptimum::default().stopping(None, Some(-0.1)).is_err());
+    /// assert!(TeamOptimum::default().stopping(Some(0.0), None).is_err());
+    /// # Ok::<(), afg_baseline::AllocError>(())
+    /// ```
+    pub fn stopping(self, time_limit: Option<f64>, gap: Option<f64>) -> Result<Self, AllocError> {
+        if let Some(seconds) = time_limit
+            && !(seconds.is_finite() && seconds > 0.0)
+        {
             return Err(AllocError::InvalidParameter(format!(
                 "the time limit must be a finite and positive number of seconds (got {seconds})"
             )));
         }
+        if let Some(gap) = gap
+            && !(gap.is_finite() && gap >= 0.0)
+        {
+            return Err(AllocError::InvalidParameter(format!(
+                "the gap must be a finite, non-negative fraction, e.g. 0.001 for 0.1 % (got {gap})"
+            )));
+        }
         Ok(TeamOptimum {
-            time_limit: Some(Duration::try_from_secs_f64(seconds).unwrap_or(Duration::MAX)),
+            time_limit: time_limit
+                .map(|seconds| Duration::try_from_secs_f64(seconds).unwrap_or(Duration::MAX)),
+            gap,
+            ..self
         })
     }
 }
@@ -122,7 +218,12 @@ impl TeamOptimum {
     /// None on a valid instance (the `Result` is the [`Allocator`]'s).
     pub fn solve(&self, instance: &Instance) -> Result<TeamSolution, AllocError> {
         let deadline = Deadline::new(self.time_limit);
-        let out_of_time = || deadline.near();
+        let stopped = || {
+            self.stop
+                .as_ref()
+                .is_some_and(|s| s.load(Ordering::Relaxed))
+        };
+        let out_of_time = || deadline.near() || stopped();
         let mut search = Search::new(instance);
         let Some(mut root) = search.node(search.root_decisions(), Vec::new(), None) else {
             unreachable!("the root is feasible: the instance holds every robot")
@@ -137,12 +238,28 @@ impl TeamOptimum {
             root.bound = root.bound.min(search.price_skills(&root, &out_of_time));
         }
         let mut open = BinaryHeap::from([root]);
+        let bound =
+            |open: &BinaryHeap<Node>, best: f64| open.peek().map_or(best, |n| n.bound.max(best));
         while let Some(node) = open.peek() {
             if search.closes(node.bound) {
                 open.clear();
                 break;
             }
-            if out_of_time() {
+            let (welfare, bound) = (search.best_welfare(), bound(&open, search.best_welfare()));
+            if let Some(report) = self.progress {
+                report(&TeamProgress {
+                    seconds: deadline.start.elapsed().as_secs_f64(),
+                    welfare,
+                    bound,
+                    nodes: search.nodes(),
+                    open: open.len(),
+                });
+            }
+            if out_of_time()
+                || self
+                    .gap
+                    .is_some_and(|gap| crate::certified_gap(bound, welfare) <= gap)
+            {
                 break;
             }
             let node = open.pop().expect("peeked");
@@ -158,12 +275,9 @@ impl TeamOptimum {
             }
         }
         let (best, best_welfare, nodes) = search.into_best();
-        let bound = open
-            .peek()
-            .map_or(best_welfare, |n| n.bound.max(best_welfare));
         Ok(TeamSolution {
             proven: open.is_empty(),
-            bound,
+            bound: bound(&open, best_welfare),
             welfare: best_welfare,
             assignment: best,
             nodes,
@@ -319,14 +433,18 @@ impl TeamOptimum {
     }
 }
 
-/// `opt` with a time limit: the best assignment found, its bound in
-/// [`AllocStats::bound`] and the nodes solved in [`AllocStats::iterations`].
+/// `opt` with its limits: on a team game the best assignment found, its bound in
+/// [`AllocStats::bound`] and the nodes solved in [`AllocStats::iterations`]; the
+/// paper's game is [`Optimum`]'s (exact in polynomial time, no limit needed).
 impl Allocator for TeamOptimum {
     fn name(&self) -> String {
         "opt".into()
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
+        if !instance.has_teams() {
+            return Optimum.allocate(instance);
+        }
         let (solution, wall_time) = timed(|| self.solve(instance));
         let solution = solution?;
         Ok(Allocation {

@@ -123,6 +123,16 @@ impl<'a> Search<'a> {
         (self.best, self.best_welfare, self.nodes)
     }
 
+    /// The best welfare found so far.
+    pub(super) fn best_welfare(&self) -> f64 {
+        self.best_welfare
+    }
+
+    /// Nodes whose relaxation was solved so far.
+    pub(super) fn nodes(&self) -> u64 {
+        self.nodes
+    }
+
     /// The root's decisions: the tasks no team can staff are unstaffed.
     pub(super) fn root_decisions(&self) -> Vec<Decision> {
         let mut decisions = vec![Decision::Open; self.instance.num_tasks()];
