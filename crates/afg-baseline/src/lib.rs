@@ -36,8 +36,8 @@ use thiserror::Error;
 
 pub use dynamics::{CentralisedDa, DecentralisedDa, DecentralisedRun};
 pub use optimum::{
-    Certificate, IncrementalOptimum, Optimum, TeamOptimum, TeamProgress, TeamRelaxation,
-    TeamSolution, verify_optimal,
+    BYTES_PER_PAIR, Certificate, IncrementalOptimum, Optimum, TeamOptimum, TeamProgress,
+    TeamRelaxation, TeamSolution, available_memory, exact_memory, verify_optimal,
 };
 pub use simple::{Blind, Greedy, Nearest, RandomAllocator};
 pub use swarm::{
@@ -220,6 +220,23 @@ pub enum AllocError {
         welfare: f64,
         /// The prices' upper bound on every assignment's welfare.
         upper_bound: f64,
+    },
+    /// The exact solver would need more memory than this machine has available
+    /// ([`exact_memory`], [`available_memory`]): refused before any is taken.
+    #[error(
+        "a {robots} × {tasks} game needs about {:.1} GB for the exact solver ({BYTES_PER_PAIR} bytes per robot–task pair), and this machine has {:.1} GB available: solve fewer robots or tasks at once, or measure a method without the optimum (--no-reference, reference=False)",
+        *needed as f64 / 1e9,
+        *available as f64 / 1e9
+    )]
+    TooLarge {
+        /// Robots N.
+        robots: usize,
+        /// Tasks M.
+        tasks: usize,
+        /// Bytes the solve would need.
+        needed: u64,
+        /// Bytes available.
+        available: u64,
     },
     /// The dynamics did not settle within the safety bound of rounds.
     #[error("no stable partition after {rounds} rounds")]

@@ -452,3 +452,26 @@ fn grape_leaves_every_robot_satisfied_on_threshold_games() {
         }
     }
 }
+
+#[test]
+fn a_game_too_large_for_memory_is_refused_in_one_line_before_any_is_taken() {
+    // 10¹¹ robot–task pairs: terabytes, more than any machine running this has.
+    let mut cfg = afg_game::GeneratorConfig::paper(1_000_000, 100_000, 1);
+    let paper = cfg.generate().unwrap();
+    cfg.min_team = Some(afg_game::CountRange { min: 2, max: 4 });
+    let teams = cfg.generate().unwrap();
+    let refusals = [
+        Optimum.allocate(&paper).unwrap_err(),
+        TeamOptimum::default().solve(&teams).unwrap_err(),
+    ];
+    for err in refusals {
+        let text = err.to_string();
+        assert!(matches!(err, AllocError::TooLarge { .. }), "{text}");
+        assert!(
+            text.contains("a 1000000 × 100000 game needs about 5600.1 GB"),
+            "{text}"
+        );
+        assert!(!text.contains('\n'), "{text}");
+    }
+    assert!(afg_baseline::available_memory().is_some_and(|bytes| bytes > 1 << 20));
+}

@@ -121,14 +121,16 @@ pub(crate) fn pair<T: Copy>(flag: &str, values: Option<&[T]>) -> Result<Option<(
 pub fn run(args: GenArgs) -> Result<()> {
     let instances = generate(&args)?;
     crate::warn_unstaffable(&instances);
-    write_atomic(&args.out, dataset_to_jsonl(&instances).as_bytes())?;
+    let text = dataset_to_jsonl(&instances);
+    write_atomic(&args.out, text.as_bytes())?;
     println!(
-        "wrote {} ({} instance{}, N = {}, M = {})",
+        "wrote {} ({} instance{}, N = {}, M = {}, {:.1} MB)",
         args.out.display(),
         instances.len(),
         if instances.len() == 1 { "" } else { "s" },
         args.robots,
-        args.tasks
+        args.tasks,
+        text.len() as f64 / 1e6
     );
     Ok(())
 }

@@ -230,6 +230,10 @@ fn afg_train_staffing_refuses_skill_knobs_without_skills() {
             &["--skills", "2", "--requires", "3,1"][..],
             "requires range 3..=1 is empty",
         ),
+        (
+            &["--skills", "1000000"][..],
+            "at most 64 skills (got 1000000)",
+        ),
     ] {
         let out = afg(&[&["train-staffing", "--out", out_dir][..], flags].concat());
         assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));

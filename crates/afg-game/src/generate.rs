@@ -51,6 +51,9 @@ impl GeneratorKnobs {
     pub const SKILL_SHARE: f64 = 0.5;
     /// The default range of a task's requirement of a skill.
     pub const REQUIRES: (usize, usize) = (1, 2);
+    /// The most skills the generator draws: every robot and task carries one amount
+    /// per skill, so S multiplies the file and the memory of every game.
+    pub const MAX_SKILLS: usize = 64;
 }
 
 impl GeneratorKnobs {
@@ -99,8 +102,9 @@ impl GeneratorKnobs {
     /// The skills these knobs draw (`None`: no skill rule), their defaults filled in.
     ///
     /// # Errors
-    /// [`GameError::InvalidGenerator`] for a share outside [0, 1], an empty requirement
-    /// range, or a share or requirements without skills.
+    /// [`GameError::InvalidGenerator`] for more than [`GeneratorKnobs::MAX_SKILLS`]
+    /// skills, a share outside [0, 1], an empty requirement range, or a share or
+    /// requirements without skills.
     ///
     /// # Examples
     /// ```
@@ -110,10 +114,16 @@ impl GeneratorKnobs {
     /// assert_eq!((draw.count, draw.share), (2, GeneratorKnobs::SKILL_SHARE));
     /// let alone = GeneratorKnobs { skill_share: Some(0.2), ..GeneratorKnobs::default() };
     /// assert!(alone.skill_draw().is_err());
+    /// let many = GeneratorKnobs { skills: Some(1_000_000), ..GeneratorKnobs::default() };
+    /// assert!(many.skill_draw().unwrap_err().to_string().contains("at most 64 skills"));
     /// # Ok::<(), afg_game::GameError>(())
     /// ```
     pub fn skill_draw(&self) -> Result<Option<SkillDraw>, GameError> {
         match self.skills {
+            Some(count) if count > Self::MAX_SKILLS => Err(GameError::InvalidGenerator(format!(
+                "at most {} skills (got {count}): every robot and task carries one amount per skill, {count} in each of N + M rows",
+                Self::MAX_SKILLS
+            ))),
             Some(count) if count > 0 => {
                 let share = self.skill_share.unwrap_or(Self::SKILL_SHARE);
                 if !(0.0..=1.0).contains(&share) {

@@ -320,3 +320,12 @@ def test_arguments_are_read_as_python_writes_them_and_refused_as_afg_errors():
     ]:
         with pytest.raises(afg.InvalidInputError, match=says):
             call()
+
+
+def test_a_game_too_large_for_memory_is_refused_not_a_crash() -> None:
+    # 10¹¹ robot–task pairs: terabytes for the exact solver, refused before it starts.
+    inst = afg.generate(1_000_000, 100_000, seed=1, min_team=(2, 4))
+    with pytest.raises(afg.InvalidInputError, match=r"1000000 × 100000 game needs about [0-9.]+ GB"):
+        afg.solve(inst, method="opt")
+    with pytest.raises(afg.InvalidInputError, match="at most 64 skills"):
+        afg.generate(10, 2, skills=1_000_000)

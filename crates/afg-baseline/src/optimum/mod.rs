@@ -33,6 +33,7 @@
 mod augmenting;
 mod certificate;
 mod incremental;
+mod memory;
 mod movers;
 mod teams;
 mod transport;
@@ -41,6 +42,8 @@ use afg_game::{Assignment, Instance, RobotId, TaskId};
 
 pub use certificate::{Certificate, verify_optimal};
 pub use incremental::IncrementalOptimum;
+pub(crate) use memory::check_memory;
+pub use memory::{BYTES_PER_PAIR, available_memory, exact_memory};
 pub use teams::{TeamOptimum, TeamProgress, TeamRelaxation, TeamSolution};
 
 use crate::{AllocError, AllocStats, Allocation, Allocator, timed};
@@ -310,6 +313,7 @@ impl Allocator for Optimum {
         if instance.has_teams() {
             return TeamOptimum::default().allocate(instance);
         }
+        check_memory(instance)?;
         let (solution, wall_time) = timed(|| transport::solve(instance));
         Ok(Allocation {
             assignment: assignment_of(instance, &solution.task_of),

@@ -215,8 +215,10 @@ impl TeamOptimum {
     /// Solves `instance`: any team game, or the paper's.
     ///
     /// # Errors
-    /// None on a valid instance (the `Result` is the [`Allocator`]'s).
+    /// [`AllocError::TooLarge`] where the solve would need more memory than this
+    /// machine has available ([`crate::exact_memory`]).
     pub fn solve(&self, instance: &Instance) -> Result<TeamSolution, AllocError> {
+        super::check_memory(instance)?;
         let deadline = Deadline::new(self.time_limit);
         let stopped = || {
             self.stop
