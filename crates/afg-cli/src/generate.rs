@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use afg_game::fs::write_atomic;
 use afg_game::io::dataset_to_jsonl;
-use afg_game::{GeneratorConfig, GeneratorKnobs, Instance};
+use afg_game::{Family, GeneratorConfig, GeneratorKnobs, Instance};
 use anyhow::{Result, bail};
 use clap::Args;
 
@@ -42,6 +42,12 @@ pub struct GenArgs {
     allow_void: bool,
     #[command(flatten)]
     teams: TeamArgs,
+    /// Start from a named family of team games instead of the paper's game (the knobs
+    /// given beside it override its values): scarce, skills (the committed ones),
+    /// clustered, heavy-tail, constant, team-rewards, sparse-skills, many-skills,
+    /// void-capacity, mixed. docs/families.md says what each draws.
+    #[arg(long, value_name = "NAME", value_parser = str::parse::<Family>)]
+    family: Option<Family>,
     /// Output JSON Lines file (one instance per line, generator parameters inside).
     #[arg(long)]
     out: PathBuf,
@@ -62,6 +68,7 @@ pub fn generate(args: &GenArgs) -> Result<Vec<Instance>> {
         skills: args.teams.skills,
         skill_share: args.teams.skill_share,
         requires: args.teams.requires()?,
+        family: args.family,
     };
     (0..args.count as u64)
         .map(|i| {

@@ -3,7 +3,9 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::{CountRange, GameError, GeneratorConfig, Instance, Point, SkillDraw, Task};
+use crate::{
+    CountRange, Family, GameError, GeneratorConfig, Instance, Point, Shape, SkillDraw, Task,
+};
 
 /// The generator's knobs as a user gives them (`afg gen`, `afg.generate`, the gym
 /// environments): each `None` keeps the paper's default of [`GeneratorConfig::paper`].
@@ -44,6 +46,9 @@ pub struct GeneratorKnobs {
     pub skill_share: Option<f64>,
     /// Each task requires each skill in an amount uniform in `[lo, hi]` (default 1, 2).
     pub requires: Option<(usize, usize)>,
+    /// A named family to start from instead of the paper's game ([`Family::config`]);
+    /// the knobs given beside it override its values.
+    pub family: Option<Family>,
 }
 
 impl GeneratorKnobs {
@@ -68,8 +73,11 @@ impl GeneratorKnobs {
         tasks: usize,
         seed: u64,
     ) -> Result<GeneratorConfig, GameError> {
-        let mut cfg = GeneratorConfig::paper(robots, tasks, seed);
-        cfg.allow_void = self.allow_void;
+        let mut cfg = match self.family {
+            Some(family) => family.config(robots, tasks, seed)?,
+            None => GeneratorConfig::paper(robots, tasks, seed),
+        };
+        cfg.allow_void |= self.allow_void;
         if let Some(eps) = self.eps {
             cfg.eps = eps;
         }
@@ -95,7 +103,9 @@ impl GeneratorKnobs {
             }
             cfg.min_team = Some(CountRange { min, max }.check("threshold (min_team)")?);
         }
-        cfg.skills = self.skill_draw()?;
+        if let Some(draw) = self.skill_draw()? {
+            cfg.skills = Some(draw);
+        }
         Ok(cfg)
     }
 
@@ -169,6 +179,7 @@ impl GeneratorConfig {
             min_team: None,
             skills: None,
             allow_void: false,
+            shape: Shape::default(),
         }
     }
 
@@ -215,12 +226,13 @@ impl GeneratorConfig {
                 )));
             }
         }
+        self.shape.check(self.eps)?;
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
-        let point = |rng: &mut ChaCha8Rng| Point::new(rng.random::<f64>(), rng.random::<f64>());
-        let robots: Vec<Point> = (0..self.robots).map(|_| point(&mut rng)).collect();
-        let tasks = (0..self.tasks)
+        let positions = self.shape.positions(&mut rng);
+        let robots: Vec<Point> = (0..self.robots).map(|_| positions.draw(&mut rng)).collect();
+        let mut tasks: Vec<Task> = (0..self.tasks)
             .map(|_| {
-                let position = point(&mut rng);
+                let position = positions.draw(&mut rng);
                 let reward =
                     self.reward_min + (self.reward_max - self.reward_min) * rng.random::<f64>();
                 let capacity = self.capacity.map(|c| rng.random_range(c.min..=c.max));
@@ -232,26 +244,43 @@ impl GeneratorConfig {
                 }
             })
             .collect();
+        let mut teams = self.draw_teams(&mut rng);
+        self.draw_shape(&mut rng, &mut tasks, teams.as_mut());
         let instance = if self.allow_void {
             Instance::with_void(robots, tasks, self.beta)?
         } else {
             Instance::new(robots, tasks, self.beta)?
         };
-        let instance = self.draw_teams(&mut rng, instance)?;
+        let instance = match teams {
+            Some(Teams {
+                min_team,
+                skills,
+                requires,
+            }) => instance.with_teams(min_team, &skills, &requires)?,
+            None => instance,
+        };
         Ok(instance.with_generator(self.clone()))
     }
 }
 
+/// The team rules of one draw: each task's threshold (empty: all 1), each robot's
+/// skills and each task's requirements (empty: none).
+struct Teams {
+    min_team: Vec<usize>,
+    skills: Vec<Vec<u32>>,
+    requires: Vec<Vec<u32>>,
+}
+
 impl GeneratorConfig {
     /// Draws the thresholds and skills (after everything else: the paper's game keeps
-    /// its draws) and puts them on `instance`.
-    fn draw_teams(&self, rng: &mut ChaCha8Rng, instance: Instance) -> Result<Instance, GameError> {
+    /// its draws); `None` in the paper's game.
+    fn draw_teams(&self, rng: &mut ChaCha8Rng) -> Option<Teams> {
         if self.min_team.is_none() && self.skills.is_none() {
-            return Ok(instance);
+            return None;
         }
         let min_team = match self.min_team {
-            Some(c) => (0..self.tasks)
-                .map(|_| rng.random_range(c.min..=c.max))
+            Some(range) => (0..self.tasks)
+                .map(|_| self.shape.threshold(rng, range))
                 .collect(),
             None => Vec::new(),
         };
@@ -276,7 +305,37 @@ impl GeneratorConfig {
             }
             None => (Vec::new(), Vec::new()),
         };
-        instance.with_teams(min_team, &skills, &requires)
+        Some(Teams {
+            min_team,
+            skills,
+            requires,
+        })
+    }
+
+    /// The shape's own draws, last: which tasks keep their skill requirements, then
+    /// each task's ε; and the rewards scaled by the thresholds.
+    fn draw_shape(&self, rng: &mut ChaCha8Rng, tasks: &mut [Task], teams: Option<&mut Teams>) {
+        let shape = &self.shape;
+        if let Some(teams) = teams {
+            if let Some(share) = shape.skill_tasks {
+                for requires in &mut teams.requires {
+                    if !rng.random_bool(share) {
+                        requires.fill(0);
+                    }
+                }
+            }
+            if let (true, Some(range)) = (shape.reward_per_member, self.min_team) {
+                let mean = (range.min + range.max) as f64 / 2.0;
+                for (task, &k) in tasks.iter_mut().zip(&teams.min_team) {
+                    task.reward *= k as f64 / mean;
+                }
+            }
+        }
+        if let Some(lo) = shape.eps_min {
+            for task in tasks.iter_mut() {
+                task.eps = rng.random_range(lo..=self.eps);
+            }
+        }
     }
 }
 

@@ -4,7 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::GameError;
+use crate::{GameError, Shape};
 
 /// Inclusive range of whole numbers from which each task's capacity (or threshold) is
 /// drawn uniformly.
@@ -94,4 +94,8 @@ pub struct GeneratorConfig {
     /// (false) in the paper's game, so the committed datasets read as before.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub allow_void: bool,
+    /// How the draw departs from the paper's uniform one (clusters, heavy tails, ε per
+    /// task, …) and the named family it is; absent where it does not.
+    #[serde(default, skip_serializing_if = "Shape::is_plain")]
+    pub shape: Shape,
 }

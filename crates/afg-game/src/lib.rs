@@ -27,6 +27,7 @@
 
 mod assignment;
 mod error;
+mod family;
 pub mod fs;
 mod generate;
 mod generator_config;
@@ -40,6 +41,7 @@ mod teams;
 
 pub use assignment::Assignment;
 pub use error::GameError;
+pub use family::{Clusters, Family, Shape};
 pub use generate::{GameSize, GeneratorKnobs};
 pub use generator_config::{CountRange, GeneratorConfig, SkillDraw};
 pub use ids::{RobotId, TaskId};

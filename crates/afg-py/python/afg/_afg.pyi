@@ -107,14 +107,16 @@ def generate(
     seed: int = 0,
     capacity_slack: Optional[float] = None,
     eps: Optional[float] = None,
-    beta: float = 1.0,
+    beta: Optional[float] = None,
     rewards: Optional[Tuple[float, float]] = None,
     allow_void: bool = False,
     min_team: Optional[Tuple[int, int]] = None,
     skills: Optional[int] = None,
     skill_share: Optional[float] = None,
     requires: Optional[Tuple[int, int]] = None,
+    family: Optional[str] = None,
 ) -> Instance: ...
+def families() -> List[str]: ...
 def read_jsonl(path: _Path) -> List[Instance]: ...
 def write_jsonl(path: _Path, instances: Sequence[Instance]) -> None: ...
 def solve(

@@ -186,6 +186,7 @@ impl VecEnvCore {
                 skills,
                 skill_share,
                 requires,
+                family: None,
             },
         };
         let first = Arc::new(draw.instance(0).map_err(crate::crate_error)?);
