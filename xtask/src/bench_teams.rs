@@ -7,16 +7,18 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
-use afg_baseline::{AllocError, Method, TeamOptimum};
+use afg_baseline::{AllocError, Allocator, Method, TeamOptimum};
 use afg_game::fs::write_atomic;
 use afg_game::io::dataset_to_jsonl;
-use afg_game::{Assignment, GeneratorKnobs, Instance, TaskId};
+use afg_game::{Assignment, Family, GeneratorKnobs, Instance, TaskId};
 use anyhow::{Context, Result, bail, ensure};
 use clap::Args;
 use serde::{Deserialize, Serialize};
 
 use crate::bench::runs::{check_python, measure_rows, scratch_dir};
 use crate::bench_opt::Case;
+
+mod families;
 
 /// The options of `cargo xtask bench-teams`.
 #[derive(Args)]
@@ -33,6 +35,12 @@ pub struct BenchTeamsArgs {
     seed: u64,
     #[command(flatten)]
     skills: SkillFlags,
+    /// Named families of team games instead of the scarce ones (`afg gen --family`),
+    /// e.g. `--families scarce,clustered,heavy-tail` or `--families all`: a table per
+    /// family and size of the time to proof beside HiGHS and CP-SAT, and every
+    /// allocator's share, worst instance beside the mean.
+    #[arg(long, value_delimiter = ',', value_parser = families::parse, conflicts_with = "skills")]
+    families: Vec<Vec<Family>>,
     /// afg's time limit per instance, seconds.
     #[arg(long, default_value_t = 10.0)]
     time_limit: f64,
@@ -75,6 +83,9 @@ pub(crate) const ALLOCATORS: [Method; 6] = [
 /// One instance's measurements.
 #[derive(Serialize)]
 struct Row {
+    /// The named family it was drawn from (`None`: the scarce game of the flags).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    family: Option<Family>,
     robots: usize,
     tasks: usize,
     seed: u64,
@@ -120,22 +131,36 @@ pub fn run(args: BenchTeamsArgs) -> Result<()> {
         check_python(python, &["ortools", "highspy", "numpy"])?;
     }
     let seeds = args.seed..args.seed + args.instances as u64;
-    let runs: Vec<(Case, u64)> = args
-        .cases
+    let families: Vec<Option<Family>> = match args.families.concat() {
+        named if named.is_empty() => vec![None],
+        named => named.into_iter().map(Some).collect(),
+    };
+    let runs: Vec<(Option<Family>, Case, u64)> = families
         .iter()
-        .flat_map(|&case| seeds.clone().map(move |seed| (case, seed)))
+        .flat_map(|&family| {
+            let seeds = seeds.clone();
+            args.cases
+                .iter()
+                .flat_map(move |&case| seeds.clone().map(move |seed| (family, case, seed)))
+        })
         .collect();
-    let describe =
-        |(c, seed): &(Case, u64)| format!("N = {} M = {} seed {seed}", c.robots, c.tasks);
+    let describe = |(family, c, seed): &(Option<Family>, Case, u64)| {
+        let family = family.map_or(String::new(), |f| format!("{f} "));
+        format!("{family}N = {} M = {} seed {seed}", c.robots, c.tasks)
+    };
     let rows = measure_rows(
         "bench-teams",
         &runs,
         args.json,
         describe,
-        |&(case, seed)| measure(case, seed, &args, &dir),
+        |&(family, case, seed)| measure(family, case, seed, &args, &dir),
     )?;
     if !args.json {
-        print!("{}", markdown(&rows, &args));
+        if args.families.is_empty() {
+            print!("{}", markdown(&rows, &args));
+        } else {
+            print!("{}", families::markdown(&rows, &args));
+        }
     }
     Ok(())
 }
@@ -194,10 +219,20 @@ pub fn scarce(case: Case, seed: u64, skills: Option<&GeneratorKnobs>) -> Result<
     Ok(knobs.config(case.robots, case.tasks, seed)?.generate()?)
 }
 
-fn measure(case: Case, seed: u64, args: &BenchTeamsArgs, dir: &Path) -> Result<Row> {
-    let inst = scarce(case, seed, args.skills.knobs()?.as_ref())?;
+fn measure(
+    family: Option<Family>,
+    case: Case,
+    seed: u64,
+    args: &BenchTeamsArgs,
+    dir: &Path,
+) -> Result<Row> {
+    let inst = match family {
+        Some(family) => family.config(case.robots, case.tasks, seed)?.generate()?,
+        None => scarce(case, seed, args.skills.knobs()?.as_ref())?,
+    };
+    let name = family.map_or("teams".to_owned(), |f| f.to_string());
     let file = dir.join(format!(
-        "teams_n{}_m{}_seed{seed}.jsonl",
+        "{name}_n{}_m{}_seed{seed}.jsonl",
         case.robots, case.tasks
     ));
     write_atomic(
@@ -229,21 +264,28 @@ fn measure(case: Case, seed: u64, args: &BenchTeamsArgs, dir: &Path) -> Result<R
             }
         }
     }
-    let allocators = ALLOCATORS
+    let mut players: Vec<(String, Box<dyn Allocator>)> = ALLOCATORS
+        .iter()
+        .map(|&m| (m.label().to_owned(), m.allocator(seed)))
+        .collect();
+    if family.is_some() {
+        players.extend(families::staffing_models()?);
+    }
+    let allocators = players
         .iter()
         .filter(|_| case.robots <= args.allocators_up_to)
-        .map(|&method| {
+        .map(|(label, allocator)| {
             let start = Instant::now();
-            let welfare = match method.allocator(seed).allocate(&inst) {
+            let welfare = match allocator.allocate(&inst) {
                 Ok(out) => Some(inst.welfare(&out.assignment)),
-                Err(AllocError::NotConverged { .. } | AllocError::TeamsNotSupported { .. }) => None,
+                Err(
+                    AllocError::NotConverged { .. }
+                    | AllocError::TeamsNotSupported { .. }
+                    | AllocError::VoidNotSupported { .. },
+                ) => None,
                 Err(e) => return Err(e.into()),
             };
-            Ok((
-                method.label().to_owned(),
-                welfare,
-                start.elapsed().as_secs_f64(),
-            ))
+            Ok((label.clone(), welfare, start.elapsed().as_secs_f64()))
         })
         .collect::<Result<Vec<_>>>()?;
     let best_bound = peers
@@ -261,6 +303,7 @@ fn measure(case: Case, seed: u64, args: &BenchTeamsArgs, dir: &Path) -> Result<R
         case.tasks
     );
     Ok(Row {
+        family,
         robots: case.robots,
         tasks: case.tasks,
         seed,

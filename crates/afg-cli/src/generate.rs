@@ -209,6 +209,28 @@ mod tests {
     }
 
     #[test]
+    fn a_family_is_drawn_by_name_and_the_knobs_beside_it_override_it() {
+        let family = |flags: &str| {
+            generate(&gen_args(&format!(
+                "--robots 60 --tasks 6 --seed 2 {flags} --out x.jsonl"
+            )))
+        };
+        let drawn = &family("--family void-capacity").unwrap()[0];
+        let by_library = afg_game::Family::VoidCapacity
+            .config(60, 6, 2)
+            .unwrap()
+            .generate()
+            .unwrap();
+        assert_eq!(drawn, &by_library);
+        let lighter = &family("--family void-capacity --beta 0.5").unwrap()[0];
+        assert!(lighter.allows_void() && lighter.beta() == 0.5);
+        let Err(err) = crate::parse("gen --robots 6 --family uniformish --out x.jsonl") else {
+            panic!("an unknown family was read")
+        };
+        assert!(err.to_string().contains("one of scarce, skills"), "{err}");
+    }
+
+    #[test]
     fn bad_knobs_are_clear_errors() {
         for (flags, needle) in [
             ("--robots 10 --eps 1.2 --out x.jsonl", "eps"),

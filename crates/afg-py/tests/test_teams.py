@@ -329,3 +329,17 @@ def test_a_game_too_large_for_memory_is_refused_not_a_crash() -> None:
         afg.solve(inst, method="opt")
     with pytest.raises(afg.InvalidInputError, match="at most 64 skills"):
         afg.generate(10, 2, skills=1_000_000)
+
+
+def test_named_families_are_drawn_by_name_and_seeded() -> None:
+    names = afg.families()
+    assert names[:2] == ["scarce", "skills"] and "mixed" in names and len(names) == 10
+    for name in names:
+        inst = afg.generate(60, 6, seed=2, family=name)
+        assert inst.to_json() == afg.generate(60, 6, seed=2, family=name).to_json()
+        assert f'"family":"{name}"' in inst.to_json()
+    void = afg.generate(60, 6, seed=2, family="void-capacity")
+    assert void.allow_void and void.beta == 2.0
+    assert afg.generate(60, 6, seed=2, family="void-capacity", beta=0.5).beta == 0.5
+    with pytest.raises(afg.InvalidInputError, match="one of scarce, skills"):
+        afg.generate(60, 6, family="uniformish")
