@@ -264,30 +264,7 @@ fn measure(
             }
         }
     }
-    let mut players: Vec<(String, Box<dyn Allocator>)> = ALLOCATORS
-        .iter()
-        .map(|&m| (m.label().to_owned(), m.allocator(seed)))
-        .collect();
-    if family.is_some() {
-        players.extend(families::staffing_models()?);
-    }
-    let allocators = players
-        .iter()
-        .filter(|_| case.robots <= args.allocators_up_to)
-        .map(|(label, allocator)| {
-            let start = Instant::now();
-            let welfare = match allocator.allocate(&inst) {
-                Ok(out) => Some(inst.welfare(&out.assignment)),
-                Err(
-                    AllocError::NotConverged { .. }
-                    | AllocError::TeamsNotSupported { .. }
-                    | AllocError::VoidNotSupported { .. },
-                ) => None,
-                Err(e) => return Err(e.into()),
-            };
-            Ok((label.clone(), welfare, start.elapsed().as_secs_f64()))
-        })
-        .collect::<Result<Vec<_>>>()?;
+    let allocators = play(family.is_some(), case, seed, args, &inst)?;
     let best_bound = peers
         .iter()
         .filter_map(|p| p.bound)
@@ -313,6 +290,41 @@ fn measure(
         best_bound,
         best_welfare,
     })
+}
+
+/// Each allocator's welfare (`None`: refused or unsettled) and seconds on `inst`, the
+/// committed staffing models too where `staffing`; none above `--allocators-up-to`.
+fn play(
+    staffing: bool,
+    case: Case,
+    seed: u64,
+    args: &BenchTeamsArgs,
+    inst: &Instance,
+) -> Result<Vec<(String, Option<f64>, f64)>> {
+    let mut players: Vec<(String, Box<dyn Allocator>)> = ALLOCATORS
+        .iter()
+        .map(|&m| (m.label().to_owned(), m.allocator(seed)))
+        .collect();
+    if staffing {
+        players.extend(families::staffing_models()?);
+    }
+    players
+        .iter()
+        .filter(|_| case.robots <= args.allocators_up_to)
+        .map(|(label, allocator)| {
+            let start = Instant::now();
+            let welfare = match allocator.allocate(inst) {
+                Ok(out) => Some(inst.welfare(&out.assignment)),
+                Err(
+                    AllocError::NotConverged { .. }
+                    | AllocError::TeamsNotSupported { .. }
+                    | AllocError::VoidNotSupported { .. },
+                ) => None,
+                Err(e) => return Err(e.into()),
+            };
+            Ok((label.clone(), welfare, start.elapsed().as_secs_f64()))
+        })
+        .collect()
 }
 
 /// Runs `scripts/teams_milp.py` with `solver` at `budget` seconds on `file`.
