@@ -34,7 +34,6 @@ use afg_game::{Assignment, Instance, TaskId};
 use super::Optimum;
 use crate::{AllocError, AllocStats, Allocation, Allocator, timed};
 
-mod improve;
 mod node;
 use node::{Decision, Node, Search};
 
@@ -227,7 +226,7 @@ impl TeamOptimum {
                 .is_some_and(|s| s.load(Ordering::Relaxed))
         };
         let out_of_time = || deadline.near() || stopped();
-        let mut search = Search::polishing(instance);
+        let mut search = Search::new(instance);
         let Some(mut root) = search.node(search.root_decisions(), Vec::new(), None) else {
             unreachable!("the root is feasible: the instance holds every robot")
         };

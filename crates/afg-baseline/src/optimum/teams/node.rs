@@ -92,20 +92,9 @@ pub(super) struct Search<'a> {
     best: Assignment,
     best_welfare: f64,
     nodes: u64,
-    /// Whether a new best is first improved by the local search ([`super::improve`]):
-    /// the exact search's, not a placement's, whose staffing is the caller's.
-    polish: bool,
 }
 
 impl<'a> Search<'a> {
-    /// The search of the exact solver: its new bests polished by the local search.
-    pub(super) fn polishing(instance: &'a Instance) -> Self {
-        Search {
-            polish: true,
-            ..Search::new(instance)
-        }
-    }
-
     pub(super) fn new(instance: &'a Instance) -> Self {
         let max_cost = instance
             .robot_ids()
@@ -126,7 +115,6 @@ impl<'a> Search<'a> {
             best: Assignment::unassigned(instance.num_robots(), instance.num_tasks()),
             best_welfare: f64::NEG_INFINITY,
             nodes: 0,
-            polish: false,
         }
     }
 
@@ -345,18 +333,12 @@ impl<'a> Search<'a> {
             .all(|&(i, j, fixed)| (assignment.task_of(i) == Some(j)) == fixed)
     }
 
-    /// Offers `assignment` to the best found; one that beats it is first improved by
-    /// the local search where the search polishes.
+    /// Offers `assignment` to the best found.
     fn offer(&mut self, assignment: &Assignment) {
         let welfare = self.instance.welfare(assignment);
         if welfare > self.best_welfare {
-            let improved = if self.polish {
-                super::improve::improve(self.instance, assignment.clone())
-            } else {
-                assignment.clone()
-            };
-            self.best_welfare = self.instance.welfare(&improved);
-            self.best = improved;
+            self.best_welfare = welfare;
+            self.best = assignment.clone();
         }
     }
 
