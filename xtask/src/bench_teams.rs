@@ -4,21 +4,23 @@
 //! the game, as a share of the best proven bound.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
+
 use std::time::Instant;
 
 use afg_baseline::{AllocError, Allocator, Method, TeamOptimum};
 use afg_game::fs::write_atomic;
 use afg_game::io::dataset_to_jsonl;
-use afg_game::{Assignment, Family, GeneratorKnobs, Instance, TaskId};
+use afg_game::{Family, GeneratorKnobs, Instance};
 use anyhow::{Context, Result, bail, ensure};
 use clap::Args;
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
 use crate::bench::runs::{check_python, measure_rows, scratch_dir};
 use crate::bench_opt::Case;
 
 mod families;
+mod peer;
+pub(crate) use peer::{Peer, peer};
 
 /// The options of `cargo xtask bench-teams`.
 #[derive(Args)]
@@ -109,19 +111,6 @@ struct Exact {
     nodes: u64,
     seconds: f64,
     peak_rss_mib: Option<f64>,
-}
-
-/// What a peer did at one budget.
-#[derive(Serialize)]
-pub(crate) struct Peer {
-    solver: String,
-    budget: f64,
-    status: String,
-    /// The welfare of its assignment, computed by afg (`None`: none found).
-    pub(crate) welfare: Option<f64>,
-    /// Its proven bound (`None`: none yet).
-    bound: Option<f64>,
-    pub(crate) seconds: f64,
 }
 
 /// Runs `cargo xtask bench-teams`.
@@ -325,62 +314,6 @@ fn play(
             Ok((label.clone(), welfare, start.elapsed().as_secs_f64()))
         })
         .collect()
-}
-
-/// Runs `scripts/teams_milp.py` with `solver` at `budget` seconds on `file`.
-pub(crate) fn peer(
-    python: &Path,
-    solver: &str,
-    budget: f64,
-    threads: Option<usize>,
-    file: &Path,
-    inst: &Instance,
-) -> Result<Peer> {
-    #[derive(Deserialize)]
-    struct Solved {
-        status: String,
-        seconds: f64,
-        bound: Option<f64>,
-        tasks: Option<Vec<i64>>,
-    }
-    let out = file.with_extension(format!("{solver}-{budget}.json"));
-    let script = crate::repo_root().join("scripts").join("teams_milp.py");
-    let threads =
-        threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from));
-    let status = Command::new(python)
-        .arg(&script)
-        .args([file, &out])
-        .args(["--solver", solver, "--time-limit", &budget.to_string()])
-        .args(["--threads", &threads.to_string()])
-        .stdout(std::process::Stdio::null())
-        .status()?;
-    if !status.success() {
-        bail!(
-            "{} --solver {solver} failed on {}",
-            script.display(),
-            file.display()
-        );
-    }
-    let mut solved: Vec<Solved> = serde_json::from_slice(&std::fs::read(&out)?)?;
-    let solved = solved.pop().context("the peer returned no result")?;
-    let welfare = match solved.tasks {
-        Some(tasks) => {
-            let tasks = tasks
-                .iter()
-                .map(|&j| u32::try_from(j).ok().map(TaskId))
-                .collect();
-            Some(inst.welfare(&Assignment::from_tasks(inst, tasks)?))
-        }
-        None => None,
-    };
-    Ok(Peer {
-        solver: solver.to_owned(),
-        budget,
-        status: solved.status,
-        welfare,
-        bound: solved.bound,
-        seconds: solved.seconds,
-    })
 }
 
 /// Means over a case's rows.

@@ -29,6 +29,7 @@
 //! ```
 
 pub mod curves;
+mod exact_progress;
 pub mod generate;
 pub mod migrate;
 pub mod mission;

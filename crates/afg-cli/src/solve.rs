@@ -2,9 +2,7 @@
 
 use std::path::PathBuf;
 
-use std::sync::atomic::{AtomicU64, Ordering};
-
-use afg_baseline::{Allocator, Method, TeamOptimum, TeamProgress};
+use afg_baseline::{Allocator, Method, TeamOptimum};
 use afg_eval::solve::{Against, Report, Row};
 use afg_game::fs::write_atomic_making_dirs;
 use afg_game::io::read_instances;
@@ -198,7 +196,7 @@ fn allocator(args: &SolveArgs) -> Result<(String, Box<dyn Allocator>)> {
                 TeamOptimum::limits(args.time_limit, args.gap).context("--time-limit / --gap")?;
             let exact = match *m {
                 Method::Opt => Some(TeamOptimum {
-                    progress: Some(print_progress),
+                    progress: Some(crate::exact_progress::print_progress),
                     ..limits.unwrap_or_default()
                 }),
                 _ => limits,
@@ -227,29 +225,6 @@ fn allocator(args: &SolveArgs) -> Result<(String, Box<dyn Allocator>)> {
         }
         (None, None) => unreachable!("clap requires an allocator"),
     })
-}
-
-/// The exact search's progress on stderr, once a second after its first: the best
-/// found, the bound, the gap and the nodes.
-fn print_progress(p: &TeamProgress) {
-    // the next whole second to print at; a new solve starts again from 1
-    static NEXT: AtomicU64 = AtomicU64::new(1);
-    let next = NEXT.load(Ordering::Relaxed);
-    let second = p.seconds as u64;
-    if second + 1 < next {
-        NEXT.store(second.max(1), Ordering::Relaxed);
-    } else if second >= next {
-        NEXT.store(second + 1, Ordering::Relaxed);
-        eprintln!(
-            "opt {:>6.1} s  best {:.4}  bound {:.4}  gap {:.3} %  nodes {}  open {}",
-            p.seconds,
-            p.welfare,
-            p.bound,
-            100.0 * p.gap(),
-            p.nodes,
-            p.open
-        );
-    }
 }
 
 fn reference(args: &SolveArgs, instances: &[Instance]) -> Result<(Against, String)> {

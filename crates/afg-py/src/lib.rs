@@ -17,6 +17,7 @@ use pyo3::types::PyType;
 mod args;
 mod dataset;
 mod env;
+mod interrupt;
 mod mission;
 mod mission_env;
 mod schedule;
