@@ -316,6 +316,20 @@ fn play(
         .collect()
 }
 
+/// The peers' columns of the tables, in the first row's order: each solver's name as
+/// printed and its budget.
+fn peer_columns(rows: &[Row]) -> Vec<(&'static str, f64)> {
+    let name = |solver: &str| if solver == "cpsat" { "CP-SAT" } else { "HiGHS" };
+    rows.first()
+        .map(|r| {
+            r.peers
+                .iter()
+                .map(|p| (name(&p.solver), p.budget))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
 /// Means over a case's rows.
 fn mean(rows: &[&Row], f: impl Fn(&Row) -> f64) -> f64 {
     rows.iter().map(|r| f(r)).sum::<f64>() / rows.len() as f64
@@ -344,17 +358,8 @@ fn markdown(rows: &[Row], args: &BenchTeamsArgs) -> String {
         if k == 1 { "" } else { "s" },
         args.time_limit
     );
-    let peer_names: Vec<(String, f64)> = rows
-        .first()
-        .map(|r| {
-            r.peers
-                .iter()
-                .map(|p| (p.solver.clone(), p.budget))
-                .collect()
-        })
-        .unwrap_or_default();
-    for (solver, budget) in &peer_names {
-        let name = if solver == "cpsat" { "CP-SAT" } else { "HiGHS" };
+    let peer_names = peer_columns(rows);
+    for (name, budget) in &peer_names {
         md += &format!(" {name} {budget}s: proven | % of bound | time |");
     }
     md += "\n|---|---|---|---|---|---|---|";

@@ -7,7 +7,7 @@ use afg_game::Family;
 use afg_learn::run::{ModelOptions, load_model};
 use anyhow::{Context, Result};
 
-use super::{BenchTeamsArgs, Row, percent};
+use super::{BenchTeamsArgs, Row, peer_columns, percent};
 
 /// `--families`: names, or `all`.
 pub(super) fn parse(text: &str) -> Result<Vec<Family>, String> {
@@ -48,15 +48,7 @@ pub(super) fn markdown(rows: &[Row], args: &BenchTeamsArgs) -> String {
             None => groups.push(vec![row]),
         }
     }
-    let peers: Vec<(String, f64)> = rows
-        .first()
-        .map(|r| {
-            r.peers
-                .iter()
-                .map(|p| (p.solver.clone(), p.budget))
-                .collect()
-        })
-        .unwrap_or_default();
+    let peers = peer_columns(rows);
     let mut md = format!(
         "Time to proof, per family and size ({} instances each; afg on one core, limit {} s; \
          a peer that did not prove the optimum counts its whole budget, marked ≥; ratio: \
@@ -64,8 +56,7 @@ pub(super) fn markdown(rows: &[Row], args: &BenchTeamsArgs) -> String {
          where afg was slower):\n\n| family | N | M | afg time mean / worst | afg proven |",
         args.instances, args.time_limit
     );
-    for (solver, budget) in &peers {
-        let name = if solver == "cpsat" { "CP-SAT" } else { "HiGHS" };
+    for (name, budget) in &peers {
         md += &format!(" {name} {budget}s time mean / worst | proven | ratio geo / lowest |");
     }
     md += "\n|---|---|---|---|---|";
