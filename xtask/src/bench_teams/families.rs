@@ -53,13 +53,14 @@ pub(super) fn markdown(rows: &[Row], args: &BenchTeamsArgs) -> String {
         "Time to proof, per family and size ({} instances each; afg on one core, limit {} s; \
          a peer that did not prove the optimum counts its whole budget, marked ≥; ratio: \
          the peer's time over afg's, geometric mean and the lowest instance — below 1 \
-         where afg was slower):\n\n| family | N | M | afg time mean / worst | afg proven |",
+         where afg was slower; afg's worst gap: its certified gap when it stopped, the \
+         largest of the family's instances):\n\n| family | N | M | afg time mean / worst | afg proven | afg worst gap |",
         args.instances, args.time_limit
     );
     for (name, budget) in &peers {
         md += &format!(" {name} {budget}s time mean / worst | proven | ratio geo / lowest |");
     }
-    md += "\n|---|---|---|---|---|";
+    md += "\n|---|---|---|---|---|---|";
     md += &"---|---|---|".repeat(peers.len());
     md.push('\n');
     for group in &groups {
@@ -68,14 +69,19 @@ pub(super) fn markdown(rows: &[Row], args: &BenchTeamsArgs) -> String {
             .iter()
             .map(|r| (r.afg.seconds, r.afg.proven))
             .collect();
+        let worst_gap = group
+            .iter()
+            .map(|r| afg_baseline::certified_gap(r.afg.bound, r.afg.welfare))
+            .fold(0.0, f64::max);
         md += &format!(
-            "| {} | {} | {} | {} | {}/{} |",
+            "| {} | {} | {} | {} | {}/{} | {:.3} % |",
             r0.family.map_or("—".into(), |f| f.to_string()),
             r0.robots,
             r0.tasks,
             times(&afg),
             afg.iter().filter(|t| t.1).count(),
-            group.len()
+            group.len(),
+            100.0 * worst_gap
         );
         for p in 0..peers.len() {
             if group.iter().any(|r| r.peers.len() <= p) {
