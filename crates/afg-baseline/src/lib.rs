@@ -423,6 +423,33 @@ impl Method {
         }
     }
 
+    /// The exact solver this method runs with a user's `time_limit` and `gap` (see
+    /// [`TeamOptimum::limits`]): for `opt` always one, limited or not, so that a front
+    /// end can set its stop flag and progress hook; for another method the limits
+    /// alone, which [`Method::allocator_with`] refuses. The same answers as
+    /// [`Method::allocator`] where no limit is given: `opt` plays the paper's game as
+    /// [`Optimum`] and a team game as [`TeamOptimum`] either way.
+    ///
+    /// # Errors
+    /// As [`TeamOptimum::stopping`].
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::Method;
+    /// assert!(Method::Opt.exact(None, None)?.is_some());
+    /// assert!(Method::Greedy.exact(None, None)?.is_none());
+    /// assert!(Method::Greedy.exact(Some(1.0), None)?.is_some()); // refused by allocator_with
+    /// # Ok::<(), afg_baseline::AllocError>(())
+    /// ```
+    pub fn exact(
+        self,
+        time_limit: Option<f64>,
+        gap: Option<f64>,
+    ) -> Result<Option<TeamOptimum>, AllocError> {
+        let limits = TeamOptimum::limits(time_limit, gap)?;
+        Ok(limits.or_else(|| (self == Method::Opt).then(TeamOptimum::default)))
+    }
+
     /// The label of tables and figures.
     ///
     /// # Examples

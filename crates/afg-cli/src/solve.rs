@@ -192,15 +192,12 @@ pub fn run(args: SolveArgs) -> Result<()> {
 fn allocator(args: &SolveArgs) -> Result<(String, Box<dyn Allocator>)> {
     Ok(match (&args.method, &args.model) {
         (Some(m), _) => {
-            let limits =
-                TeamOptimum::limits(args.time_limit, args.gap).context("--time-limit / --gap")?;
-            let exact = match *m {
-                Method::Opt => Some(TeamOptimum {
+            let exact = (m.exact(args.time_limit, args.gap))
+                .context("--time-limit / --gap")?
+                .map(|exact| TeamOptimum {
                     progress: Some(crate::exact_progress::print_progress),
-                    ..limits.unwrap_or_default()
-                }),
-                _ => limits,
-            };
+                    ..exact
+                });
             let allocator = m
                 .allocator_with(args.seed, exact)
                 .context("--time-limit / --gap")?;

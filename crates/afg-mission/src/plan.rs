@@ -5,7 +5,7 @@
 
 use std::fmt::Write as _;
 
-use afg_baseline::{Allocator, Method, SwarmMethod, TeamOptimum};
+use afg_baseline::{Allocator, Method, SwarmMethod};
 use afg_game::Preference;
 use afg_graph::GraphKind;
 
@@ -189,7 +189,7 @@ impl MissionPlan {
                             .into(),
                     ));
                 }
-                let allocator = TeamOptimum::limits(self.time_limit, None)
+                let allocator = (method.exact(self.time_limit, None))
                     .and_then(|exact| method.allocator_with(self.seed, exact))
                     .map_err(|e| MissionError::Invalid(e.to_string()))?;
                 return self.central(allocator, Some(method));

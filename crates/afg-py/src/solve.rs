@@ -316,14 +316,12 @@ fn solve(
         (Some(name), None) => {
             let method = self::method(name)?;
             let stop = Arc::new(AtomicBool::new(false));
-            let exact = TeamOptimum::limits(time_limit, gap)
-                .map(|limits| match method {
-                    // opt answers Ctrl-C, limited or not
-                    Method::Opt => Some(TeamOptimum {
+            let exact = (method.exact(time_limit, gap))
+                .map(|exact| {
+                    exact.map(|exact| TeamOptimum {
                         stop: Some(Arc::clone(&stop)),
-                        ..limits.unwrap_or_default()
-                    }),
-                    _ => limits,
+                        ..exact
+                    })
                 })
                 .and_then(|exact| method.allocator_with(seed, exact))
                 .map_err(|e| crate::bad_input(format!("time_limit / gap: {e}")))?;
