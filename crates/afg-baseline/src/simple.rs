@@ -100,7 +100,7 @@ impl Allocator for Greedy {
 }
 
 /// The task positions in one contiguous array, for the loops over all N · M pairs.
-fn task_positions(instance: &Instance) -> Vec<Point> {
+pub(crate) fn task_positions(instance: &Instance) -> Vec<Point> {
     instance.tasks().iter().map(|t| t.position).collect()
 }
 

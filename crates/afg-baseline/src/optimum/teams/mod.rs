@@ -23,19 +23,22 @@
 //! robots free to join it earns nothing. Staffed then means earning: the threshold
 //! met and the skills held.
 
-use std::cell::Cell;
 use std::collections::BinaryHeap;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use afg_game::{Assignment, Instance, TaskId};
 
 use super::Optimum;
 use crate::{AllocError, AllocStats, Allocation, Allocator, timed};
 
+mod deadline;
 mod node;
+use deadline::Deadline;
 use node::{Decision, Node, Search};
+
+use super::transport::NEVER;
 
 /// The exact optimum of a game with team thresholds (or the paper's game), with a
 /// proven upper bound: branch and bound over which tasks are staffed (see the module
@@ -57,14 +60,16 @@ use node::{Decision, Node, Search};
 #[derive(Clone, Debug, Default)]
 pub struct TeamOptimum {
     /// Stop within this long with the best found and its gap (`None`: until proven):
-    /// the search starts no step that its longest step so far says would end later
-    /// (the root's relaxation is always solved, however long it takes).
+    /// the search starts no step that its longest step so far says would end later,
+    /// and the root's relaxation stops at 3/4 of it where it is not solved by then
+    /// (its prices then give the bound, and the teams they half staff the answer).
     pub time_limit: Option<Duration>,
     /// Stop as soon as the certified gap ([`TeamSolution::gap`]) is at most this
     /// (`Some(0.001)`: within 0.1 % of the bound; `None`: until proven).
     pub gap: Option<f64>,
     /// Stop, with the best found, once this is set (from another thread: a Ctrl-C
-    /// handler, a user's cancel button). Checked between the search's steps.
+    /// handler, a user's cancel button). Checked between the search's steps, and
+    /// inside the root's relaxation.
     pub stop: Option<Arc<AtomicBool>>,
     /// Told the search's state after the dive and after every node (at most every
     /// millisecond or so: rate-limit what it prints).
@@ -227,8 +232,19 @@ impl TeamOptimum {
         };
         let out_of_time = || deadline.near() || stopped();
         let mut search = Search::new(instance);
-        let Some(mut root) = search.node(search.root_decisions(), Vec::new(), None) else {
-            unreachable!("the root is feasible: the instance holds every robot")
+        let root = search.root(&|| deadline.root_over() || stopped());
+        let mut root = match root {
+            Ok(root) => root,
+            Err(bound) => {
+                let (assignment, welfare, nodes) = search.into_best();
+                return Ok(TeamSolution {
+                    assignment,
+                    welfare,
+                    bound: bound.max(welfare),
+                    proven: false,
+                    nodes,
+                });
+            }
         };
         let m = instance.num_tasks();
         search.dive(&root, &out_of_time, &mut |node, fractional| {
@@ -319,8 +335,8 @@ impl TeamOptimum {
     /// ```
     pub fn relax(instance: &Instance) -> TeamRelaxation {
         let mut search = Search::new(instance);
-        let Some(root) = search.node(search.root_decisions(), Vec::new(), None) else {
-            unreachable!("the root is feasible: the instance holds every robot")
+        let Ok(root) = search.root(NEVER) else {
+            unreachable!("never stopped")
         };
         root.relaxation(instance.num_tasks())
     }
@@ -366,11 +382,11 @@ impl TeamOptimum {
         mut round: impl FnMut(&TeamRelaxation, &[TaskId]) -> Vec<bool>,
     ) -> (Assignment, f64) {
         let mut search = Search::new(instance);
-        let Some(root) = search.node(search.root_decisions(), Vec::new(), None) else {
-            unreachable!("the root is feasible: the instance holds every robot")
+        let Ok(root) = search.root(NEVER) else {
+            unreachable!("never stopped")
         };
         let m = instance.num_tasks();
-        search.dive(&root, &|| false, &mut |node, fractional| {
+        search.dive(&root, NEVER, &mut |node, fractional| {
             round(&node.relaxation(m), fractional)
         });
         let (best, welfare, _) = search.into_best();
@@ -458,36 +474,5 @@ impl Allocator for TeamOptimum {
             },
             assignment: solution.assignment,
         })
-    }
-}
-
-/// A time limit that the search checks between steps: it is near when the time spent
-/// plus the longest step between two checks so far (the root's solve before the first
-/// check aside: it always runs) reaches it.
-struct Deadline {
-    limit: Option<Duration>,
-    start: Instant,
-    last: Cell<Option<Instant>>,
-    longest: Cell<Duration>,
-}
-
-impl Deadline {
-    fn new(limit: Option<Duration>) -> Self {
-        Deadline {
-            limit,
-            start: Instant::now(),
-            last: Cell::new(None),
-            longest: Cell::new(Duration::ZERO),
-        }
-    }
-
-    /// Whether the next step would likely end past the limit.
-    fn near(&self) -> bool {
-        let now = Instant::now();
-        if let Some(last) = self.last.replace(Some(now)) {
-            self.longest.set(self.longest.get().max(now - last));
-        }
-        self.limit
-            .is_some_and(|limit| now - self.start + self.longest.get() >= limit)
     }
 }

@@ -3,11 +3,14 @@
 
 use std::cmp::Ordering;
 
-use afg_game::{Assignment, Instance, RobotId, TaskId};
+use afg_game::{Assignment, Instance, Point, RobotId, TaskId};
 
-use super::super::transport::{self, Column, Slots, Solution, assignment_of};
+use super::super::transport::{
+    self, Column, Interrupted, NEVER, Slots, Solution, Stop, assignment_of,
+};
 
 mod lagrange;
+mod rounding;
 pub(super) use lagrange::MAX_PAIRS;
 
 /// What a node decides of one task.
@@ -96,9 +99,36 @@ pub(super) struct Search<'a> {
 
 impl<'a> Search<'a> {
     pub(super) fn new(instance: &'a Instance) -> Self {
-        let max_cost = instance
-            .robot_ids()
-            .flat_map(|i| instance.task_ids().map(move |j| instance.cost(i, j)))
+        // Every robot lies in the box of their positions: no distance to a task
+        // exceeds the one to the box's farthest corner (O(N + M), not N M).
+        let far = Point {
+            x: f64::INFINITY,
+            y: f64::INFINITY,
+        };
+        let near = Point {
+            x: -far.x,
+            y: -far.y,
+        };
+        let (lo, hi) = instance.robots().iter().fold((far, near), |(lo, hi), p| {
+            let lo = Point {
+                x: lo.x.min(p.x),
+                y: lo.y.min(p.y),
+            };
+            (
+                lo,
+                Point {
+                    x: hi.x.max(p.x),
+                    y: hi.y.max(p.y),
+                },
+            )
+        });
+        let max_cost = (instance.tasks().iter())
+            .filter(|_| lo.x <= hi.x) // a game with robots
+            .map(|t| {
+                let dx = (t.position.x - lo.x).abs().max((hi.x - t.position.x).abs());
+                let dy = (t.position.y - lo.y).abs().max((hi.y - t.position.y).abs());
+                instance.beta() * dx.hypot(dy)
+            })
             .fold(0.0, f64::max);
         let max_reward = instance
             .tasks()
@@ -243,6 +273,24 @@ impl<'a> Search<'a> {
         (Column::Task { value, capacity }, flat)
     }
 
+    /// The root (every task open but those no team can staff), solved; or, where
+    /// `stop` ends its solve first, a proven bound from the prices it had reached, with
+    /// an assignment built from where the robots stood offered to the best found.
+    pub(super) fn root(&mut self, stop: Stop) -> Result<Node, f64> {
+        let mut decisions = self.root_decisions();
+        let columns = (self.columns(&mut decisions, &[]))
+            .expect("the root is feasible: the instance holds every robot");
+        match transport::solve_columns(self.instance, &columns, None, &[], &[], stop) {
+            Ok(solution) => Ok(self
+                .node_of(decisions, Vec::new(), Vec::new(), &columns, solution)
+                .expect("the root fixes no robot")),
+            Err(Interrupted { task_of, bound, .. }) => {
+                self.offer(&self.completed(&task_of));
+                Err(bound)
+            }
+        }
+    }
+
     /// Solves a node's relaxations (warm from its parent's prices): the Lagrangian one
     /// where the root priced the skills, then the envelope's; offers their assignments
     /// to the best found, and returns the node with the lower bound; `None` if
@@ -284,9 +332,35 @@ impl<'a> Search<'a> {
         if self.closes(skill_bound) {
             return None;
         }
+        let adjust = self.adjust(&pairs);
+        let Ok(solution) =
+            transport::solve_columns(inst, &columns, warm.as_deref(), &adjust, &[], NEVER)
+        else {
+            unreachable!("never stopped")
+        };
+        let node = self.node_of(decisions, pairs, skill_prices, &columns, solution)?;
+        Some(Node {
+            bound: node.bound.min(skill_bound),
+            ..node
+        })
+    }
+
+    /// The node of `decisions` and `pairs` whose relaxation (its `columns`) was solved
+    /// to `solution`, the skill prices of its Lagrangian bound beside it (empty: none);
+    /// its assignment is offered to the best found. `None` where that assignment does
+    /// not keep every robot where `pairs` fixed it.
+    fn node_of(
+        &mut self,
+        decisions: Vec<Decision>,
+        pairs: Vec<Pair>,
+        skill_prices: Vec<f64>,
+        columns: &[Column],
+        solution: Solution,
+    ) -> Option<Node> {
+        let inst = self.instance;
         let Solution {
             task_of, prices, ..
-        } = transport::solve_columns(inst, &columns, warm.as_deref(), &self.adjust(&pairs), &[]);
+        } = solution;
         self.nodes += 1;
         let assignment = assignment_of(inst, &task_of);
         if !self.keeps(&assignment, &pairs) {
@@ -309,7 +383,7 @@ impl<'a> Search<'a> {
         Some(Node {
             decisions,
             pairs,
-            bound: bound.min(skill_bound),
+            bound,
             skill_prices,
             prices,
             sizes: assignment.sizes().to_vec(),
@@ -414,84 +488,6 @@ impl<'a> Search<'a> {
                 with(None, Some((i, j, true))),
                 with(None, Some((i, j, false))),
             ],
-        }
-    }
-
-    /// Brings the skills that the earning tasks of `node` lack, robot by robot: each
-    /// step fixes the robot that the skill branching names (the cheapest one free to
-    /// bring a missing skill to the earning task with the most value at stake) at that
-    /// task, or keeps it out where that leaves no assignment, or, where neither does
-    /// (the robots that hold the skill are fixed at other tasks), gives the task up
-    /// (unstaffed, its robots free again), and re-solves, until no earning task lacks a
-    /// skill or no robot can bring one. Every assignment met is offered to the best
-    /// found. Nothing happens in a game without skills.
-    pub(super) fn skill_dive(&mut self, node: Node) {
-        let mut current = node;
-        while let Some(branch @ Branch::Pair(_, task)) = self.skill_branch(&current) {
-            let [(join, with), (keep_out, without)] = self.children(&current, branch);
-            let give_up = || {
-                let mut decisions = current.decisions.clone();
-                decisions[task.index()] = Decision::Unstaffed;
-                let mut pairs = current.pairs.clone();
-                pairs.retain(|&(_, j, _)| j != task);
-                (decisions, pairs)
-            };
-            let next = self
-                .node(join, with, Some(&current))
-                .or_else(|| self.node(keep_out, without, Some(&current)))
-                .or_else(|| {
-                    let (decisions, pairs) = give_up();
-                    self.node(decisions, pairs, Some(&current))
-                });
-            match next {
-                Some(next) => current = next,
-                None => return,
-            }
-        }
-    }
-
-    /// Rounds the relaxation down to an assignment with no task between 0 and its
-    /// threshold, a good first incumbent: `round` decides every such task of a node at
-    /// once (staffed or not; all unstaffed where its choice asks for too many robots),
-    /// and the node is re-solved until none is left or `out_of_time`.
-    pub(super) fn dive(
-        &mut self,
-        root: &Node,
-        out_of_time: &dyn Fn() -> bool,
-        round: &mut dyn FnMut(&Node, &[TaskId]) -> Vec<bool>,
-    ) {
-        let mut current = root.clone();
-        while !out_of_time() {
-            let sizes = &current.sizes;
-            let fractional: Vec<TaskId> = self
-                .instance
-                .task_ids()
-                .filter(|&j| current.decisions[j.index()] == Decision::Open)
-                .filter(|&j| sizes[j.index()] > 0 && sizes[j.index()] < self.instance.min_team(j))
-                .collect();
-            if fractional.is_empty() {
-                return;
-            }
-            let staff = round(&current, &fractional);
-            let rounded = |keep: bool| {
-                let mut decisions = current.decisions.clone();
-                for (&j, &staff) in fractional.iter().zip(&staff) {
-                    decisions[j.index()] = if keep && staff {
-                        Decision::Staffed
-                    } else {
-                        Decision::Unstaffed
-                    };
-                }
-                decisions
-            };
-            let pairs = current.pairs.clone();
-            let next = self
-                .node(rounded(true), pairs.clone(), Some(&current))
-                .or_else(|| self.node(rounded(false), pairs, Some(&current)));
-            match next {
-                Some(next) => current = next,
-                None => return,
-            }
         }
     }
 }

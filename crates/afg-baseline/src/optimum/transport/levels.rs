@@ -4,21 +4,19 @@
 use super::*;
 
 /// The prices of the subsample of every `stride`-th robot, solved from the prices of
-/// its own subsample; `None` below [`BASE_ROBOTS`].
+/// its own subsample (or as far as they got where `stop` said so); `None` below
+/// [`BASE_ROBOTS`].
 pub(super) fn coarse_prices(
     inst: &Instance,
     columns: &[Column],
     stride: usize,
+    stop: Stop,
 ) -> Option<Vec<f64>> {
     if inst.num_robots().div_ceil(stride) < BASE_ROBOTS {
         return None;
     }
-    let warm = coarse_prices(inst, columns, stride * FACTOR);
-    Some(
-        Flow::solved(Level::new(inst, columns, stride, 0), warm.as_deref())
-            .into_solution()
-            .prices,
-    )
+    let warm = coarse_prices(inst, columns, stride * FACTOR, stop);
+    Some(Flow::solved(Level::new(inst, columns, stride, 0), warm.as_deref(), stop).prices())
 }
 
 /// The problem on every `stride`-th robot, each standing for `stride` robots: task j's
@@ -47,6 +45,17 @@ impl Level {
             n: inst.num_robots().div_ceil(stride),
             costs: cost_matrix(inst, stride, columns.len()),
             columns,
+        }
+    }
+
+    /// The finest level of `inst` with `columns`, its costs left out: its counts and
+    /// marginal values only.
+    pub(super) fn without_costs(inst: &Instance, columns: &[Column]) -> Self {
+        Level {
+            stride: 1,
+            n: inst.num_robots(),
+            columns: columns.to_vec(),
+            costs: Vec::new(),
         }
     }
 
@@ -143,22 +152,24 @@ impl Level {
 /// if any, stays 0), on all cores when large.
 pub(super) fn cost_matrix(inst: &Instance, stride: usize, width: usize) -> Vec<f64> {
     let (n, beta) = (inst.num_robots().div_ceil(stride), inst.beta());
-    let tasks: Vec<Point> = inst.tasks().iter().map(|t| t.position).collect();
+    let tasks = task_positions(inst);
     let robots = inst.robots();
     let mut costs = vec![0.0; n * width];
-    // The same arithmetic as `Instance::cost`, with the task positions contiguous.
-    let fill = |(t, row): (usize, &mut [f64])| {
-        let robot = robots[t * stride];
-        for (c, &task) in row.iter_mut().zip(&tasks) {
-            *c = beta * robot.distance(task);
-        }
-    };
+    let fill = |(t, row): (usize, &mut [f64])| cost_row(robots[t * stride], &tasks, beta, row);
     if n * width >= PARALLEL_ENTRIES {
         costs.par_chunks_mut(width).enumerate().for_each(fill);
     } else {
         costs.chunks_mut(width).enumerate().for_each(fill);
     }
     costs
+}
+
+/// The travel costs of a robot at `robot` to `tasks` into the first entries of `row`
+/// (the same arithmetic as `Instance::cost`).
+pub(super) fn cost_row(robot: Point, tasks: &[Point], beta: f64, row: &mut [f64]) {
+    for (c, &task) in row.iter_mut().zip(tasks) {
+        *c = beta * robot.distance(task);
+    }
 }
 
 /// The cheapest open column of `row` under `prices` (the lowest such index).

@@ -40,8 +40,12 @@ use super::movers::{Movers, NOWHERE};
 mod columns;
 mod levels;
 mod search;
+mod stopped;
+use crate::simple::task_positions;
 pub(in crate::optimum) use columns::{Column, Slots};
-use levels::{Level, cheapest, coarse_prices, sink};
+use levels::{Level, cheapest, coarse_prices, cost_row, sink};
+use stopped::interrupted;
+pub(in crate::optimum) use stopped::{Interrupted, NEVER, Stop};
 
 /// Each coarser level keeps every `FACTOR`-th robot of the level above.
 const FACTOR: usize = 8;
@@ -49,6 +53,8 @@ const FACTOR: usize = 8;
 const BASE_ROBOTS: usize = 256;
 /// Cost matrices with at least this many entries are filled on all cores.
 const PARALLEL_ENTRIES: usize = 1 << 16;
+/// [`Flow::route_until`] asks whether to stop once every this many units.
+const STOP_EVERY: u64 = 8;
 
 /// An optimal assignment (column per robot: a task index, or M for the void), its
 /// prices (one per column, offset so that the sink's potential is 0: each price lies
@@ -98,23 +104,30 @@ pub(super) fn task_columns(inst: &Instance) -> Vec<Column> {
 /// its subsamples' where there are none), each `(robot, column, delta)` of `adjust`
 /// added to that robot's cost there, and each robot's cost at task j lowered by
 /// `Σ_s skill_prices[j S + s] · skills[s]` where `skill_prices` is not empty (both
-/// without subsamples).
+/// without subsamples); or, where `stop` says so first (a root's solve: neither
+/// `adjust` nor `skill_prices`), where it stood.
 pub(super) fn solve_columns(
     inst: &Instance,
     columns: &[Column],
     warm: Option<&[f64]>,
     adjust: &[(usize, usize, f64)],
     skill_prices: &[f64],
-) -> Solution {
+    stop: Stop,
+) -> Result<Solution, Interrupted> {
     let coarse;
     let warm = match warm {
         Some(prices) => Some(prices),
         None if adjust.is_empty() && skill_prices.is_empty() => {
-            coarse = coarse_prices(inst, columns, FACTOR);
+            coarse = coarse_prices(inst, columns, FACTOR, stop);
             coarse.as_deref()
         }
         None => None,
     };
+    if let Some(prices) = warm
+        && stop()
+    {
+        return Err(interrupted(inst, columns, prices));
+    }
     let mut level = Level::new(inst, columns, 1, 0);
     let m = level.m();
     for &(robot, column, delta) in adjust {
@@ -128,7 +141,12 @@ pub(super) fn solve_columns(
             }
         }
     }
-    Flow::solved(level, warm).into_solution()
+    let flow = Flow::solved(level, warm, stop);
+    if flow.balanced() {
+        Ok(flow.into_solution())
+    } else {
+        Err(interrupted(inst, columns, &flow.prices()))
+    }
 }
 
 /// What robot i's skills are worth at each task at `skill_prices` (one per task and
@@ -154,17 +172,22 @@ pub(super) fn skill_rebates<'a>(
 /// `spare` closed columns to open later.
 pub(super) fn solved(inst: &Instance, spare: usize) -> Flow {
     let columns = task_columns(inst);
-    let mut warm = coarse_prices(inst, &columns, FACTOR);
+    let mut warm = coarse_prices(inst, &columns, FACTOR, NEVER);
     if let Some(prices) = &mut warm {
         prices.resize(prices.len() + spare, 0.0);
     }
-    Flow::solved(Level::new(inst, &columns, 1, spare), warm.as_deref())
+    Flow::solved(Level::new(inst, &columns, 1, spare), warm.as_deref(), NEVER)
 }
 
 /// Solves `inst` exactly from `prices` (one per column: the tasks', then the void's
 /// where the instance allows it; any common offset), without subsample levels.
 pub(super) fn solve_from(inst: &Instance, prices: &[f64]) -> Solution {
-    Flow::solved(Level::new(inst, &task_columns(inst), 1, 0), Some(prices)).into_solution()
+    Flow::solved(
+        Level::new(inst, &task_columns(inst), 1, 0),
+        Some(prices),
+        NEVER,
+    )
+    .into_solution()
 }
 
 /// The residual state of one level: where every robot is, the count each column sends
@@ -194,12 +217,13 @@ const SOURCE: u32 = u32::MAX;
 
 impl Flow {
     /// `level` solved from `warm` prices (sink potential 0), or from zero prices with
-    /// the sink's potential set so that the counts they buy add up to N.
-    fn solved(level: Level, warm: Option<&[f64]>) -> Flow {
+    /// the sink's potential set so that the counts they buy add up to N; where `stop`
+    /// says so first, as far as it got (not [`Flow::balanced`]).
+    fn solved(level: Level, warm: Option<&[f64]>, stop: Stop) -> Flow {
         let prices = warm.map_or_else(|| vec![0.0; level.m()], <[f64]>::to_vec);
         let sink = level.balancing_offset(&prices, None);
         let mut flow = Flow::new(level, prices, sink);
-        flow.route();
+        flow.route_until(stop);
         flow
     }
 
@@ -305,19 +329,33 @@ impl Flow {
     /// units, searched from the side with fewer such nodes (so that the search meets
     /// one of the many on the other side early).
     pub fn route(&mut self) -> u64 {
+        self.route_until(NEVER);
+        self.routed
+    }
+
+    /// [`Flow::route`], asking `stop` before every unit but the first few: whether
+    /// it finished (every node balanced).
+    fn route_until(&mut self, stop: Stop) -> bool {
         self.routed = 0;
         loop {
             let surplus = self.excess.iter().filter(|&&e| e > 0).count();
             let short = self.excess.iter().filter(|&&e| e < 0).count();
             if surplus == 0 {
-                break;
+                return true;
+            }
+            if self.routed % STOP_EVERY == STOP_EVERY - 1 && stop() {
+                return false;
             }
             let backward = surplus > short;
             let end = self.search(backward);
             self.augment(end, backward);
             self.routed += 1;
         }
-        self.routed
+    }
+
+    /// Whether every node is balanced: the flow is optimal at its prices.
+    fn balanced(&self) -> bool {
+        self.excess.iter().all(|&e| e == 0)
     }
 
     /// Moves the robot in `row` from column `from` to column `to`, ahead of routing.

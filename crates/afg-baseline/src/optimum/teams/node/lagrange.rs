@@ -15,7 +15,7 @@
 
 use afg_game::Assignment;
 
-use super::super::super::transport::{self, Column, assignment_of, skill_rebates};
+use super::super::super::transport::{self, Column, NEVER, assignment_of, skill_rebates};
 use super::{Decision, Node, Pair, Search};
 
 /// Subgradient steps at the root at most.
@@ -75,8 +75,12 @@ impl Search<'_> {
         if inst.allows_void() {
             columns.push(Column::Void);
         }
-        let solution =
-            transport::solve_columns(inst, &columns, Some(warm), &self.adjust(pairs), &lambda);
+        let adjust = self.adjust(pairs);
+        let Ok(solution) =
+            transport::solve_columns(inst, &columns, Some(warm), &adjust, &lambda, NEVER)
+        else {
+            unreachable!("never stopped")
+        };
         let assignment = assignment_of(inst, &solution.task_of);
         if !self.keeps(&assignment, pairs) {
             return None;
