@@ -34,6 +34,7 @@ pub mod price;
 mod qnetwork;
 mod regret;
 mod rollout;
+mod rounds;
 mod run_dir;
 mod s2v;
 pub mod staffing;

@@ -138,40 +138,37 @@ impl PriceTrainer {
     /// [`LearnError::RunInUse`] while another trainer holds the directory, a failed
     /// round, or a file that cannot be written.
     pub fn run_in(
-        mut self,
+        self,
         dir: &Path,
         command: String,
-        mut on_round: impl FnMut(&PriceRound),
+        on_round: impl FnMut(&PriceRound),
     ) -> Result<crate::manifest::RunManifest, LearnError> {
-        let start = std::time::Instant::now();
-        std::fs::create_dir_all(dir).map_err(|source| LearnError::Io {
-            path: dir.display().to_string(),
-            source,
-        })?;
-        let _lock = crate::run_dir::RunDir::new(dir).lock()?;
-        let mut log = String::new();
-        let mut last = None;
-        while !self.is_finished() {
-            let round = self.round()?;
-            log += &serde_json::to_string(&round).expect("a round always serialises");
-            log.push('\n');
-            afg_game::fs::write_atomic(&dir.join(crate::run_dir::RunDir::LOG), log.as_bytes())?;
-            on_round(&round);
-            last = Some(round);
-        }
-        let model = self.model();
+        crate::rounds::run_rounds(self, dir, command, |_| Ok(()), on_round)
+    }
+}
+
+impl crate::rounds::RoundTrainer for PriceTrainer {
+    type Round = PriceRound;
+
+    fn is_finished(&self) -> bool {
+        PriceTrainer::is_finished(self)
+    }
+
+    fn next_round(&mut self) -> Result<PriceRound, LearnError> {
+        self.round()
+    }
+
+    fn record(&self, last: Option<PriceRound>) -> (crate::manifest::RunRecord, u64) {
+        let training = self.config();
         let record = crate::manifest::RunRecord::PriceModel {
-            rounds: model.training.rounds,
+            rounds: training.rounds,
             last_round: last,
         };
-        let manifest = crate::manifest::RunManifest {
-            wall_time_s: Some(start.elapsed().as_secs_f64()),
-            ..crate::manifest::RunManifest::new(command, model.training.seed, record)
-        };
-        crate::run_dir::RunDir::new(dir).write_manifest(&manifest)?;
-        // The model last: a directory that holds one holds a whole run.
-        model.save(&dir.join(PriceModel::FILE_NAME))?;
-        Ok(manifest)
+        (record, training.seed)
+    }
+
+    fn save_model(&self, dir: &Path) -> Result<(), LearnError> {
+        self.model().save(&dir.join(PriceModel::FILE_NAME))
     }
 }
 

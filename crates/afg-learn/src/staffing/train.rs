@@ -10,7 +10,7 @@
 //! weights.
 
 use std::path::Path;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use afg_game::{GameSize, Instance, SkillDraw};
 use burn::optim::adaptor::OptimizerAdaptor;
@@ -428,40 +428,38 @@ impl StaffingTrainer {
     /// [`LearnError::RunInUse`] while another trainer holds the directory, a failed
     /// epoch, or a file that cannot be written.
     pub fn run_in(
-        mut self,
+        self,
         dir: &Path,
         command: String,
         on_game: impl Fn(&LabelledGame) + Sync,
-        mut on_epoch: impl FnMut(&StaffingEpoch),
+        on_epoch: impl FnMut(&StaffingEpoch),
     ) -> Result<crate::manifest::RunManifest, LearnError> {
-        let start = Instant::now();
-        std::fs::create_dir_all(dir).map_err(|source| LearnError::Io {
-            path: dir.display().to_string(),
-            source,
-        })?;
-        let _lock = crate::run_dir::RunDir::new(dir).lock()?;
-        self.label(Some(&dir.join(LABELS_FILE_NAME)), on_game)?;
-        let mut log = String::new();
-        let mut last = None;
-        while !self.is_finished() {
-            let epoch = self.epoch()?;
-            log += &serde_json::to_string(&epoch).expect("an epoch always serialises");
-            log.push('\n');
-            afg_game::fs::write_atomic(&dir.join(crate::run_dir::RunDir::LOG), log.as_bytes())?;
-            on_epoch(&epoch);
-            last = Some(epoch);
-        }
-        let model = self.model();
+        let labels = dir.join(LABELS_FILE_NAME);
+        let prepare = |trainer: &mut Self| trainer.label(Some(&labels), on_game);
+        crate::rounds::run_rounds(self, dir, command, prepare, on_epoch)
+    }
+}
+
+impl crate::rounds::RoundTrainer for StaffingTrainer {
+    type Round = StaffingEpoch;
+
+    fn is_finished(&self) -> bool {
+        StaffingTrainer::is_finished(self)
+    }
+
+    fn next_round(&mut self) -> Result<StaffingEpoch, LearnError> {
+        self.epoch()
+    }
+
+    fn record(&self, last: Option<StaffingEpoch>) -> (crate::manifest::RunRecord, u64) {
         let record = crate::manifest::RunRecord::StaffingModel {
-            epochs: model.training.epochs,
+            epochs: self.config.epochs,
             last_epoch: last,
         };
-        let manifest = crate::manifest::RunManifest {
-            wall_time_s: Some(start.elapsed().as_secs_f64()),
-            ..crate::manifest::RunManifest::new(command, model.training.seed, record)
-        };
-        crate::run_dir::RunDir::new(dir).write_manifest(&manifest)?;
-        model.save(&dir.join(StaffingModel::FILE_NAME))?;
-        Ok(manifest)
+        (record, self.config.seed)
+    }
+
+    fn save_model(&self, dir: &Path) -> Result<(), LearnError> {
+        self.model().save(&dir.join(StaffingModel::FILE_NAME))
     }
 }
