@@ -329,10 +329,11 @@ pub fn swarm_svg(runs: &[(String, SwarmReport)], title: &str) -> Result<String, 
 ///
 /// # Examples
 /// ```
-/// use afg_baseline::Greedy;
-/// use afg_mission::{MissionConfig, Preset, Replan, RunOptions, simulate};
+/// use afg_baseline::Method;
+/// use afg_mission::{MissionConfig, MissionMethod, MissionPlan, Preset};
 /// let mission = MissionConfig::new(Preset::Waves, 20, 6, 1).generate()?;
-/// let run = simulate(&mission, Replan::Scratch(&Greedy), RunOptions::default())?;
+/// let greedy = MissionPlan { method: MissionMethod::Central(Method::Greedy), ..MissionPlan::default() };
+/// let run = greedy.planner()?.run(&mission, Default::default(), |_| {})?;
 /// let svg = afg_eval::figures::mission_svg(&[("greedy".into(), run)], "waves")?;
 /// assert!(svg.contains("tasks done") && svg.contains("greedy"));
 /// # Ok::<(), Box<dyn std::error::Error>>(())
@@ -402,11 +403,12 @@ pub fn mission_svg(
 ///
 /// # Examples
 /// ```
-/// use afg_baseline::Greedy;
-/// use afg_mission::{MissionConfig, Preset, Replan, RunOptions, simulate};
+/// use afg_baseline::Method;
+/// use afg_mission::{MissionConfig, MissionMethod, MissionPlan, Preset, Recording};
 /// let mission = MissionConfig::new(Preset::Attrition, 20, 6, 1).generate()?;
-/// let options = RunOptions { frame_every: Some(0.5), ..RunOptions::default() };
-/// let run = simulate(&mission, Replan::Scratch(&Greedy), options)?;
+/// let greedy = MissionPlan { method: MissionMethod::Central(Method::Greedy), ..MissionPlan::default() };
+/// let frames = Recording { frame_every: Some(0.5), ..Recording::default() };
+/// let run = greedy.planner()?.run(&mission, frames, |_| {})?;
 /// let html = afg_eval::figures::mission_html(&mission, &run, "greedy")?;
 /// assert!(html.starts_with("<!DOCTYPE html>") && html.contains("\"frames\""));
 /// # Ok::<(), Box<dyn std::error::Error>>(())

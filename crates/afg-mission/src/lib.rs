@@ -9,10 +9,11 @@
 //! - [`MissionPlan`]: the one front door — who decides and how (a built-in method,
 //!   GRAPE or the auction over the radio with their [`SwarmKnobs`], or an allocator
 //!   passed in), checked once into a [`Planner`] that runs missions.
-//! - [`simulate`]: the event-driven run with a replanning rule ([`Replan`]: from
-//!   scratch, warm-started, or the exact optimum re-solved from its previous prices),
-//!   an optional decision latency ([`Latency`]) and replanning interval, returning the
-//!   [`Metrics`], a timeline and, if asked, every event ([`TraceEvent`]).
+//! - [`Planner::run`]: the event-driven run (from scratch, warm-started, or the exact
+//!   optimum re-solved from its previous prices), with an optional decision latency
+//!   ([`Latency`]) and replanning interval, returning the [`Metrics`], a timeline and,
+//!   if asked, every event ([`TraceEvent`]).
+//! - [`internal`]: the simulator's own door beneath the plan, for this crate's tests.
 //!
 //! The model, in brief (docs/missions.md has it in full): robots move in straight
 //! lines towards their task; the `n` robots present at a task do
@@ -25,11 +26,12 @@
 //!
 //! # Examples
 //! ```
-//! use afg_baseline::{Greedy, Optimum};
-//! use afg_mission::{MissionConfig, Preset, Replan, RunOptions, simulate};
+//! use afg_baseline::Method;
+//! use afg_mission::{MissionConfig, MissionMethod, MissionPlan, Preset};
 //! let mission = MissionConfig::new(Preset::Waves, 40, 8, 2).generate()?;
-//! let greedy = simulate(&mission, Replan::Scratch(&Greedy), RunOptions::default())?;
-//! let opt = simulate(&mission, Replan::WarmOpt, RunOptions::default())?;
+//! let run = |plan: MissionPlan| plan.planner()?.run(&mission, Default::default(), |_| {});
+//! let greedy = run(MissionPlan { method: MissionMethod::Central(Method::Greedy), ..MissionPlan::default() })?;
+//! let opt = run(MissionPlan { warm: true, ..MissionPlan::default() })?;
 //! assert_eq!(greedy.metrics.tasks, 8);
 //! assert!(opt.metrics.decisions >= 4); // at least one per wave
 //! # Ok::<(), afg_mission::MissionError>(())
@@ -46,10 +48,18 @@ pub use mission::{Failure, MISSION_FORMAT, MISSION_VERSION, Mission, RobotSpec, 
 pub use mission_config::{MissionConfig, Preset};
 pub use plan::{MissionMethod, MissionPlan, Planner, RadioKnobs, Recording, SwarmKnobs};
 pub use sim::{
-    Decentralised, EnvStep, Frame, Latency, Metrics, MissionEnv, MissionRun, Perception,
-    ROBOT_FEATURES, Replan, RunOptions, SwarmMetrics, TASK_FEATURES, TEAM_FEATURES, TimelinePoint,
-    TraceEvent, Waiting, simulate, simulate_with, work_rate,
+    EnvStep, Frame, Latency, Metrics, MissionEnv, MissionRun, Perception, ROBOT_FEATURES,
+    SwarmMetrics, TASK_FEATURES, TEAM_FEATURES, TimelinePoint, TraceEvent, Waiting, work_rate,
 };
+
+/// The simulator beneath [`MissionPlan`]: a run with a replanning rule and options
+/// given directly, each checked at every run. Internal: it is here for this crate's
+/// tests (custom allocators, radio settings no plan names) and may change without
+/// notice; everyone else runs missions through [`MissionPlan::planner`].
+#[doc(hidden)]
+pub mod internal {
+    pub use crate::sim::{Decentralised, Replan, RunOptions, simulate, simulate_with};
+}
 
 use afg_baseline::AllocError;
 use afg_game::GameError;

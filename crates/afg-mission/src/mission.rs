@@ -91,7 +91,8 @@ pub struct Failure {
     pub returns: Option<f64>,
 }
 
-/// A mission: everything [`crate::simulate`] needs besides the allocator.
+/// A mission: everything a run ([`Planner::run`](crate::Planner::run)) needs besides
+/// the allocator.
 ///
 /// # Examples
 /// ```

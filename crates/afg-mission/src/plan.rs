@@ -12,8 +12,10 @@ use afg_graph::GraphKind;
 mod knobs;
 pub use knobs::{RadioKnobs, SwarmKnobs};
 
-use crate::sim::check_options;
-use crate::{Decentralised, Latency, Mission, MissionError, MissionRun, Replan, RunOptions};
+use crate::sim::{
+    Decentralised, Replan, RunOptions, check_frame_every, check_options, run_checked,
+};
+use crate::{Latency, Mission, MissionError, MissionRun};
 
 /// A method in a mission, as the front ends name it: a built-in allocator deciding
 /// centrally, or `grape` / `auction`: GRAPE or the auction run by the robots
@@ -265,8 +267,7 @@ impl MissionPlan {
         })
     }
 
-    /// The central options in range, as [`simulate`](crate::simulate) checks them (it
-    /// checks the swarm's when the robots start).
+    /// The central options in range (the swarm's are checked when its robots start).
     fn check(&self) -> Result<(), MissionError> {
         check_options(&self.options())
     }
@@ -384,18 +385,20 @@ impl Planner {
     /// `on_time` the mission time after every event (a progress bar).
     ///
     /// # Errors
-    /// The simulator's errors.
+    /// [`MissionError::Invalid`] for a time between frames that is not finite and
+    /// positive; the simulator's errors.
     pub fn run(
         &self,
         mission: &Mission,
         recording: Recording,
         on_time: impl FnMut(f64),
     ) -> Result<MissionRun, MissionError> {
+        check_frame_every(recording.frame_every)?;
         let options = RunOptions {
             trace: recording.trace,
             frame_every: recording.frame_every,
             ..self.options
         };
-        crate::simulate_with(mission, self.replan(), options, on_time)
+        run_checked(mission, self.replan(), options, on_time)
     }
 }

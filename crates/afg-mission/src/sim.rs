@@ -100,22 +100,12 @@ struct Pending {
 /// Relative tolerance under which an arrival or completion counts as reached.
 const REACHED: f64 = 1e-9;
 
-/// Runs `mission` with decisions by `replan` (see docs/missions.md for the model).
+/// Runs `mission` with decisions by `replan` (see docs/missions.md for the model),
+/// its options checked first.
 ///
 /// # Errors
 /// [`MissionError::Alloc`] if the allocator fails, [`MissionError::Invalid`] for an
 /// option out of range.
-///
-/// # Examples
-/// ```
-/// use afg_baseline::Greedy;
-/// use afg_mission::{MissionConfig, Preset, Replan, RunOptions, simulate};
-/// let mission = MissionConfig::new(Preset::Static, 20, 4, 1).generate()?;
-/// let run = simulate(&mission, Replan::Scratch(&Greedy), RunOptions::default())?;
-/// assert_eq!(run.metrics.tasks_done, 4);
-/// assert!(run.metrics.makespan.is_some());
-/// # Ok::<(), afg_mission::MissionError>(())
-/// ```
 pub fn simulate(
     mission: &Mission,
     replan: Replan<'_>,
@@ -129,17 +119,6 @@ pub fn simulate(
 ///
 /// # Errors
 /// As [`simulate`].
-///
-/// # Examples
-/// ```
-/// use afg_baseline::Greedy;
-/// use afg_mission::{MissionConfig, Preset, Replan, RunOptions, simulate_with};
-/// let mission = MissionConfig::new(Preset::Waves, 10, 4, 1).generate()?;
-/// let mut last = 0.0;
-/// simulate_with(&mission, Replan::Scratch(&Greedy), RunOptions::default(), |t| last = t)?;
-/// assert!(last > 0.0 && last <= mission.horizon);
-/// # Ok::<(), afg_mission::MissionError>(())
-/// ```
 pub fn simulate_with(
     mission: &Mission,
     replan: Replan<'_>,
@@ -147,8 +126,7 @@ pub fn simulate_with(
     on_time: impl FnMut(f64),
 ) -> Result<MissionRun, MissionError> {
     check_options(&options)?;
-    let mut sim = Sim::new(Cow::Borrowed(mission), Some(replan), options);
-    if let Replan::Decentralised(config) = replan {
+    if let Replan::Decentralised(_) = replan {
         let central = options.replan_every.is_some()
             || options.latency != Latency::None
             || options.commit
@@ -158,6 +136,20 @@ pub fn simulate_with(
                 "replanning, latency, commitment and hysteresis are for central decisions; a decentralised method runs at its rounds per time unit".into(),
             ));
         }
+    }
+    run_checked(mission, replan, options, on_time)
+}
+
+/// [`simulate_with`] with options already checked (a [`Planner`](crate::Planner)'s,
+/// checked once when it was made).
+pub(crate) fn run_checked(
+    mission: &Mission,
+    replan: Replan<'_>,
+    options: RunOptions,
+    on_time: impl FnMut(f64),
+) -> Result<MissionRun, MissionError> {
+    let mut sim = Sim::new(Cow::Borrowed(mission), Some(replan), options);
+    if let Replan::Decentralised(config) = replan {
         sim.swarm = Some(SwarmState::new(mission, config)?);
     }
     sim.run(on_time)?;
@@ -456,8 +448,8 @@ mod swarm;
 
 pub use env::{EnvStep, MissionEnv, Perception, ROBOT_FEATURES, TASK_FEATURES, TEAM_FEATURES};
 use motion::Arrival;
-pub(crate) use options::check_options;
 pub use options::{Latency, Replan, RunOptions};
+pub(crate) use options::{check_frame_every, check_options};
 pub use outcome::{Frame, Metrics, MissionRun, TimelinePoint, TraceEvent, Waiting};
 use swarm::SwarmState;
 pub use swarm::{Decentralised, SwarmMetrics};

@@ -6,10 +6,8 @@
 use afg_baseline::{Method, Network, Optimum, SwarmMethod, verify_optimal};
 use afg_game::{Assignment, GeneratorConfig, Instance, Point, TaskId};
 use afg_graph::GraphKind;
-use afg_mission::{
-    Decentralised, Latency, Mission, MissionConfig, MissionRun, Preset, Replan, RunOptions,
-    TraceEvent, simulate,
-};
+use afg_mission::internal::{Decentralised, Replan, RunOptions, simulate};
+use afg_mission::{Latency, Mission, MissionConfig, MissionRun, Preset, TraceEvent};
 use proptest::prelude::*;
 
 mod common;
@@ -407,4 +405,53 @@ fn grape_runs_inside_missions() {
     assert!(swarm.response_mean.unwrap() > 0.0);
     assert!(swarm.unsettled <= 1, "{swarm:?}");
     assert_eq!(swarm.rounds, run.metrics.decisions);
+}
+
+/// A plan's options are checked once, when its planner is made; what a run records
+/// is checked at the run, for every method.
+#[test]
+fn a_plan_is_checked_at_planner_and_a_recording_at_run() {
+    use afg_mission::{MissionMethod, MissionPlan, Recording};
+    let mission = MissionConfig::new(Preset::Static, 10, 3, 1)
+        .generate()
+        .unwrap();
+    let bad_replan = MissionPlan {
+        replan_every: Some(0.0),
+        ..MissionPlan::default()
+    };
+    let refused = bad_replan.planner().err().expect("a zero interval");
+    assert!(
+        refused.to_string().contains("replanning interval"),
+        "{refused}"
+    );
+    for method in [MissionMethod::Central(Method::Greedy), MissionMethod::Grape] {
+        let planner = MissionPlan {
+            method,
+            ..MissionPlan::default()
+        }
+        .planner()
+        .unwrap();
+        for every in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            let frames = Recording {
+                frame_every: Some(every),
+                ..Recording::default()
+            };
+            let refused = planner.run(&mission, frames, |_| {}).unwrap_err();
+            assert!(
+                refused.to_string().contains("between frames"),
+                "{method}: {refused}"
+            );
+        }
+        let frames = Recording {
+            frame_every: Some(0.5),
+            ..Recording::default()
+        };
+        assert!(
+            !planner
+                .run(&mission, frames, |_| {})
+                .unwrap()
+                .frames
+                .is_empty()
+        );
+    }
 }

@@ -6,9 +6,8 @@ mod common;
 
 use afg_baseline::Optimum;
 use afg_game::Point;
-use afg_mission::{
-    Mission, MissionConfig, MissionRun, Preset, Replan, TraceEvent, simulate, work_rate,
-};
+use afg_mission::internal::{Replan, simulate};
+use afg_mission::{Mission, MissionConfig, MissionRun, Preset, TraceEvent, work_rate};
 
 use common::{check_run, traced};
 

@@ -4,9 +4,9 @@
 
 use afg_baseline::{Greedy, Optimum};
 use afg_game::Point;
+use afg_mission::internal::{Replan, RunOptions, simulate};
 use afg_mission::{
-    Failure, Mission, MissionConfig, MissionError, Preset, Replan, RobotSpec, RunOptions, TaskSpec,
-    simulate, work_rate,
+    Failure, Mission, MissionConfig, MissionError, Preset, RobotSpec, TaskSpec, work_rate,
 };
 
 fn robot(x: f64, skills: Vec<u32>) -> RobotSpec {

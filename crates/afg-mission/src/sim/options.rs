@@ -108,6 +108,17 @@ impl Default for RunOptions {
     }
 }
 
+/// A time between frames that is finite and positive, or none.
+pub(crate) fn check_frame_every(frame_every: Option<f64>) -> Result<(), MissionError> {
+    if frame_every.is_some_and(|every| !(every.is_finite() && every > 0.0)) {
+        return Err(MissionError::Invalid(
+            "the time between frames must be finite and positive".into(),
+        ));
+    }
+    Ok(())
+}
+
+/// Every option in range.
 pub(crate) fn check_options(options: &RunOptions) -> Result<(), MissionError> {
     let positive = |x: f64| x.is_finite() && x > 0.0;
     if options.replan_every.is_some_and(|r| !positive(r)) {
@@ -120,11 +131,7 @@ pub(crate) fn check_options(options: &RunOptions) -> Result<(), MissionError> {
             "the hysteresis threshold must be ≥ 0".into(),
         ));
     }
-    if options.frame_every.is_some_and(|r| !positive(r)) {
-        return Err(MissionError::Invalid(
-            "the time between frames must be finite and positive".into(),
-        ));
-    }
+    check_frame_every(options.frame_every)?;
     let latency_ok = match options.latency {
         Latency::None => true,
         Latency::Fixed { delay } => delay.is_finite() && delay >= 0.0,

@@ -148,9 +148,9 @@ pub struct MissionRun {
     pub metrics: Metrics,
     /// Open and done tasks and reward after every event.
     pub timeline: Vec<TimelinePoint>,
-    /// Every event and decision, if [`RunOptions::trace`](crate::RunOptions::trace).
+    /// Every event and decision, if [`Recording::trace`](crate::Recording::trace).
     pub trace: Vec<TraceEvent>,
-    /// Snapshots every [`RunOptions::frame_every`](crate::RunOptions::frame_every) time units.
+    /// Snapshots every [`Recording::frame_every`](crate::Recording::frame_every) time units.
     pub frames: Vec<Frame>,
 }
 
@@ -175,11 +175,10 @@ impl MissionRun {
     ///
     /// # Examples
     /// ```
-    /// use afg_baseline::Greedy;
-    /// use afg_mission::{MissionConfig, Preset, Replan, RunOptions, simulate};
+    /// use afg_mission::{MissionConfig, MissionPlan, Preset, Recording};
     /// let mission = MissionConfig::new(Preset::Static, 5, 2, 1).generate()?;
-    /// let options = RunOptions { trace: true, ..RunOptions::default() };
-    /// let run = simulate(&mission, Replan::Scratch(&Greedy), options)?;
+    /// let traced = Recording { trace: true, ..Recording::default() };
+    /// let run = MissionPlan::default().planner()?.run(&mission, traced, |_| {})?;
     /// assert_eq!(run.trace_jsonl().lines().count(), run.trace.len());
     /// # Ok::<(), afg_mission::MissionError>(())
     /// ```

@@ -19,7 +19,8 @@ use crate::{Mission, MissionError};
 /// ```
 /// use afg_baseline::{Network, SwarmMethod};
 /// use afg_game::Preference;
-/// use afg_mission::{Decentralised, MissionConfig, Preset, Replan, RunOptions, simulate};
+/// use afg_mission::internal::{Decentralised, Replan, RunOptions, simulate};
+/// use afg_mission::{MissionConfig, Preset};
 /// let mission = MissionConfig::new(Preset::Waves, 30, 6, 1).generate()?;
 /// let grape = Decentralised::new(SwarmMethod::Grape { preference: Preference::Selfish }, Network::default());
 /// let run = simulate(&mission, Replan::Decentralised(&grape), RunOptions::default())?;

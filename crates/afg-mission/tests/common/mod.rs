@@ -2,7 +2,8 @@
 //! by the mission tests.
 
 use afg_game::Point;
-use afg_mission::{Mission, MissionRun, RunOptions, TraceEvent, work_rate};
+use afg_mission::internal::RunOptions;
+use afg_mission::{Mission, MissionRun, TraceEvent, work_rate};
 
 /// Run options that keep the trace.
 pub fn traced() -> RunOptions {
