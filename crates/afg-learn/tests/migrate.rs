@@ -130,7 +130,7 @@ fn a_format_1_run_allocates_as_the_committed_one_after_migration() {
     config_as_v1(&mut config);
     let start = json!({"event": "start", "config": config});
     let step = r#"{"event":"step","step":10,"loss":0.5,"epsilon":0.9,"elapsed_s":1.0}"#;
-    std::fs::write(dir.join("log.jsonl"), format!("{start}\n{step}\n")).unwrap();
+    std::fs::write(dir.join(RunDir::LOG), format!("{start}\n{step}\n")).unwrap();
     let run = RunDir::new(&dir);
     let refused = LearnedPolicy::load(&run.weights())
         .err()
@@ -190,7 +190,7 @@ fn format_1_summaries_and_manifests_become_format_2_manifests() {
     let dir = scratch("price");
     std::fs::copy(committed.join("price.json"), dir.join("price.json")).unwrap();
     // Its log of rounds is not a Q network's log of events: left as it is.
-    std::fs::copy(committed.join("log.jsonl"), dir.join("log.jsonl")).unwrap();
+    std::fs::copy(committed.join(RunDir::LOG), dir.join(RunDir::LOG)).unwrap();
     let manifest = read(&committed.join("manifest.json"));
     let summary = json!({
         "command": manifest["command"],
@@ -202,8 +202,8 @@ fn format_1_summaries_and_manifests_become_format_2_manifests() {
     assert_eq!(migrate_run(&dir).unwrap().len(), 2);
     assert!(!dir.join("summary.json").exists());
     assert_eq!(
-        std::fs::read(dir.join("log.jsonl")).unwrap(),
-        std::fs::read(committed.join("log.jsonl")).unwrap()
+        std::fs::read(dir.join(RunDir::LOG)).unwrap(),
+        std::fs::read(committed.join(RunDir::LOG)).unwrap()
     );
     assert_eq!(
         RunDir::new(&dir).manifest().unwrap(),

@@ -72,7 +72,7 @@ fn events_round_trip_and_old_validation_lines_still_read() {
     );
     // A line that is not an event is named by its line number.
     std::fs::write(
-        dir.join("log.jsonl"),
+        dir.join(RunDir::LOG),
         format!("{}\n{{\"event\":\"teleport\"}}\n", old),
     )
     .unwrap();
@@ -103,7 +103,7 @@ fn non_finite_numbers_in_the_log_read_back() {
         10, &diverged, 2.0,
     )))
     .unwrap();
-    let text = std::fs::read_to_string(dir.join("log.jsonl")).unwrap();
+    let text = std::fs::read_to_string(dir.join(RunDir::LOG)).unwrap();
     assert!(
         text.contains(r#""loss":"inf""#) && text.contains(r#""percent_of_opt":"NaN""#),
         "{text}"
@@ -141,7 +141,7 @@ fn a_torn_last_line_is_reported_left_out_and_dropped_on_resume() {
     let whole = serde_json::to_string(&step(30)).unwrap();
     let mut f = std::fs::OpenOptions::new()
         .append(true)
-        .open(dir.join("log.jsonl"))
+        .open(dir.join(RunDir::LOG))
         .unwrap();
     std::io::Write::write_all(&mut f, &whole.as_bytes()[..whole.len() / 2]).unwrap();
     assert_eq!(run.torn_log_line().unwrap(), Some(3));
@@ -150,7 +150,7 @@ fn a_torn_last_line_is_reported_left_out_and_dropped_on_resume() {
     run.append(&step(30)).unwrap();
     assert_eq!(run.log().unwrap(), vec![step(10), step(20), step(30)]);
     // A bad line that does end in a line break is no torn line: an error.
-    std::fs::write(dir.join("log.jsonl"), "{\"event\":\"step\"}\n").unwrap();
+    std::fs::write(dir.join(RunDir::LOG), "{\"event\":\"step\"}\n").unwrap();
     assert!(run.log().is_err());
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -170,11 +170,11 @@ fn truncating_a_log_keeps_earlier_steps_and_their_clock() {
             .to_owned(),
         r#"{"event":"step","step":30,"loss":0.5,"epsilon":1.0,"elapsed_s":4.0}"#.to_owned(),
     ];
-    std::fs::write(dir.join("log.jsonl"), lines.join("\n") + "\n").unwrap();
+    std::fs::write(dir.join(RunDir::LOG), lines.join("\n") + "\n").unwrap();
     assert_eq!(run.truncate_log(20).unwrap(), 2.5);
     // The kept lines are the lines as written, not re-serialised events.
     assert_eq!(
-        std::fs::read_to_string(dir.join("log.jsonl")).unwrap(),
+        std::fs::read_to_string(dir.join(RunDir::LOG)).unwrap(),
         lines[..3].join("\n") + "\n"
     );
     let kept = run.log().unwrap();
