@@ -284,7 +284,7 @@ impl<'a> Search<'a> {
             Ok(solution) => Ok(self
                 .node_of(decisions, Vec::new(), Vec::new(), &columns, solution)
                 .expect("the root fixes no robot")),
-            Err(Interrupted { task_of, bound, .. }) => {
+            Err(Interrupted { task_of, bound }) => {
                 self.offer(&self.completed(&task_of));
                 Err(bound)
             }
