@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use afg_baseline::{AllocError, TeamOptimum, TeamRelaxation};
+use afg_baseline::{AllocError, Allocator, TeamOptimum, TeamRelaxation};
 use afg_game::{GameSize, Instance, Point, Task};
 use afg_learn::LearnError;
 use afg_learn::run::{ModelOptions, load_model};
@@ -362,6 +362,72 @@ fn the_committed_staffing_models_reach_98_percent_of_the_optimum() {
         assert!(
             learned > knapsack && learned > dive,
             "{name}: {learned} against the knapsack's {knapsack} and the dive's {dive}"
+        );
+    }
+}
+
+/// The committed staffing models on held-out games of the families they were not
+/// trained on (100 robots × 20 tasks, as docs/families.md measures them): at least
+/// 98 % of the exact solver's optimum (its bound where it stops at 2 s) on average
+/// where docs/teams.md says they carry — the threshold model on `clustered`,
+/// `heavy-tail`, `constant`, `team-rewards` and `void-capacity`, the skill model on
+/// `many-skills` — and no game below 90 % on any family either plays, `sparse-skills`
+/// and `mixed` included (where the mean is below 98 %). The hand-written knapsack
+/// beside them fails the 98 % on `many-skills`; on `clustered`, `heavy-tail` and
+/// `sparse-skills` it does as well as the network, so no more is claimed there.
+#[test]
+fn the_committed_staffing_models_carry_to_the_families_docs_name() {
+    use afg_game::Family;
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let carries = [
+        ("staffing_teams", Family::Clustered, true),
+        ("staffing_teams", Family::HeavyTail, true),
+        ("staffing_teams", Family::Constant, true),
+        ("staffing_teams", Family::TeamRewards, true),
+        ("staffing_teams", Family::VoidCapacity, true),
+        ("staffing_skills", Family::ManySkills, true),
+        ("staffing_skills", Family::SparseSkills, false),
+        ("staffing_skills", Family::Mixed, false),
+    ];
+    for (name, family, mean_98) in carries {
+        let policy = load_model(
+            &repo.join("models/ours").join(name),
+            ModelOptions::default(),
+        )
+        .unwrap();
+        // The same pipeline without the network: the hand-written knapsack's worth.
+        let hand = afg_learn::staffing::StaffingPolicy::untrained(
+            afg_learn::price::PriceNetConfig { hidden: 1, seed: 0 },
+            name == "staffing_skills",
+        );
+        let (mut learned, mut knapsack) = (Vec::new(), Vec::new());
+        for seed in 54..58 {
+            let inst = family.config(100, 20, seed).unwrap().generate().unwrap();
+            let best = TeamOptimum::with_time_limit(2.0)
+                .unwrap()
+                .solve(&inst)
+                .unwrap();
+            let reference = if best.proven {
+                best.welfare
+            } else {
+                best.bound
+            };
+            let share = |allocator: &dyn Allocator| {
+                let out = allocator.allocate(&inst).unwrap().assignment;
+                inst.check(&out).unwrap();
+                inst.welfare(&out) / reference
+            };
+            learned.push(share(policy.as_ref()));
+            knapsack.push(share(&hand));
+        }
+        let mean = |shares: &[f64]| shares.iter().sum::<f64>() / shares.len() as f64;
+        let worst = learned.iter().copied().fold(f64::INFINITY, f64::min);
+        assert!(worst >= 0.90, "{name} on {family}: worst {worst}");
+        assert!(
+            !mean_98 || mean(&learned) >= 0.98,
+            "{name} on {family}: mean {} (the hand-written knapsack's {})",
+            mean(&learned),
+            mean(&knapsack)
         );
     }
 }
