@@ -298,6 +298,29 @@ proptest::proptest! {
     }
 }
 
+/// What a model is measured against on `inst`: the exact solver's optimum, or its
+/// proven bound where it stops at `seconds` unproven.
+fn reference(inst: &Instance, seconds: f64) -> f64 {
+    let best = TeamOptimum::with_time_limit(seconds)
+        .unwrap()
+        .solve(inst)
+        .unwrap();
+    if best.proven {
+        best.welfare
+    } else {
+        best.bound
+    }
+}
+
+/// The staffing pipeline without the network: the hand-written knapsack's worth
+/// (reading skills where `skills`).
+fn hand_knapsack(skills: bool) -> afg_learn::staffing::StaffingPolicy {
+    afg_learn::staffing::StaffingPolicy::untrained(
+        afg_learn::price::PriceNetConfig { hidden: 1, seed: 0 },
+        skills,
+    )
+}
+
 /// One method's mean share of the reference over `games` (the proven optimum, or the
 /// bound where the solver stops).
 fn mean_share(games: &[(Instance, f64)], method: impl Fn(&Instance) -> f64) -> f64 {
@@ -322,26 +345,12 @@ fn the_committed_staffing_models_reach_98_percent_of_the_optimum() {
         let model = StaffingModel::load(&dir.join(StaffingModel::FILE_NAME)).unwrap();
         let skills = model.training.skills;
         let policy = load_model(&dir, ModelOptions::default()).unwrap();
-        let hand = afg_learn::staffing::StaffingPolicy::untrained(
-            afg_learn::price::PriceNetConfig { hidden: 1, seed: 0 },
-            skills.is_some(),
-        );
+        let hand = hand_knapsack(skills.is_some());
         let size = model.training.sizes[0];
-        let limit = std::time::Duration::from_secs(5);
         let games: Vec<(Instance, f64)> = (54..64)
             .map(|seed| {
                 let inst = scarce_game(size, skills, seed).unwrap();
-                let best = TeamOptimum {
-                    time_limit: Some(limit),
-                    ..TeamOptimum::default()
-                }
-                .solve(&inst)
-                .unwrap();
-                let reference = if best.proven {
-                    best.welfare
-                } else {
-                    best.bound
-                };
+                let reference = reference(&inst, 5.0);
                 (inst, reference)
             })
             .collect();
@@ -395,23 +404,11 @@ fn the_committed_staffing_models_carry_to_the_families_docs_name() {
             ModelOptions::default(),
         )
         .unwrap();
-        // The same pipeline without the network: the hand-written knapsack's worth.
-        let hand = afg_learn::staffing::StaffingPolicy::untrained(
-            afg_learn::price::PriceNetConfig { hidden: 1, seed: 0 },
-            name == "staffing_skills",
-        );
+        let hand = hand_knapsack(name == "staffing_skills");
         let (mut learned, mut knapsack) = (Vec::new(), Vec::new());
         for seed in 54..58 {
             let inst = family.config(100, 20, seed).unwrap().generate().unwrap();
-            let best = TeamOptimum::with_time_limit(2.0)
-                .unwrap()
-                .solve(&inst)
-                .unwrap();
-            let reference = if best.proven {
-                best.welfare
-            } else {
-                best.bound
-            };
+            let reference = reference(&inst, 2.0);
             let share = |allocator: &dyn Allocator| {
                 let out = allocator.allocate(&inst).unwrap().assignment;
                 inst.check(&out).unwrap();
