@@ -28,6 +28,7 @@ pub mod realloc_study;
 pub mod regret_study;
 pub mod run_manifests;
 pub mod scale;
+pub mod study_families;
 pub mod table_diff;
 pub mod tables;
 pub mod train_all;

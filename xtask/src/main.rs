@@ -6,7 +6,8 @@ use anyhow::Result;
 use clap::{Parser, Subcommand};
 use xtask::{
     bench, bench_opt, bench_schedule, bench_staffing, bench_teams, crash, datasets, grape_fig7,
-    mission_study, realloc_study, regret_study, run_manifests, scale, tables, train_all,
+    mission_study, realloc_study, regret_study, run_manifests, scale, study_families, tables,
+    train_all,
 };
 
 /// See the `mimalloc` feature in Cargo.toml.
@@ -44,6 +45,8 @@ enum Command {
     BenchSchedule(bench_schedule::BenchScheduleArgs),
     /// The staffing model (ours) on held-out team games: against the optimum, every hand-written allocator, and afg, CP-SAT and HiGHS given its time.
     BenchStaffing(bench_staffing::BenchStaffingArgs),
+    /// Staffing models (ours) trained on one family, on a mixture and on the mixture without each family, tested on every family (docs/families.md).
+    StudyFamilies(study_families::StudyFamiliesArgs),
     /// The optimum re-solved after one event against from scratch; whole missions with allocators in the loop.
     BenchMission(bench::mission_loop::BenchMissionArgs),
     /// The learned policy (fast path, blocks, repair) against OPT, DA and greedy up to N = 100 000.
@@ -88,6 +91,7 @@ impl Command {
             Command::BenchTeams(args) => bench_teams::run(args),
             Command::BenchSchedule(args) => bench_schedule::run(args),
             Command::BenchStaffing(args) => bench_staffing::run(args),
+            Command::StudyFamilies(args) => study_families::run(args),
             Command::BenchMission(args) => bench::mission_loop::run(args),
             Command::BenchScale(args) => scale::run(args),
             Command::ReallocStudy(args) => realloc_study::run(args),

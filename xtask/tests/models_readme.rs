@@ -37,6 +37,11 @@ fn is_change(word: &str) -> bool {
             .iter()
             .any(|prefix| numbered(prefix, digits))
         || numbered("lr", rate)
+        || word == "mixture"
+        || ["on-", "without-"].iter().any(|prefix| {
+            word.strip_prefix(prefix)
+                .is_some_and(|family| family.parse::<afg_game::Family>().is_ok())
+        })
 }
 
 /// Whether a run's directory name reads `{model}[_{change}…]_n{N}`, or
@@ -72,6 +77,9 @@ fn the_grammar_takes_the_readme_names_and_refuses_the_old_ones() {
         "staffing_teams",
         "staffing_teams_seed1",
         "staffing_skills",
+        "staffing_teams_on-heavy-tail",
+        "staffing_skills_without-mixed",
+        "staffing_teams_mixture",
     ] {
         assert!(follows_the_grammar(name), "{name}");
     }
@@ -86,6 +94,8 @@ fn the_grammar_takes_the_readme_names_and_refuses_the_old_ones() {
         "staffing_n60",
         "staffing_teams_big",
         "staffing_both",
+        "staffing_teams_on-nowhere",
+        "staffing_teams_without",
     ] {
         assert!(!follows_the_grammar(name), "{name}");
     }
@@ -114,7 +124,7 @@ fn the_models_readme_lists_every_run_in_its_folder_and_where_it_is_discussed() {
         let cells: Vec<&str> = line.split('|').map(str::trim).collect();
         assert_eq!(cells.len(), 6, "{line}");
         let run = cells[1].trim_matches('`').to_owned();
-        let (run_folder, name) = run.split_once('/').unwrap_or(("", &run));
+        let (run_folder, name) = run.rsplit_once('/').unwrap_or(("", &run));
         assert_eq!(run_folder, folder, "{run} is listed under `{folder}/`");
         assert!(
             follows_the_grammar(name),

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use afg_game::{GameSize, GeneratorKnobs, SkillDraw};
+use afg_game::{Family, GameSize, GeneratorKnobs, SkillDraw};
 use afg_learn::staffing::{StaffingModel, StaffingTrainConfig, StaffingTrainer};
 use anyhow::{Result, bail};
 use clap::Args;
@@ -30,7 +30,14 @@ pub struct StaffingArgs {
     #[arg(long, value_delimiter = ',', num_args = 1, value_names = ["LO,HI"])]
     #[serde(serialize_with = "joined")]
     requires: Vec<usize>,
-    /// Training games per size.
+    /// Draw the games from these named families instead of the scarce game, --games of
+    /// each per size (as `afg gen --family`; docs/families.md): a model for games
+    /// drawn unlike ours. It reads the skill features where any family draws skills;
+    /// not with --skills (the families draw their own).
+    #[arg(long, value_delimiter = ',', value_name = "NAMES")]
+    #[serde(serialize_with = "joined")]
+    families: Vec<Family>,
+    /// Training games per size (per family and size, with --families).
     #[arg(long)]
     games: Option<usize>,
     /// Validation games per size (other seeds).
@@ -110,6 +117,7 @@ pub fn run(args: StaffingArgs) -> Result<()> {
         config.sizes.clone_from(&args.sizes);
     }
     config.skills = skill_draw(&args)?;
+    config.families.clone_from(&args.families);
     crate::set_given!(config;
         games = args.games,
         validation_games = args.validation_games,
@@ -121,7 +129,7 @@ pub fn run(args: StaffingArgs) -> Result<()> {
         network.hidden = args.hidden,
     );
     let trainer = StaffingTrainer::new(config)?;
-    let games = (trainer.config().games * trainer.config().sizes.len()) as u64;
+    let games = trainer.config().training_game_count() as u64;
     let bar = afg_eval::report::progress(games, "label games");
     let command = format!(
         "afg train-staffing {}",

@@ -225,6 +225,23 @@ impl Family {
         Family::Mixed,
     ];
 
+    /// Whether the family's games carry skills.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::Family;
+    /// for family in Family::ALL {
+    ///     assert_eq!(family.draws_skills(), family.config(20, 4, 0)?.skills.is_some());
+    /// }
+    /// # Ok::<(), afg_game::GameError>(())
+    /// ```
+    pub fn draws_skills(self) -> bool {
+        matches!(
+            self,
+            Family::Skills | Family::SparseSkills | Family::ManySkills | Family::Mixed
+        )
+    }
+
     /// The name tables and command lines use.
     pub fn name(self) -> &'static str {
         match self {

@@ -6,7 +6,7 @@ use std::path::Path;
 use std::time::Duration;
 
 use afg_baseline::TeamOptimum;
-use afg_game::{GameSize, GeneratorKnobs, Instance, SkillDraw};
+use afg_game::{Family, GameSize, GeneratorKnobs, Instance, SkillDraw};
 use serde::{Deserialize, Serialize};
 
 use super::features::STAFF_FEATURES;
@@ -37,11 +37,53 @@ pub fn scarce_game(
     Ok(knobs.config(size.robots, size.tasks, seed)?.generate()?)
 }
 
-/// One labelled game: its seed and size, every task's features and label (1: earning
+/// Which game a training run draws: the scarce game, or a named family's, of a size
+/// and seed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct GameDraw {
+    /// The named family (`None`: the scarce game, with the run's skills).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub family: Option<Family>,
+    /// The generator seed.
+    pub seed: u64,
+    /// Its size.
+    pub size: GameSize,
+}
+
+impl GameDraw {
+    /// The game: the family's, or the scarce game with `skills`.
+    ///
+    /// # Errors
+    /// Errors of the generator.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::{Family, GameSize};
+    /// use afg_learn::staffing::GameDraw;
+    /// let size = GameSize { robots: 30, tasks: 5 };
+    /// let draw = GameDraw { family: Some(Family::Constant), seed: 1, size };
+    /// let inst = draw.game(None)?;
+    /// assert!(inst.task_ids().all(|j| inst.min_team(j) == 9)); // ⌈1.5 N/M⌉
+    /// # Ok::<(), afg_learn::LearnError>(())
+    /// ```
+    pub fn game(self, skills: Option<SkillDraw>) -> Result<Instance, LearnError> {
+        match self.family {
+            None => scarce_game(self.size, skills, self.seed),
+            Some(family) => Ok(family
+                .config(self.size.robots, self.size.tasks, self.seed)?
+                .generate()?),
+        }
+    }
+}
+
+/// One labelled game: which game it is, every task's features and label (1: earning
 /// in the best assignment found, its team complete and holding its skills), and that
 /// assignment's welfare.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LabelledGame {
+    /// Its named family (`None`: the scarce game).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub family: Option<Family>,
     /// The generator seed.
     pub seed: u64,
     /// Its size.
@@ -58,26 +100,36 @@ pub struct LabelledGame {
     pub proven: bool,
 }
 
+impl LabelledGame {
+    /// Which game it is.
+    pub fn draw(&self) -> GameDraw {
+        GameDraw {
+            family: self.family,
+            seed: self.seed,
+            size: self.size,
+        }
+    }
+}
+
 pub(super) fn label(
-    size: GameSize,
-    skills: Option<SkillDraw>,
-    seed: u64,
+    inst: &Instance,
+    draw: GameDraw,
     limit: Duration,
 ) -> Result<LabelledGame, LearnError> {
-    let inst = scarce_game(size, skills, seed)?;
     let best = TeamOptimum {
         time_limit: Some(limit),
         ..TeamOptimum::default()
     }
-    .solve(&inst)
+    .solve(inst)
     .map_err(|e| LearnError::InvalidConfig(e.to_string()))?;
     let labels = (inst.earning_tasks(&best.assignment).into_iter())
         .map(|earns| f32::from(u8::from(earns)))
         .collect();
     Ok(LabelledGame {
-        seed,
-        size,
-        features: staffing_features(&inst, &TeamOptimum::relax(&inst)),
+        family: draw.family,
+        seed: draw.seed,
+        size: draw.size,
+        features: staffing_features(inst, &TeamOptimum::relax(inst)),
         labels,
         thresholds: inst.task_ids().map(|j| inst.min_team(j)).collect(),
         welfare: best.welfare,

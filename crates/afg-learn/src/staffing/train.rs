@@ -12,7 +12,7 @@
 use std::path::Path;
 use std::time::Duration;
 
-use afg_game::{GameSize, Instance, SkillDraw};
+use afg_game::{Family, GameSize, Instance, SkillDraw};
 use burn::optim::adaptor::OptimizerAdaptor;
 use burn::optim::{Adam, AdamConfig, GradientsParams, Optimizer};
 use burn::tensor::{Tensor, TensorData};
@@ -23,7 +23,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::features::{MARGIN, SIZE, STAFF_FEATURES, staffing_input_width, staffing_inputs};
-use super::labels::{LABELS_FILE_NAME, LabelledGame, label, lines_of, read_labels, scarce_game};
+use super::labels::{GameDraw, LABELS_FILE_NAME, LabelledGame, label, lines_of, read_labels};
 use super::{StaffingModel, knapsack, staff_by_values, values_of};
 use crate::price::{PriceNet, PriceNetConfig, TaskMlp};
 use crate::train::training_instance_seed;
@@ -40,7 +40,12 @@ pub struct StaffingTrainConfig {
     /// the skill features too and plays skill games; one trained without refuses them.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub skills: Option<SkillDraw>,
-    /// Training games per size.
+    /// Draw the games from these named families instead (each size's training and
+    /// validation games per family; empty: the scarce game above). The model reads the
+    /// skill features where any of them draws skills.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub families: Vec<Family>,
+    /// Training games per size (per family and size, with families).
     pub games: usize,
     /// Validation games per size (other seeds).
     pub validation_games: usize,
@@ -70,6 +75,7 @@ impl StaffingTrainConfig {
                 .map(|(robots, tasks)| GameSize { robots, tasks })
                 .to_vec(),
             skills: None,
+            families: Vec::new(),
             games: 600,
             validation_games: 20,
             label_time_limit: 10.0,
@@ -107,13 +113,48 @@ impl StaffingTrainConfig {
         {
             return bad("skills need S ≥ 1, a share in [0, 1] and requirements LO ≤ HI");
         }
+        if self.skills.is_some() && !self.families.is_empty() {
+            return bad("named families draw their own skills: give skills or families, not both");
+        }
         Ok(())
     }
 
     /// The width of the network's input (it reads the skill features where the games
     /// have skills).
     pub fn input_width(&self) -> usize {
-        staffing_input_width(self.skills.is_some())
+        staffing_input_width(self.reads_skills())
+    }
+
+    /// Whether the games have skills, so that the model reads the skill features.
+    pub fn reads_skills(&self) -> bool {
+        self.skills.is_some() || self.families.iter().any(|f| f.draws_skills())
+    }
+
+    /// How many training games the run labels: per size (and family).
+    pub fn training_game_count(&self) -> usize {
+        self.games * self.sizes.len() * self.families.len().max(1)
+    }
+
+    /// The games of a run: per size, per family (or the scarce game), `count` seeds
+    /// from `seed_of(size's index, k)`; a family's games at a size are the same in every
+    /// run that names it.
+    fn draws(&self, count: usize, seed_of: impl Fn(usize, u64) -> u64) -> Vec<GameDraw> {
+        let families: Vec<Option<Family>> = if self.families.is_empty() {
+            vec![None]
+        } else {
+            self.families.iter().copied().map(Some).collect()
+        };
+        let mut draws = Vec::new();
+        for (at, &size) in self.sizes.iter().enumerate() {
+            for &family in &families {
+                draws.extend((0..count as u64).map(|k| GameDraw {
+                    family,
+                    seed: seed_of(at, k),
+                    size,
+                }));
+            }
+        }
+        draws
     }
 }
 
@@ -186,17 +227,12 @@ impl StaffingTrainer {
         &self.config
     }
 
-    /// The training games to label: (size, seed), every size's in turn.
-    fn training_games(&self) -> Vec<(GameSize, u64)> {
-        let mut index = 0;
-        let mut games = Vec::new();
-        for &size in &self.config.sizes {
-            for _ in 0..self.config.games {
-                games.push((size, training_instance_seed(self.config.seed, index)));
-                index += 1;
-            }
-        }
-        games
+    /// The training games to label, every size's (and family's) in turn.
+    fn training_games(&self) -> Vec<GameDraw> {
+        let (seed, games) = (self.config.seed, self.config.games as u64);
+        self.config.draws(self.config.games, |at, k| {
+            training_instance_seed(seed, at as u64 * games + k)
+        })
     }
 
     /// Labels every training and validation game, in parallel over the cores. With
@@ -215,29 +251,35 @@ impl StaffingTrainer {
         let limit = Duration::from_secs_f64(self.config.label_time_limit);
         let skills = self.config.skills;
         let games = self.training_games();
+        let solve = |draw: GameDraw| -> Result<(Instance, LabelledGame), LearnError> {
+            let inst = draw.game(skills)?;
+            let labelled = label(&inst, draw, limit)?;
+            Ok((inst, labelled))
+        };
         // The games already labelled, in whatever order a stopped run finished them.
         let cached: Vec<LabelledGame> = match cache {
             Some(path) if path.exists() => read_labels(path)?,
             _ => Vec::new(),
         };
-        if let Some(game) = cached.iter().find(|g| !games.contains(&(g.size, g.seed))) {
+        if let Some(game) = cached.iter().find(|g| !games.contains(&g.draw())) {
             return Err(LearnError::InvalidConfig(format!(
-                "{} holds another run's games (seed {} of {}x{}, which this run does not draw); remove it or choose another directory",
+                "{} holds another run's games (seed {} of {}x{}{}, which this run does not draw); remove it or choose another directory",
                 cache.map_or_else(String::new, |p| p.display().to_string()),
                 game.seed,
                 game.size.robots,
                 game.size.tasks,
+                game.family.map_or_else(String::new, |f| format!(" of {f}")),
             )));
         }
         cached.iter().for_each(&on_game);
-        let todo: Vec<(GameSize, u64)> = (games.iter().copied())
-            .filter(|&(size, seed)| !cached.iter().any(|g| (g.size, g.seed) == (size, seed)))
+        let todo: Vec<GameDraw> = (games.iter().copied())
+            .filter(|&draw| !cached.iter().any(|g| g.draw() == draw))
             .collect();
         let file = std::sync::Mutex::new(cache.map(|path| (path.to_path_buf(), lines_of(&cached))));
         let fresh: Vec<LabelledGame> = todo
             .par_iter()
-            .map(|&(size, seed)| {
-                let game = label(size, skills, seed, limit)?;
+            .map(|&draw| {
+                let (_, game) = solve(draw)?;
                 if let Some((path, text)) = file.lock().expect("no panics while held").as_mut() {
                     text.push_str(&serde_json::to_string(&game).expect("a game serialises"));
                     text.push('\n');
@@ -252,10 +294,10 @@ impl StaffingTrainer {
         let mut labelled: Vec<Option<LabelledGame>> =
             cached.into_iter().chain(fresh).map(Some).collect();
         let done: Vec<LabelledGame> = (games.iter())
-            .map(|&(size, seed)| {
+            .map(|&draw| {
                 let at = labelled
                     .iter()
-                    .position(|g| g.as_ref().is_some_and(|g| (g.size, g.seed) == (size, seed)));
+                    .position(|g| g.as_ref().is_some_and(|g| g.draw() == draw));
                 at.and_then(|at| labelled[at].take())
                     .expect("every game labelled")
             })
@@ -264,22 +306,10 @@ impl StaffingTrainer {
             afg_game::fs::write_atomic(path, lines_of(&done).as_bytes())?;
         }
         self.training = done;
-        let validation: Vec<(GameSize, u64)> = self
-            .config
-            .sizes
-            .iter()
-            .flat_map(|&size| {
-                (0..self.config.validation_games as u64).map(move |i| (size, (1 << 63) + i))
-            })
-            .collect();
+        let validation = (self.config).draws(self.config.validation_games, |_, i| (1 << 63) + i);
         self.validation = validation
             .par_iter()
-            .map(|&(size, seed)| {
-                Ok((
-                    scarce_game(size, skills, seed)?,
-                    label(size, skills, seed, limit)?,
-                ))
-            })
+            .map(|&draw| solve(draw))
             .collect::<Result<_, LearnError>>()?;
         Ok(())
     }
@@ -318,7 +348,7 @@ impl StaffingTrainer {
         }
         self.epoch += 1;
         let mlp = TaskMlp::from_burn(&self.net);
-        let reads_skills = self.config.skills.is_some();
+        let reads_skills = self.config.reads_skills();
         let (mut agree, mut tasks, mut percent) = (0usize, 0usize, 0.0);
         for (inst, game) in &self.validation {
             let values = values_of(&mlp, &game.features, reads_skills);
@@ -355,7 +385,7 @@ impl StaffingTrainer {
         for &g in batch {
             x.extend(staffing_inputs(
                 &self.training[g].features,
-                self.config.skills.is_some(),
+                self.config.reads_skills(),
             ));
         }
         let rows = x.len() / width;
