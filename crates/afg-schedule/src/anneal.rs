@@ -2,8 +2,10 @@
 //!
 //! A plan is an order; the decoder staffs each task in turn, so every change to the
 //! order is replayed from the first position it touches, with the fleets before each
-//! position kept from the last accepted plan. Moves: take one task or a block of up to
-//! four out and put it back nearby, or swap two nearby tasks.
+//! position kept from the last accepted plan. Moves: put a task just before or after
+//! one of the tasks nearest it on the map (so that the team of one can go on to the
+//! other), take one task or a block of up to four out and put it back nearby in the
+//! order, or swap two nearby tasks.
 
 use std::time::Instant;
 
@@ -65,7 +67,7 @@ impl<'a> Plan<'a> {
             ready: Vec::new(),
             team: Vec::new(),
         };
-        plan.cost = plan.replay(0, true);
+        plan.cost = plan.replay(0, usize::MAX, true);
         plan
     }
 
@@ -74,8 +76,11 @@ impl<'a> Plan<'a> {
         self.cost
     }
 
-    /// Decodes from position `from` on; with `keep`, stores the fleets it passes.
-    fn replay(&mut self, from: usize, keep: bool) -> Cost {
+    /// Decodes from position `from` on; with `keep`, stores the fleets it passes. Past
+    /// `changed` (the last position a move touched), a fleet equal to the plan's own at
+    /// the same place means the rest of the plan is as it was: the replay stops there
+    /// and the cost is the plan's. `changed` at or past the end replays it all.
+    fn replay(&mut self, from: usize, changed: usize, keep: bool) -> Cost {
         let mut fleet = self.before[from].clone();
         let mut overwait = self.overwait[from];
         for p in from..self.order.len() {
@@ -85,6 +90,11 @@ impl<'a> Plan<'a> {
                 .staff(&fleet, j, &mut self.ready, &mut self.team);
             overwait += over;
             self.decoder.assign(&mut fleet, j, start, &self.team);
+            let unchanged =
+                p == changed && overwait == self.overwait[p + 1] && fleet == self.before[p + 1];
+            if unchanged {
+                return self.cost;
+            }
             if keep {
                 self.before[p + 1].clone_from(&fleet);
                 self.overwait[p + 1] = overwait;
@@ -107,8 +117,19 @@ enum Move {
     Swap(usize, usize),
 }
 
+/// How many of a task's nearest tasks a move may put it beside.
+const NEIGHBOURS: usize = 8;
+/// The share of moves that put a task beside a neighbour on the map.
+const BESIDE_SHARE: f64 = 0.4;
+
 impl Move {
-    fn draw(m: usize, rng: &mut ChaCha8Rng) -> Self {
+    fn draw(order: &[usize], neighbours: &[Vec<usize>], rng: &mut ChaCha8Rng) -> Self {
+        let m = order.len();
+        if rng.random_bool(BESIDE_SHARE)
+            && let Some(mv) = Move::beside(order, neighbours, rng)
+        {
+            return mv;
+        }
         let near = |p: usize, rng: &mut ChaCha8Rng| {
             let span = 12.min(m - 1) as i64;
             (p as i64 + rng.random_range(-span..=span)).clamp(0, m as i64 - 1) as usize
@@ -127,6 +148,30 @@ impl Move {
             from,
             len,
             to: near(from, rng).min(m - len),
+        }
+    }
+
+    /// Moves a task to just after or just before one of its `neighbours` (None for a
+    /// task with none).
+    fn beside(order: &[usize], neighbours: &[Vec<usize>], rng: &mut ChaCha8Rng) -> Option<Self> {
+        let from = rng.random_range(0..order.len());
+        let near = &neighbours[order[from]];
+        if near.is_empty() {
+            return None;
+        }
+        let other = near[rng.random_range(0..near.len())];
+        let at = order.iter().position(|&j| j == other)?;
+        // `to` is where the task stands once moved: past `from`, the neighbour's own
+        // place moves up by one when the task leaves.
+        let to = at + usize::from(rng.random_bool(0.5)) - usize::from(at > from);
+        Some(Move::Shift { from, len: 1, to })
+    }
+
+    /// The last position the move changes.
+    fn last(self) -> usize {
+        match self {
+            Move::Swap(a, b) => a.max(b),
+            Move::Shift { from, len, to } => from.max(to) + len - 1,
         }
     }
 
@@ -173,6 +218,7 @@ pub(crate) fn anneal(
     let total = deadline.map(|d| d.saturating_duration_since(clock).as_secs_f64());
     let (hot, cold) = (0.02 * plan.cost.makespan, 0.0005 * plan.cost.makespan);
     let (mut best_order, mut best) = (plan.order.clone(), plan.cost);
+    let neighbours = plan.decoder.neighbours(NEIGHBOURS);
     let (mut step, mut progress) = (0u64, 0.0);
     loop {
         if let Some(n) = max_steps {
@@ -190,11 +236,12 @@ pub(crate) fn anneal(
         }
         step += 1;
         let temperature = hot * (cold / hot).powf(progress);
-        let mv = Move::draw(m, rng);
+        let mv = Move::draw(&plan.order, &neighbours, rng);
         let from = mv.apply(&mut plan.order);
-        let delta = plan.replay(from, false).value() - plan.cost.value();
+        let changed = mv.last();
+        let delta = plan.replay(from, changed, false).value() - plan.cost.value();
         if delta <= 0.0 || rng.random::<f64>() < (-delta / temperature).exp() {
-            plan.cost = plan.replay(from, true);
+            plan.cost = plan.replay(from, changed, true);
             if plan.cost.better_than(best) {
                 best = plan.cost;
                 best_order.clone_from(&plan.order);
@@ -204,6 +251,96 @@ pub(crate) fn anneal(
         }
     }
     plan.order = best_order;
-    plan.cost = plan.replay(0, true);
+    plan.cost = plan.replay(0, usize::MAX, true);
     step
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::SeedableRng;
+    use rand::seq::SliceRandom;
+
+    use super::*;
+    use crate::{Family, Generate};
+
+    fn decoder(seed: u64) -> Decoder {
+        let inst = Generate {
+            family: Family::Dcmrta,
+            robots: 6,
+            tasks: 14,
+            seed,
+        }
+        .instance()
+        .unwrap();
+        Decoder::new(&inst, 10.0)
+    }
+
+    /// A replay that stops where the fleet meets the plan's own costs what a replay to
+    /// the end costs, on random moves of random plans.
+    #[test]
+    fn a_replay_that_stops_early_costs_what_a_full_one_does() {
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let (mut stopped, mut checked) = (0, 0);
+        for seed in 0..20 {
+            let decoder = decoder(seed);
+            let neighbours = decoder.neighbours(NEIGHBOURS);
+            let mut plan = Plan::new(&decoder, (0..14).collect());
+            for _ in 0..200 {
+                let mv = Move::draw(&plan.order, &neighbours, &mut rng);
+                let from = mv.apply(&mut plan.order);
+                let early = plan.replay(from, mv.last(), false);
+                let full = plan.replay(from, usize::MAX, false);
+                assert_eq!(early, full);
+                checked += 1;
+                stopped += usize::from(early == plan.cost && full == plan.cost);
+                if rng.random_bool(0.5) {
+                    plan.cost = plan.replay(from, mv.last(), true);
+                    assert_eq!(plan.cost, full);
+                } else {
+                    mv.undo(&mut plan.order);
+                }
+            }
+            // the stored fleets stay the plan's own
+            let cost = plan.cost;
+            assert_eq!(plan.replay(0, usize::MAX, false), cost);
+        }
+        assert!(stopped > checked / 10, "{stopped} of {checked}");
+    }
+
+    /// A move beside a neighbour leaves the task next to that neighbour in the order.
+    #[test]
+    fn a_move_beside_a_neighbour_puts_the_task_next_to_it() {
+        let mut rng = ChaCha8Rng::seed_from_u64(2);
+        let decoder = decoder(3);
+        let neighbours = decoder.neighbours(3);
+        for (j, near) in neighbours.iter().enumerate() {
+            assert_eq!(near.len(), 3);
+            let far = |o: usize| decoder.time(j, o);
+            assert!(near.windows(2).all(|w| far(w[0]) <= far(w[1])));
+            assert!(
+                (0..14)
+                    .filter(|o| *o != j && !near.contains(o))
+                    .all(|o| far(o) >= far(near[2]))
+            );
+        }
+        for _ in 0..500 {
+            let mut order: Vec<usize> = (0..14).collect();
+            order.shuffle(&mut rng);
+            let mv = Move::beside(&order, &neighbours, &mut rng).unwrap();
+            let Move::Shift { from, len: 1, to } = mv else {
+                panic!("a shift of one task")
+            };
+            let task = order[from];
+            mv.apply(&mut order);
+            assert_eq!(order[to], task);
+            let beside = [to.checked_sub(1), Some(to + 1)];
+            assert!(
+                beside
+                    .iter()
+                    .flatten()
+                    .any(|&p| p < 14 && neighbours[task].contains(&order[p])),
+                "{task} at {to} in {order:?}"
+            );
+        }
+    }
 }

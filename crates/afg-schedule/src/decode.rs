@@ -89,6 +89,23 @@ impl Decoder {
         }
     }
 
+    /// The `count` tasks nearest each task, nearest first.
+    pub(crate) fn neighbours(&self, count: usize) -> Vec<Vec<usize>> {
+        (0..self.num_tasks)
+            .map(|j| {
+                let mut others: Vec<usize> = (0..self.num_tasks).filter(|&o| o != j).collect();
+                let far = |o: &usize| self.time(j, *o);
+                let count = count.min(others.len());
+                if count > 0 && count < others.len() {
+                    others.select_nth_unstable_by(count - 1, |a, b| far(a).total_cmp(&far(b)));
+                }
+                others.truncate(count);
+                others.sort_by(|a, b| far(a).total_cmp(&far(b)));
+                others
+            })
+            .collect()
+    }
+
     /// The fleet at time 0.
     pub(crate) fn start(&self) -> Fleet {
         Fleet {
