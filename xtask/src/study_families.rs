@@ -56,30 +56,16 @@ pub struct StudyFamiliesArgs {
     json: bool,
 }
 
-/// The families of each mixture, by the committed model of the group whose name its
-/// runs extend (models/README.md): the threshold games, and the games with skills.
-const GROUPS: [(&str, &[Family]); 2] = [
-    (
-        "staffing_teams",
-        &[
-            Family::Scarce,
-            Family::Clustered,
-            Family::HeavyTail,
-            Family::Constant,
-            Family::TeamRewards,
-            Family::VoidCapacity,
-        ],
-    ),
-    (
-        "staffing_skills",
-        &[
-            Family::Skills,
-            Family::SparseSkills,
-            Family::ManySkills,
-            Family::Mixed,
-        ],
-    ),
-];
+/// The groups of families, by the committed model whose name their runs extend
+/// (models/README.md): the threshold games, and the games with skills.
+const GROUPS: [(&str, bool); 2] = [("staffing_teams", false), ("staffing_skills", true)];
+
+/// The families of a group: those that draw skills, or those that do not.
+fn families_of(skills: bool) -> Vec<Family> {
+    (Family::ALL.into_iter())
+        .filter(|f| f.draws_skills() == skills)
+        .collect()
+}
 
 /// The training and test games' size.
 const SIZE: GameSize = GameSize {
@@ -113,7 +99,8 @@ struct Row {
 /// Trains (where missing) and tests every model; prints the table.
 pub fn run(args: StudyFamiliesArgs) -> Result<()> {
     let mut rows = Vec::new();
-    for (group, families) in GROUPS {
+    for (group, skills) in GROUPS {
+        let families = &families_of(skills)[..];
         for &family in families {
             train(
                 &args,
@@ -277,7 +264,8 @@ fn table(args: &StudyFamiliesArgs, rows: &[Row]) -> String {
         );
     }
     let mut runs = Vec::new();
-    for (group, families) in GROUPS {
+    for (group, skills) in GROUPS {
+        let families = families_of(skills);
         runs.extend(families.iter().map(|f| format!("`{group}_on-{f}`")));
         runs.push(format!("`{group}_mixture`"));
         runs.extend(families.iter().map(|f| format!("`{group}_without-{f}`")));

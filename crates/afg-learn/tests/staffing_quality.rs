@@ -31,6 +31,37 @@ fn hand_knapsack(skills: bool) -> afg_learn::staffing::StaffingPolicy {
     )
 }
 
+/// The shares of the reference that `learned` and `hand` reach on four held-out games
+/// of `family` (100 robots × 20 tasks, seeds 54–57), the reference at most 2 s a game.
+fn family_shares(
+    family: Family,
+    learned: &dyn Allocator,
+    hand: &dyn Allocator,
+) -> (Vec<f64>, Vec<f64>) {
+    (54..58)
+        .map(|seed| {
+            let inst = family.config(100, 20, seed).unwrap().generate().unwrap();
+            let reference = reference(&inst, 2.0);
+            let share = |allocator: &dyn Allocator| {
+                let out = allocator.allocate(&inst).unwrap().assignment;
+                inst.check(&out).unwrap();
+                inst.welfare(&out) / reference
+            };
+            (share(learned), share(hand))
+        })
+        .unzip()
+}
+
+/// The mean of `shares`.
+fn mean(shares: &[f64]) -> f64 {
+    shares.iter().sum::<f64>() / shares.len() as f64
+}
+
+/// The least of `shares`.
+fn worst(shares: &[f64]) -> f64 {
+    shares.iter().copied().fold(f64::INFINITY, f64::min)
+}
+
 /// One method's mean share of the reference over `games` (the proven optimum, or the
 /// bound where the solver stops).
 fn mean_share(games: &[(Instance, f64)], method: impl Fn(&Instance) -> f64) -> f64 {
@@ -114,20 +145,8 @@ fn the_committed_staffing_models_carry_to_the_families_docs_name() {
         )
         .unwrap();
         let hand = hand_knapsack(name == "staffing_skills");
-        let (mut learned, mut knapsack) = (Vec::new(), Vec::new());
-        for seed in 54..58 {
-            let inst = family.config(100, 20, seed).unwrap().generate().unwrap();
-            let reference = reference(&inst, 2.0);
-            let share = |allocator: &dyn Allocator| {
-                let out = allocator.allocate(&inst).unwrap().assignment;
-                inst.check(&out).unwrap();
-                inst.welfare(&out) / reference
-            };
-            learned.push(share(policy.as_ref()));
-            knapsack.push(share(&hand));
-        }
-        let mean = |shares: &[f64]| shares.iter().sum::<f64>() / shares.len() as f64;
-        let worst = learned.iter().copied().fold(f64::INFINITY, f64::min);
+        let (learned, knapsack) = family_shares(family, policy.as_ref(), &hand);
+        let worst = worst(&learned);
         assert!(worst >= 0.90, "{name} on {family}: worst {worst}");
         assert!(
             !mean_98 || mean(&learned) >= 0.98,
@@ -149,41 +168,22 @@ fn models_trained_without_a_family_carry_to_it() {
     let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let hand = hand_knapsack(false);
     let (mut learned, mut written) = (Vec::new(), Vec::new());
-    for family in [
-        Family::Scarce,
-        Family::Clustered,
-        Family::HeavyTail,
-        Family::Constant,
-        Family::TeamRewards,
-        Family::VoidCapacity,
-    ] {
+    for family in Family::ALL.into_iter().filter(|f| !f.draws_skills()) {
         let dir = repo.join(format!(
             "models/ours/families/staffing_teams_without-{family}"
         ));
         let model = StaffingModel::load(&dir.join(StaffingModel::FILE_NAME)).unwrap();
         assert!(!model.training.families.contains(&family));
         let policy = load_model(&dir, ModelOptions::default()).unwrap();
-        let mut shares = Vec::new();
-        for seed in 54..58 {
-            let inst = family.config(100, 20, seed).unwrap().generate().unwrap();
-            let reference = reference(&inst, 2.0);
-            let share = |allocator: &dyn Allocator| {
-                let out = allocator.allocate(&inst).unwrap().assignment;
-                inst.check(&out).unwrap();
-                inst.welfare(&out) / reference
-            };
-            shares.push(share(policy.as_ref()));
-            written.push(share(&hand));
-        }
-        let mean = shares.iter().sum::<f64>() / shares.len() as f64;
-        let worst = shares.iter().copied().fold(f64::INFINITY, f64::min);
+        let (shares, hand_shares) = family_shares(family, policy.as_ref(), &hand);
+        let (mean, worst) = (mean(&shares), worst(&shares));
         assert!(
             mean >= 0.98 && worst >= 0.95,
             "without {family}: mean {mean}, worst {worst}"
         );
         learned.extend(shares);
+        written.extend(hand_shares);
     }
-    let mean = |shares: &[f64]| shares.iter().sum::<f64>() / shares.len() as f64;
     assert!(
         mean(&learned) >= mean(&written) + 0.005,
         "{} against the hand-written {}",
