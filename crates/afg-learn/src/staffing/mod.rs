@@ -49,7 +49,7 @@ use afg_game::{Assignment, Instance};
 use serde::{Deserialize, Serialize};
 
 pub use features::{COUNT_FEATURES, STAFF_FEATURES, staffing_features, staffing_input_width};
-pub use labels::{LABELS_FILE_NAME, LabelledGame, scarce_game};
+pub use labels::{GameDraw, LABELS_FILE_NAME, LabelledGame, scarce_game};
 pub use train::{StaffingEpoch, StaffingTrainConfig, StaffingTrainer};
 
 use crate::LearnError;
