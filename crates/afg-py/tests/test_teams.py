@@ -136,14 +136,22 @@ def test_ctrl_c_stops_the_exact_search_at_its_next_step() -> None:
     import threading
     import time
 
+    import signal
+
     inst = _slow_skill_game()
-    timer = threading.Timer(0.5, _thread.interrupt_main)
-    start = time.monotonic()
-    timer.start()
-    with pytest.raises(KeyboardInterrupt):
-        afg.solve(inst, method="opt", reference=False)
-    timer.join()
-    assert time.monotonic() - start < 10.0
+    # Python's own Ctrl-C handler, whatever an earlier test (Ray's, say) left in its place:
+    # interrupt_main does nothing where SIGINT is not handled by Python's default.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        timer = threading.Timer(0.5, _thread.interrupt_main)
+        start = time.monotonic()
+        timer.start()
+        with pytest.raises(KeyboardInterrupt):
+            afg.solve(inst, method="opt", reference=False)
+        timer.join()
+        assert time.monotonic() - start < 10.0
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def test_bad_team_input_and_refusals_are_clear_errors() -> None:
