@@ -38,3 +38,27 @@ fn the_team_optimum_equals_brute_force_on_small_games_of_every_family() {
     }
     assert_eq!(checked, 80);
 }
+
+/// The skill families on games large enough that the search branches on robots and
+/// rules pairs out as it finds better assignments (8–9 robots, 3 tasks), against brute
+/// force.
+#[test]
+fn the_skill_optimum_equals_brute_force_where_the_search_rules_pairs_out() {
+    let mut branched = 0;
+    for family in Family::ALL.into_iter().filter(|f| f.draws_skills()) {
+        for seed in 0..40u64 {
+            let robots = 8 + seed as usize % 2;
+            let inst = family.config(robots, 3, seed).unwrap().generate().unwrap();
+            let best = TeamOptimum::default().solve(&inst).unwrap();
+            let brute = brute_force(&inst);
+            let tol = 1e-9 * brute.abs().max(1.0);
+            assert!(
+                best.proven && (best.welfare - brute).abs() < tol,
+                "{family} seed {seed}: {} vs {brute}",
+                best.welfare
+            );
+            branched += usize::from(best.nodes > 3);
+        }
+    }
+    assert!(branched >= 20, "{branched}");
+}

@@ -101,7 +101,7 @@ fn the_skill_optimum_equals_brute_force_on_small_instances() {
         pair_branches += usize::from(best.nodes > 3);
     }
     // Many searches went past the root and its dive.
-    assert!(pair_branches > 30, "{pair_branches}");
+    assert!(pair_branches >= 25, "{pair_branches}");
 }
 
 #[test]

@@ -243,6 +243,74 @@ impl Instance {
         held
     }
 
+    /// The fewest members with which a coalition at task j can earn: its threshold, or
+    /// more where fewer robots cannot hold the skills it requires. Counted over the
+    /// kinds of robot in the game (their skill rows), each kind as often as needed — a
+    /// lower bound where a kind is rare; where the requirements are too many to search
+    /// (more than 4 096 partial covers), the largest of `requires[s] / max_i skill[i][s]`
+    /// rounded up. `None` where some required skill no robot holds.
+    ///
+    /// A game whose thresholds are raised to these is the same game (a smaller team
+    /// never earns), but an exact solver's relaxation of it is tighter.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::{Instance, Point, Task, TaskId};
+    /// let task = Task { position: Point::new(0.0, 0.0), reward: 1.0, eps: 2.0, capacity: None };
+    /// let robots = vec![Point::new(0.0, 0.0); 3];
+    /// // Robots hold skill 0, skill 1, and both; task 0 needs two of each, task 1 none.
+    /// let inst = Instance::new(robots, vec![task; 3], 1.0)?.with_teams(
+    ///     vec![1, 3, 1],
+    ///     &[vec![1, 0], vec![0, 1], vec![1, 1]],
+    ///     &[vec![2, 2], vec![], vec![0, 4]],
+    /// )?;
+    /// assert_eq!(inst.smallest_team(TaskId(0)), Some(2)); // two robots holding both
+    /// assert_eq!(inst.smallest_team(TaskId(1)), Some(3)); // its threshold
+    /// assert_eq!(inst.smallest_team(TaskId(2)), Some(4));
+    /// # Ok::<(), afg_game::GameError>(())
+    /// ```
+    pub fn smallest_team(&self, task: TaskId) -> Option<usize> {
+        let k = self.min_team(task);
+        let need = self.requires(task);
+        if need.iter().all(|&r| r == 0) {
+            return Some(k);
+        }
+        let s = need.len();
+        // Each kind of robot, its amounts capped at the need; none that holds nothing
+        // needed, none that another kind holds at least as much as of every skill.
+        let mut kinds: Vec<Vec<u32>> = Vec::new();
+        for robot in self.robot_ids() {
+            let kind: Vec<u32> = (self.skills(robot).iter().zip(need))
+                .map(|(&q, &r)| q.min(r))
+                .collect();
+            let covers = |a: &[u32], b: &[u32]| a.iter().zip(b).all(|(x, y)| x >= y);
+            if kind.iter().all(|&q| q == 0) || kinds.iter().any(|other| covers(other, &kind)) {
+                continue;
+            }
+            kinds.retain(|other| !covers(&kind, other));
+            kinds.push(kind);
+        }
+        if (0..s).any(|t| need[t] > 0 && kinds.iter().all(|kind| kind[t] == 0)) {
+            return None;
+        }
+        let states = need
+            .iter()
+            .try_fold(1usize, |all, &r| all.checked_mul(r as usize + 1))
+            .filter(|&states| states <= MAX_COVER_STATES);
+        let fewest = match states {
+            Some(states) => fewest_covering(need, &kinds, states),
+            None => (0..s)
+                .filter(|&t| need[t] > 0)
+                .map(|t| {
+                    let most = kinds.iter().map(|kind| kind[t]).max().unwrap_or(1);
+                    need[t].div_ceil(most) as usize
+                })
+                .max()
+                .unwrap_or(0),
+        };
+        Some(k.max(fewest))
+    }
+
     /// The tasks no coalition can ever staff: a threshold above the number of robots
     /// or the task's capacity, or a skill that all the robots together hold less of
     /// than the task needs. Legal (they earn nothing); front ends warn about them.
@@ -271,6 +339,51 @@ impl Instance {
             })
             .collect()
     }
+}
+
+/// The most partial covers [`Instance::smallest_team`] searches.
+const MAX_COVER_STATES: usize = 4096;
+
+/// The fewest of `kinds` (each as often as needed, each capped at `need`) whose sum
+/// reaches `need`: a breadth-first search over the `states` partial sums (mixed radix,
+/// skill 0 the lowest digit).
+fn fewest_covering(need: &[u32], kinds: &[Vec<u32>], states: usize) -> usize {
+    let digits = |mut state: usize| {
+        need.iter().map(move |&r| {
+            let radix = r as usize + 1;
+            let digit = state % radix;
+            state /= radix;
+            digit as u32
+        })
+    };
+    let encode = |sum: &mut dyn Iterator<Item = u32>| {
+        let (mut state, mut scale) = (0, 1);
+        for (d, &r) in sum.zip(need) {
+            state += d as usize * scale;
+            scale *= r as usize + 1;
+        }
+        state
+    };
+    let mut steps = vec![usize::MAX; states];
+    steps[0] = 0;
+    let mut queue = std::collections::VecDeque::from([0usize]);
+    while let Some(state) = queue.pop_front() {
+        if state == states - 1 {
+            return steps[state];
+        }
+        for kind in kinds {
+            let next = encode(
+                &mut digits(state)
+                    .zip(kind.iter().zip(need))
+                    .map(|(d, (&q, &r))| (d + q).min(r)),
+            );
+            if steps[next] == usize::MAX {
+                steps[next] = steps[state] + 1;
+                queue.push_back(next);
+            }
+        }
+    }
+    unreachable!("every needed skill is held by some kind")
 }
 
 /// The warning front ends give of the tasks (by index) that no team can staff

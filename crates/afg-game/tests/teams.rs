@@ -232,3 +232,71 @@ fn unstaffable_tasks_are_legal_and_earn_nothing() {
         })
     ));
 }
+
+/// The fewest robots among `inst`'s whose skills meet task j's requirements (all of
+/// them may join), by trying every subset; `None` where no subset does.
+fn fewest_meeting(inst: &Instance, j: TaskId) -> Option<usize> {
+    let (n, s) = (inst.num_robots(), inst.num_skills());
+    (0u32..1 << n)
+        .filter(|&subset| {
+            let mut held = vec![0u64; s];
+            for i in (0..n).filter(|&i| subset >> i & 1 == 1) {
+                for (h, &q) in held.iter_mut().zip(inst.skills(RobotId(i as u32))) {
+                    *h += u64::from(q);
+                }
+            }
+            inst.skills_met(j, &held)
+        })
+        .map(|subset| subset.count_ones() as usize)
+        .min()
+}
+
+/// `smallest_team` never exceeds the fewest robots that can earn (it is a lower bound:
+/// it counts each kind of robot as often as needed), and equals it where every kind is
+/// there three times over (as many as any task requires), on random skill games.
+#[test]
+fn the_smallest_team_is_the_fewest_robots_that_can_earn() {
+    let mut rng = ChaCha8Rng::seed_from_u64(8);
+    let mut raised = 0;
+    for case in 0..200 {
+        let s = rng.random_range(1..=3);
+        let kinds: Vec<Vec<u32>> = (0..rng.random_range(1..=3))
+            .map(|_| (0..s).map(|_| rng.random_range(0..=2)).collect())
+            .collect();
+        let copies = if case % 2 == 0 { 3 } else { 1 };
+        let skills: Vec<Vec<u32>> = (kinds.iter())
+            .flat_map(|kind| std::iter::repeat_n(kind.clone(), copies))
+            .collect();
+        let requires: Vec<Vec<u32>> = (0..2)
+            .map(|_| (0..s).map(|_| rng.random_range(0..=3)).collect())
+            .collect();
+        let robots = vec![Point::new(0.0, 0.0); skills.len()];
+        let inst = Instance::new(robots, vec![task(0.0, 0.0, 1.0, 2.0); 2], 1.0)
+            .unwrap()
+            .with_teams(vec![1, 2], &skills, &requires)
+            .unwrap();
+        for j in inst.task_ids() {
+            let Some(smallest) = inst.smallest_team(j) else {
+                assert!(inst.unstaffable_tasks().contains(&j), "case {case}");
+                continue;
+            };
+            let fewest = fewest_meeting(&inst, j);
+            let at = format!(
+                "case {case} task {j:?}: {kinds:?} × {copies}, needs {:?}",
+                inst.requires(j)
+            );
+            if let Some(fewest) = fewest {
+                assert!(smallest <= fewest.max(inst.min_team(j)), "{at}");
+            }
+            if copies == 3 {
+                assert_eq!(
+                    Some(smallest),
+                    fewest.map(|f| f.max(inst.min_team(j))),
+                    "{at}"
+                );
+            }
+            raised += usize::from(smallest > inst.min_team(j));
+        }
+    }
+    assert!(raised > 100, "{raised}");
+}

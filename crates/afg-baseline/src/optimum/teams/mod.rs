@@ -21,7 +21,14 @@
 //! branches on the cheapest robot holding that skill (not there, free to go there):
 //! it joins the task, or it may not. A task left with too little of a skill among the
 //! robots free to join it earns nothing. Staffed then means earning: the threshold
-//! met and the skills held.
+//! met and the skills held. Every threshold is read as the task's smallest earning
+//! team ([`Instance::smallest_team`]: more than k where its skills need more robots),
+//! which tightens the envelope of a task that needs few robots but many skills.
+//!
+//! **Pairs ruled out.** The root's relaxation, priced, bounds every assignment less the
+//! reduced costs of where it puts its robots; a robot-task pair whose reduced cost
+//! alone brings that bound to the best found is kept out of every node, more of them
+//! with each better assignment found (reduced-cost fixing).
 
 use std::collections::BinaryHeap;
 use std::sync::Arc;
@@ -254,6 +261,9 @@ impl TeamOptimum {
             && instance.num_robots() * instance.num_tasks() <= node::MAX_PAIRS
         {
             root.bound = root.bound.min(search.price_skills(&root, &out_of_time));
+        }
+        if instance.num_robots() * instance.num_tasks() <= node::MAX_PAIRS {
+            search.fix_pairs(&root);
         }
         let mut open = BinaryHeap::from([root]);
         let bound =

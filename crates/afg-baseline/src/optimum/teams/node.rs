@@ -9,8 +9,11 @@ use super::super::transport::{
     self, Column, Interrupted, NEVER, Slots, Solution, Stop, assignment_of,
 };
 
+mod branching;
+mod fixing;
 mod lagrange;
 mod rounding;
+pub(super) use branching::Branch;
 pub(super) use lagrange::MAX_PAIRS;
 
 /// What a node decides of one task.
@@ -74,21 +77,18 @@ impl Node {
     }
 }
 
-/// Where a node branches.
-#[derive(Clone, Copy, Debug)]
-pub(super) enum Branch {
-    /// An open task between 0 and its threshold: staffed, or not.
-    Task(usize),
-    /// An earning task short of a skill, and the cheapest robot free to bring it: it
-    /// joins the task, or it may not.
-    Pair(RobotId, TaskId),
-}
-
-/// The search's data: the instance, the bonus that forces a staffed task's first
-/// members (and, four times over, a fixed robot's place), the skill prices of the
-/// Lagrangian bound (empty: none), and the best found so far.
+/// The search's data: the instance, each task's threshold as the search reads it, the
+/// bonus that forces a staffed task's first members (and, four times over, a fixed
+/// robot's place), the skill prices of the Lagrangian bound (empty: none), and the best
+/// found so far.
 pub(super) struct Search<'a> {
     instance: &'a Instance,
+    thresholds: Vec<usize>,
+    /// The pairs that no assignment better than the best found uses (row-major N × M;
+    /// empty: none yet), and the same as cost changes for the relaxations.
+    forbidden: Vec<bool>,
+    kept_out: Vec<(usize, usize, f64)>,
+    root_dual: Option<fixing::RootDual>,
     bonus: f64,
     skill_prices: Vec<f64>,
     skill_step: f64,
@@ -135,8 +135,18 @@ impl<'a> Search<'a> {
             .iter()
             .map(|t| t.reward)
             .fold(0.0, f64::max);
+        // A task earns from its smallest team on: where its skills need more robots
+        // than its threshold, the relaxation spreads its value over them (more than N:
+        // it never earns).
+        let thresholds = (instance.task_ids())
+            .map(|j| (instance.smallest_team(j)).unwrap_or(instance.num_robots() + 1))
+            .collect();
         Search {
             instance,
+            thresholds,
+            forbidden: Vec::new(),
+            kept_out: Vec::new(),
+            root_dual: None,
             // More than any other member or move is worth: a staffed task's first k
             // members come before anything else.
             bonus: 2.0 * (max_cost + max_reward) + 1.0,
@@ -165,11 +175,23 @@ impl<'a> Search<'a> {
 
     /// The root's decisions: the tasks no team can staff are unstaffed.
     pub(super) fn root_decisions(&self) -> Vec<Decision> {
-        let mut decisions = vec![Decision::Open; self.instance.num_tasks()];
-        for j in self.instance.unstaffable_tasks() {
+        let inst = self.instance;
+        let mut decisions = vec![Decision::Open; inst.num_tasks()];
+        for j in inst.unstaffable_tasks() {
             decisions[j.index()] = Decision::Unstaffed;
         }
+        for j in inst.task_ids() {
+            if self.threshold(j) > inst.num_robots().min(inst.capacity(j)) {
+                decisions[j.index()] = Decision::Unstaffed;
+            }
+        }
         decisions
+    }
+
+    /// The fewest members with which task j earns ([`Instance::smallest_team`]): the
+    /// threshold every relaxation and branching here reads.
+    fn threshold(&self, j: TaskId) -> usize {
+        self.thresholds[j.index()]
     }
 
     /// Whether a node of this bound cannot beat the best found (beyond rounding).
@@ -184,7 +206,7 @@ impl<'a> Search<'a> {
         if inst.requires(j).iter().any(|&r| r > 0) {
             inst.capacity(j)
         } else {
-            inst.capacity(j).min(inst.min_team(j) - 1)
+            inst.capacity(j).min(self.threshold(j) - 1)
         }
     }
 
@@ -196,9 +218,10 @@ impl<'a> Search<'a> {
             return true;
         }
         let free = |i: RobotId| {
-            !pairs
-                .iter()
-                .any(|&(r, t, fixed)| r == i && (if fixed { t != j } else { t == j }))
+            self.allowed(i, j)
+                && !pairs
+                    .iter()
+                    .any(|&(r, t, fixed)| r == i && (if fixed { t != j } else { t == j }))
         };
         let mut held = vec![0u64; inst.num_skills()];
         for i in inst.robot_ids().filter(|&i| free(i)) {
@@ -226,7 +249,7 @@ impl<'a> Search<'a> {
         let staffed: usize = inst
             .task_ids()
             .filter(|j| decisions[j.index()] == Decision::Staffed)
-            .map(|j| inst.min_team(j))
+            .map(|j| self.threshold(j))
             .sum();
         if staffed > inst.num_robots() {
             return None;
@@ -255,7 +278,7 @@ impl<'a> Search<'a> {
     /// open task's envelope spreads its value (0 where it may not earn).
     fn task_column(&self, j: TaskId, decision: Decision, penalty: f64) -> (Column, usize) {
         let inst = self.instance;
-        let (value, k) = (inst.value_function(j), inst.min_team(j));
+        let (value, k) = (inst.value_function(j), self.threshold(j));
         let capacity = inst.capacity(j);
         let (value, capacity, flat) = match decision {
             Decision::Open => {
@@ -376,7 +399,7 @@ impl<'a> Search<'a> {
             };
             bound += value.value(assignment.size(j));
             if decisions[j.index()] == Decision::Staffed {
-                bound -= self.bonus * inst.min_team(j) as f64;
+                bound -= self.bonus * self.threshold(j) as f64;
             }
         }
         self.offer(&assignment);
@@ -391,103 +414,50 @@ impl<'a> Search<'a> {
         })
     }
 
-    /// The cost changes that fix robots at tasks or keep them out.
+    /// What keeping a robot out of a task adds to its cost there (fixing it takes as
+    /// much off): more than any assignment's welfare can make up.
+    fn keep_out_cost(&self) -> f64 {
+        4.0 * self.bonus
+    }
+
+    /// The cost changes that fix robots at tasks or keep them out: `pairs`', and the
+    /// pairs the root's dual rules out.
     fn adjust(&self, pairs: &[Pair]) -> Vec<(usize, usize, f64)> {
-        let fix = 4.0 * self.bonus;
+        let fix = self.keep_out_cost();
         pairs
             .iter()
             .map(|&(i, j, fixed)| (i.index(), j.index(), if fixed { -fix } else { fix }))
+            .chain(self.kept_out.iter().copied())
             .collect()
     }
 
-    /// Whether `assignment` keeps every robot where `pairs` fixed it.
+    /// Whether robot i may join task j at all (the root's dual does not rule it out).
+    fn allowed(&self, i: RobotId, j: TaskId) -> bool {
+        let m = self.instance.num_tasks();
+        !self
+            .forbidden
+            .get(i.index() * m + j.index())
+            .copied()
+            .unwrap_or(false)
+    }
+
+    /// Whether `assignment` keeps every robot where `pairs` fixed it, and out of the
+    /// pairs the root's dual rules out.
     fn keeps(&self, assignment: &Assignment, pairs: &[Pair]) -> bool {
         pairs
             .iter()
             .all(|&(i, j, fixed)| (assignment.task_of(i) == Some(j)) == fixed)
+            && (self.instance.robot_ids())
+                .all(|i| assignment.task_of(i).is_none_or(|j| self.allowed(i, j)))
     }
 
-    /// Offers `assignment` to the best found.
+    /// Offers `assignment` to the best found (a better one rules out more pairs).
     fn offer(&mut self, assignment: &Assignment) {
         let welfare = self.instance.welfare(assignment);
         if welfare > self.best_welfare {
             self.best_welfare = welfare;
             self.best = assignment.clone();
-        }
-    }
-
-    /// Where a node branches: first an open task whose relaxed coalition is between 0
-    /// and its threshold (the most envelope value at stake), then an earning task short
-    /// of a skill (the most value at stake) and the cheapest robot free to bring it;
-    /// `None` when there is neither (the relaxation is a real assignment, worth its
-    /// bound).
-    pub(super) fn branch(&self, node: &Node) -> Option<Branch> {
-        let inst = self.instance;
-        let sizes = &node.sizes;
-        let task = inst
-            .task_ids()
-            .filter(|j| node.decisions[j.index()] == Decision::Open)
-            .filter_map(|j| {
-                let (n, k) = (sizes[j.index()], inst.min_team(j));
-                (n > 0 && n < k).then(|| {
-                    let at_stake = n as f64 * inst.value_function(j).value(k) / k as f64;
-                    (j.index(), at_stake)
-                })
-            })
-            .max_by(|a, b| a.1.total_cmp(&b.1));
-        if let Some((j, _)) = task {
-            return Some(Branch::Task(j));
-        }
-        self.skill_branch(node)
-    }
-
-    /// The earning task short of a skill with the most value at stake, and the
-    /// cheapest robot free to bring that skill there.
-    fn skill_branch(&self, node: &Node) -> Option<Branch> {
-        let inst = self.instance;
-        let a = node.assignment.as_ref()?; // kept in games with skills only
-        let s = inst.num_skills();
-        let held = inst.skills_held(a);
-        let (j, _) = inst
-            .task_ids()
-            .filter(|&j| node.decisions[j.index()] != Decision::Unstaffed)
-            .filter(|&j| a.size(j) >= inst.min_team(j))
-            .filter(|&j| !inst.skills_met(j, &held[j.index() * s..][..s]))
-            .map(|j| (j, inst.coalition_value(j, a.size(j))))
-            .max_by(|x, y| x.1.total_cmp(&y.1))?;
-        let row = &held[j.index() * s..][..s];
-        let short = (0..s).find(|&k| row[k] < u64::from(inst.requires(j)[k]))?;
-        let decided = |i: RobotId| {
-            node.pairs.iter().any(|&(r, _, fixed)| r == i && fixed)
-                || node.pairs.iter().any(|&(r, t, _)| r == i && t == j)
-        };
-        let robot = inst
-            .robot_ids()
-            .filter(|&i| inst.skills(i)[short] > 0 && a.task_of(i) != Some(j) && !decided(i))
-            .min_by(|&x, &y| inst.cost(x, j).total_cmp(&inst.cost(y, j)))?;
-        Some(Branch::Pair(robot, j))
-    }
-
-    /// The two children of a branch: its decisions and fixed robots.
-    pub(super) fn children(&self, node: &Node, branch: Branch) -> [(Vec<Decision>, Vec<Pair>); 2] {
-        let with = |decision: Option<(usize, Decision)>, pair: Option<Pair>| {
-            let mut decisions = node.decisions.clone();
-            if let Some((j, d)) = decision {
-                decisions[j] = d;
-            }
-            let mut pairs = node.pairs.clone();
-            pairs.extend(pair);
-            (decisions, pairs)
-        };
-        match branch {
-            Branch::Task(j) => [
-                with(Some((j, Decision::Staffed)), None),
-                with(Some((j, Decision::Unstaffed)), None),
-            ],
-            Branch::Pair(i, j) => [
-                with(None, Some((i, j, true))),
-                with(None, Some((i, j, false))),
-            ],
+            self.forbid();
         }
     }
 }

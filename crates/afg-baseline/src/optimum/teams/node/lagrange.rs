@@ -32,18 +32,20 @@ pub(in super::super) const MAX_PAIRS: usize = 1 << 21;
 /// A Lagrangian relaxation's optimum: its bound, its assignment, its prices, and how
 /// much of each task's team it holds (y_j: 1 where it earns, a share of the team its
 /// envelope spreads the value over where it is open, 0 where it may not earn).
-struct Relaxed {
-    bound: f64,
+pub(super) struct Relaxed {
+    pub(super) bound: f64,
     assignment: Assignment,
-    prices: Vec<f64>,
+    pub(super) prices: Vec<f64>,
     earns: Vec<f64>,
+    /// The relaxation's columns (its tasks' at λ, then the void's).
+    pub(super) columns: Vec<Column>,
 }
 
 impl Search<'_> {
     /// Solves the Lagrangian relaxation of a node (its decisions and fixed robots) at
     /// `lambda` (task-major, one per task and skill), from `warm` prices; `None` where
     /// it cannot keep the fixed robots.
-    fn relax(
+    pub(super) fn relax(
         &self,
         decisions: &[Decision],
         pairs: &[Pair],
@@ -88,10 +90,9 @@ impl Search<'_> {
         let mut bound = 0.0;
         for i in inst.robot_ids() {
             if let Some(j) = assignment.task_of(i) {
-                let rebate = skill_rebates(inst, i, &lambda)
-                    .nth(j.index())
-                    .expect("a rebate per task");
-                bound += rebate - inst.cost(i, j);
+                // Without skills λ is empty, and so are the rebates.
+                let rebate = skill_rebates(inst, i, &lambda).nth(j.index());
+                bound += rebate.unwrap_or(0.0) - inst.cost(i, j);
             }
         }
         let earns = inst
@@ -104,7 +105,7 @@ impl Search<'_> {
                 bound += value.value(n);
                 match decisions[j.index()] {
                     Decision::Staffed => {
-                        bound -= self.bonus * inst.min_team(j) as f64;
+                        bound -= self.bonus * self.threshold(j) as f64;
                         1.0
                     }
                     Decision::Open if flats[j.index()] > 0 => {
@@ -119,6 +120,7 @@ impl Search<'_> {
             assignment,
             prices: solution.prices,
             earns,
+            columns,
         })
     }
 
@@ -265,34 +267,38 @@ struct Dual {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use afg_game::{Assignment, GeneratorKnobs, Instance, TaskId};
     use proptest::prelude::*;
 
     use super::super::Search;
 
-    /// The best welfare over every assignment (with the void where allowed).
-    fn brute_force(inst: &Instance) -> f64 {
+    /// Every assignment of `inst` (with the void where allowed) that respects its
+    /// capacities.
+    pub(in super::super) fn every_assignment(inst: &Instance) -> impl Iterator<Item = Assignment> {
         let (n, m) = (inst.num_robots(), inst.num_tasks());
         let choices = m + usize::from(inst.allows_void());
-        let mut best = f64::NEG_INFINITY;
-        for code in 0..choices.pow(n as u32) {
+        (0..choices.pow(n as u32)).filter_map(move |code| {
             let tasks = (0..n)
                 .map(|i| {
                     let c = code / choices.pow(i as u32) % choices;
                     (c < m).then_some(TaskId(c as u32))
                 })
                 .collect();
-            if let Ok(a) = Assignment::from_tasks(inst, tasks) {
-                best = best.max(inst.welfare(&a));
-            }
-        }
-        best
+            Assignment::from_tasks(inst, tasks).ok()
+        })
+    }
+
+    /// The best welfare over every assignment.
+    fn brute_force(inst: &Instance) -> f64 {
+        every_assignment(inst)
+            .map(|a| inst.welfare(&a))
+            .fold(f64::NEG_INFINITY, f64::max)
     }
 
     /// Small games with thresholds 1–3 and two skills of `share`, tasks requiring
     /// `requires` of each.
-    fn skill_knobs(share: f64, requires: (usize, usize)) -> GeneratorKnobs {
+    pub(in super::super) fn skill_knobs(share: f64, requires: (usize, usize)) -> GeneratorKnobs {
         GeneratorKnobs {
             min_team: Some((1, 3)),
             skills: Some(2),

@@ -20,13 +20,13 @@ impl Search<'_> {
         for &j in task_of.iter().filter(|&&j| (j as usize) < m) {
             sizes[j as usize] += 1;
         }
-        let fill = |j: TaskId| sizes[j.index()] as f64 / inst.min_team(j) as f64;
+        let fill = |j: TaskId| sizes[j.index()] as f64 / self.threshold(j) as f64;
         let mut tasks: Vec<TaskId> = inst.task_ids().filter(|&j| fill(j) >= 0.5).collect();
         tasks.sort_by(|&a, &b| fill(b).total_cmp(&fill(a)));
         let mut staffed = Assignment::unassigned(inst.num_robots(), m);
         let mut free: Vec<RobotId> = inst.robot_ids().collect();
         for j in tasks {
-            let k = inst.min_team(j);
+            let k = self.threshold(j);
             if k > free.len() || k > inst.capacity(j) {
                 continue;
             }
@@ -96,7 +96,7 @@ impl Search<'_> {
                 .instance
                 .task_ids()
                 .filter(|&j| current.decisions[j.index()] == Decision::Open)
-                .filter(|&j| sizes[j.index()] > 0 && sizes[j.index()] < self.instance.min_team(j))
+                .filter(|&j| sizes[j.index()] > 0 && sizes[j.index()] < self.threshold(j))
                 .collect();
             if fractional.is_empty() {
                 return;

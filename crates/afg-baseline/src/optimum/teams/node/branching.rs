@@ -1,0 +1,145 @@
+//! Where a node branches: on a task between 0 and its threshold, or on a robot that
+//! could bring a skill an earning task lacks.
+
+use afg_game::{RobotId, TaskId};
+
+use super::{Decision, Node, Pair, Search};
+
+/// Where a node branches.
+#[derive(Clone, Copy, Debug)]
+pub(in super::super) enum Branch {
+    /// An open task between 0 and its threshold, or an earning task that no robot may
+    /// any longer bring a missing skill to: staffed, or not.
+    Task(usize),
+    /// An earning task short of a skill, and the cheapest robot free to bring it: it
+    /// joins the task, or it may not.
+    Pair(RobotId, TaskId),
+}
+
+impl Search<'_> {
+    /// Where a node branches: first an open task whose relaxed coalition is between 0
+    /// and its threshold (the most envelope value at stake), then an earning task short
+    /// of a skill (the most value at stake) and the cheapest robot free to bring it;
+    /// `None` when there is neither (the relaxation is a real assignment, worth its
+    /// bound).
+    pub(in super::super) fn branch(&self, node: &Node) -> Option<Branch> {
+        let inst = self.instance;
+        let sizes = &node.sizes;
+        let task = inst
+            .task_ids()
+            .filter(|j| node.decisions[j.index()] == Decision::Open)
+            .filter_map(|j| {
+                let (n, k) = (sizes[j.index()], self.threshold(j));
+                (n > 0 && n < k).then(|| {
+                    let at_stake = n as f64 * inst.value_function(j).value(k) / k as f64;
+                    (j.index(), at_stake)
+                })
+            })
+            .max_by(|a, b| a.1.total_cmp(&b.1));
+        if let Some((j, _)) = task {
+            return Some(Branch::Task(j));
+        }
+        self.skill_branch(node)
+    }
+
+    /// The earning task short of a skill with the most value at stake, and the
+    /// cheapest robot free to bring that skill there (the task itself where none is).
+    pub(super) fn skill_branch(&self, node: &Node) -> Option<Branch> {
+        let inst = self.instance;
+        let a = node.assignment.as_ref()?; // kept in games with skills only
+        let s = inst.num_skills();
+        let held = inst.skills_held(a);
+        let (j, _) = inst
+            .task_ids()
+            .filter(|&j| node.decisions[j.index()] != Decision::Unstaffed)
+            .filter(|&j| a.size(j) >= self.threshold(j))
+            .filter(|&j| !inst.skills_met(j, &held[j.index() * s..][..s]))
+            .map(|j| (j, inst.coalition_value(j, a.size(j))))
+            .max_by(|x, y| x.1.total_cmp(&y.1))?;
+        let row = &held[j.index() * s..][..s];
+        let short = (0..s).find(|&k| row[k] < u64::from(inst.requires(j)[k]))?;
+        let decided = |i: RobotId| {
+            node.pairs.iter().any(|&(r, _, fixed)| r == i && fixed)
+                || node.pairs.iter().any(|&(r, t, _)| r == i && t == j)
+        };
+        let robot = inst
+            .robot_ids()
+            .filter(|&i| inst.skills(i)[short] > 0 && a.task_of(i) != Some(j) && !decided(i))
+            .filter(|&i| self.allowed(i, j))
+            .min_by(|&x, &y| inst.cost(x, j).total_cmp(&inst.cost(y, j)));
+        // Where every robot that could bring the skill was ruled out since the node was
+        // made (a better assignment found), the task is staffed (no longer possible) or
+        // not.
+        Some(robot.map_or(Branch::Task(j.index()), |i| Branch::Pair(i, j)))
+    }
+
+    /// The two children of a branch: its decisions and fixed robots.
+    pub(in super::super) fn children(
+        &self,
+        node: &Node,
+        branch: Branch,
+    ) -> [(Vec<Decision>, Vec<Pair>); 2] {
+        let with = |decision: Option<(usize, Decision)>, pair: Option<Pair>| {
+            let mut decisions = node.decisions.clone();
+            if let Some((j, d)) = decision {
+                decisions[j] = d;
+            }
+            let mut pairs = node.pairs.clone();
+            pairs.extend(pair);
+            (decisions, pairs)
+        };
+        match branch {
+            Branch::Task(j) => [
+                with(Some((j, Decision::Staffed)), None),
+                with(Some((j, Decision::Unstaffed)), None),
+            ],
+            Branch::Pair(i, j) => [
+                with(None, Some((i, j, true))),
+                with(None, Some((i, j, false))),
+            ],
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use afg_game::{Instance, Point, RobotId, Task, TaskId};
+
+    use super::super::Search;
+    use super::Branch;
+
+    /// Where every robot that could bring an earning task's missing skill has been
+    /// ruled out since its node was made (a better assignment found), the node branches
+    /// on the task — staffed, which no assignment can be, or not — rather than closing
+    /// as though its relaxation were a real assignment.
+    #[test]
+    fn a_task_no_robot_may_bring_its_skill_to_is_branched_on_not_closed() {
+        let task = |x| Task {
+            position: Point::new(x, 0.0),
+            reward: 1.0,
+            eps: 2.0,
+            capacity: None,
+        };
+        // Robot 0 lacks the skill task 0 requires; robot 1, nearer task 1, holds it.
+        let robots = vec![Point::new(0.1, 0.0), Point::new(0.9, 0.0)];
+        let inst = Instance::new(robots, vec![task(0.0), task(1.0)], 1.0)
+            .unwrap()
+            .with_teams(vec![1, 1], &[vec![0], vec![1]], &[vec![1], vec![]])
+            .unwrap();
+        let mut search = Search::new(&inst);
+        let root = search
+            .node(search.root_decisions(), Vec::new(), None)
+            .unwrap();
+        assert!(matches!(
+            search.branch(&root),
+            Some(Branch::Pair(RobotId(1), TaskId(0)))
+        ));
+        search.forbidden = vec![false, false, true, false]; // robot 1 may not join task 0
+        let Some(Branch::Task(0)) = search.branch(&root) else {
+            panic!("closed, or a pair the search ruled out")
+        };
+        let [staffed, unstaffed] = search.children(&root, Branch::Task(0));
+        assert!(search.node(staffed.0, staffed.1, Some(&root)).is_none());
+        assert!(search.node(unstaffed.0, unstaffed.1, Some(&root)).is_some());
+    }
+}
