@@ -23,7 +23,9 @@
 //! robots free to join it earns nothing. Staffed then means earning: the threshold
 //! met and the skills held. Every threshold is read as the task's smallest earning
 //! team ([`Instance::smallest_team`]: more than k where its skills need more robots),
-//! which tightens the envelope of a task that needs few robots but many skills.
+//! which tightens the envelope of a task that needs few robots but many skills. (The
+//! dives a rounding or a staffing takes, [`TeamOptimum::dive`] and
+//! [`TeamOptimum::staff`], read the thresholds as they are.)
 //!
 //! **Pairs ruled out.** The root's relaxation, priced, bounds every assignment less the
 //! reduced costs of where it puts its robots; a robot-task pair whose reduced cost
@@ -238,7 +240,7 @@ impl TeamOptimum {
                 .is_some_and(|s| s.load(Ordering::Relaxed))
         };
         let out_of_time = || deadline.near() || stopped();
-        let mut search = Search::new(instance);
+        let mut search = Search::exact(instance);
         let root = search.root(&|| deadline.root_over() || stopped());
         let mut root = match root {
             Ok(root) => root,

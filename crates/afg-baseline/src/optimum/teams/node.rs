@@ -98,6 +98,19 @@ pub(super) struct Search<'a> {
 }
 
 impl<'a> Search<'a> {
+    /// The search of the exact solve: every threshold read as the task's smallest
+    /// earning team ([`Instance::smallest_team`]; more than N: it never earns).
+    pub(super) fn exact(instance: &'a Instance) -> Self {
+        let thresholds = (instance.task_ids())
+            .map(|j| (instance.smallest_team(j)).unwrap_or(instance.num_robots() + 1))
+            .collect();
+        Search {
+            thresholds,
+            ..Search::new(instance)
+        }
+    }
+
+    /// The search of a rounding or a staffing (the dives): the thresholds as they are.
     pub(super) fn new(instance: &'a Instance) -> Self {
         // Every robot lies in the box of their positions: no distance to a task
         // exceeds the one to the box's farthest corner (O(N + M), not N M).
@@ -135,15 +148,9 @@ impl<'a> Search<'a> {
             .iter()
             .map(|t| t.reward)
             .fold(0.0, f64::max);
-        // A task earns from its smallest team on: where its skills need more robots
-        // than its threshold, the relaxation spreads its value over them (more than N:
-        // it never earns).
-        let thresholds = (instance.task_ids())
-            .map(|j| (instance.smallest_team(j)).unwrap_or(instance.num_robots() + 1))
-            .collect();
         Search {
             instance,
-            thresholds,
+            thresholds: instance.task_ids().map(|j| instance.min_team(j)).collect(),
             forbidden: Vec::new(),
             kept_out: Vec::new(),
             root_dual: None,
@@ -188,8 +195,8 @@ impl<'a> Search<'a> {
         decisions
     }
 
-    /// The fewest members with which task j earns ([`Instance::smallest_team`]): the
-    /// threshold every relaxation and branching here reads.
+    /// Task j's threshold as every relaxation and branching here reads it (see
+    /// [`Search::exact`]).
     fn threshold(&self, j: TaskId) -> usize {
         self.thresholds[j.index()]
     }
