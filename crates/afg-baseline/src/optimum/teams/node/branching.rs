@@ -18,10 +18,10 @@ pub(in super::super) enum Branch {
 
 impl Search<'_> {
     /// Where a node branches: first an open task whose relaxed coalition is between 0
-    /// and its threshold (the most envelope value at stake), then an earning task short
-    /// of a skill (the most value at stake) and the cheapest robot free to bring it;
-    /// `None` when there is neither (the relaxation is a real assignment, worth its
-    /// bound).
+    /// and its threshold (the most envelope value at stake), then the earning task short
+    /// of a skill with the most value at stake — the task itself where it is open, else
+    /// the cheapest robot free to bring the skill; `None` when there is neither (the
+    /// relaxation is a real assignment, worth its bound).
     pub(in super::super) fn branch(&self, node: &Node) -> Option<Branch> {
         let inst = self.instance;
         let sizes = &node.sizes;
@@ -39,7 +39,14 @@ impl Search<'_> {
         if let Some((j, _)) = task {
             return Some(Branch::Task(j));
         }
-        self.skill_branch(node)
+        // An open task short of a skill is decided first: not staffed, or staffed
+        // (then its skills are branched on robot by robot).
+        match self.skill_branch(node)? {
+            Branch::Pair(_, j) if node.decisions[j.index()] == Decision::Open => {
+                Some(Branch::Task(j.index()))
+            }
+            branch => Some(branch),
+        }
     }
 
     /// The earning task short of a skill with the most value at stake, and the
@@ -105,15 +112,16 @@ impl Search<'_> {
 mod tests {
     use afg_game::{Instance, Point, RobotId, Task, TaskId};
 
-    use super::super::Search;
+    use super::super::{Decision, Search};
     use super::Branch;
 
-    /// Where every robot that could bring an earning task's missing skill has been
-    /// ruled out since its node was made (a better assignment found), the node branches
-    /// on the task — staffed, which no assignment can be, or not — rather than closing
-    /// as though its relaxation were a real assignment.
+    /// An open task short of a skill is branched on itself first; once it is staffed,
+    /// on the cheapest robot that could bring the skill; and where every such robot
+    /// has been ruled out since its node was made (a better assignment found), on the
+    /// task again — staffed, which no assignment can be, or not — rather than closing
+    /// as though the node's relaxation were a real assignment.
     #[test]
-    fn a_task_no_robot_may_bring_its_skill_to_is_branched_on_not_closed() {
+    fn a_task_short_of_a_skill_is_decided_then_its_robots() {
         let task = |x| Task {
             position: Point::new(x, 0.0),
             reward: 1.0,
@@ -130,16 +138,26 @@ mod tests {
         let root = search
             .node(search.root_decisions(), Vec::new(), None)
             .unwrap();
+        let Some(Branch::Task(0)) = search.branch(&root) else {
+            panic!("an open task short of a skill is decided first")
+        };
+        let [(decisions, pairs), _] = search.children(&root, Branch::Task(0));
+        assert_eq!(decisions[0], Decision::Staffed);
+        let staffed = search.node(decisions, pairs, Some(&root)).unwrap();
         assert!(matches!(
-            search.branch(&root),
+            search.branch(&staffed),
             Some(Branch::Pair(RobotId(1), TaskId(0)))
         ));
         search.forbidden = vec![false, false, true, false]; // robot 1 may not join task 0
-        let Some(Branch::Task(0)) = search.branch(&root) else {
+        let Some(Branch::Task(0)) = search.branch(&staffed) else {
             panic!("closed, or a pair the search ruled out")
         };
-        let [staffed, unstaffed] = search.children(&root, Branch::Task(0));
-        assert!(search.node(staffed.0, staffed.1, Some(&root)).is_none());
-        assert!(search.node(unstaffed.0, unstaffed.1, Some(&root)).is_some());
+        let [again, unstaffed] = search.children(&staffed, Branch::Task(0));
+        assert!(search.node(again.0, again.1, Some(&staffed)).is_none());
+        assert!(
+            search
+                .node(unstaffed.0, unstaffed.1, Some(&staffed))
+                .is_some()
+        );
     }
 }
