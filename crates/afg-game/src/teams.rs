@@ -270,6 +270,38 @@ impl Instance {
     /// # Ok::<(), afg_game::GameError>(())
     /// ```
     pub fn smallest_team(&self, task: TaskId) -> Option<usize> {
+        self.smallest_team_of(task, &self.robot_kinds())
+    }
+
+    /// [`Instance::smallest_team`] of every task, the robots' kinds read once: O(N S)
+    /// and then a small search per task that requires skills.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::{GeneratorKnobs, TaskId};
+    /// let knobs = GeneratorKnobs { skills: Some(2), requires: Some((0, 3)), ..GeneratorKnobs::default() };
+    /// let inst = knobs.config(20, 4, 1)?.generate()?;
+    /// let all = inst.smallest_teams();
+    /// assert!(inst.task_ids().all(|j| all[j.index()] == inst.smallest_team(j)));
+    /// # Ok::<(), afg_game::GameError>(())
+    /// ```
+    pub fn smallest_teams(&self) -> Vec<Option<usize>> {
+        let kinds = self.robot_kinds();
+        self.task_ids()
+            .map(|j| self.smallest_team_of(j, &kinds))
+            .collect()
+    }
+
+    /// The distinct skill rows of the robots.
+    fn robot_kinds(&self) -> Vec<&[u32]> {
+        let mut kinds: Vec<&[u32]> = self.robot_ids().map(|i| self.skills(i)).collect();
+        kinds.sort_unstable();
+        kinds.dedup();
+        kinds
+    }
+
+    /// [`Instance::smallest_team`] of task j among robots of `kinds` (distinct rows).
+    fn smallest_team_of(&self, task: TaskId, robot_kinds: &[&[u32]]) -> Option<usize> {
         let k = self.min_team(task);
         let need = self.requires(task);
         if need.iter().all(|&r| r == 0) {
@@ -279,10 +311,8 @@ impl Instance {
         // Each kind of robot, its amounts capped at the need; none that holds nothing
         // needed, none that another kind holds at least as much as of every skill.
         let mut kinds: Vec<Vec<u32>> = Vec::new();
-        for robot in self.robot_ids() {
-            let kind: Vec<u32> = (self.skills(robot).iter().zip(need))
-                .map(|(&q, &r)| q.min(r))
-                .collect();
+        for row in robot_kinds {
+            let kind: Vec<u32> = (row.iter().zip(need)).map(|(&q, &r)| q.min(r)).collect();
             let covers = |a: &[u32], b: &[u32]| a.iter().zip(b).all(|(x, y)| x >= y);
             if kind.iter().all(|&q| q == 0) || kinds.iter().any(|other| covers(other, &kind)) {
                 continue;

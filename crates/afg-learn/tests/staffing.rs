@@ -180,7 +180,8 @@ fn a_run_on_named_families_draws_each_family_and_reuses_another_runs_labels() {
     assert!(
         constant
             .iter()
-            .all(|g| g.family == Some(Family::Constant) && g.thresholds.iter().all(|&k| k == 12))
+            .all(|g| g.draw.family == Some(Family::Constant)
+                && g.thresholds.iter().all(|&k| k == 12))
     );
 
     let config = with(vec![Family::Constant, Family::HeavyTail]);
@@ -205,10 +206,10 @@ fn a_run_on_named_families_draws_each_family_and_reuses_another_runs_labels() {
     assert!(
         mixture[3..]
             .iter()
-            .all(|g| g.family == Some(Family::HeavyTail))
+            .all(|g| g.draw.family == Some(Family::HeavyTail))
     );
     let heavy = Family::HeavyTail
-        .config(30, 4, mixture[3].seed)
+        .config(30, 4, mixture[3].draw.seed)
         .unwrap()
         .generate()
         .unwrap();

@@ -81,13 +81,9 @@ impl GameDraw {
 /// assignment's welfare.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LabelledGame {
-    /// Its named family (`None`: the scarce game).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub family: Option<Family>,
-    /// The generator seed.
-    pub seed: u64,
-    /// Its size.
-    pub size: GameSize,
+    /// Which game it is (written as its own fields: `family`, `seed`, `size`).
+    #[serde(flatten)]
+    pub draw: GameDraw,
     /// `[M, STAFF_FEATURES]`.
     pub features: Vec<f32>,
     /// `[M]`, 0 or 1.
@@ -98,17 +94,6 @@ pub struct LabelledGame {
     pub welfare: f64,
     /// Whether it is proven optimal.
     pub proven: bool,
-}
-
-impl LabelledGame {
-    /// Which game it is.
-    pub fn draw(&self) -> GameDraw {
-        GameDraw {
-            family: self.family,
-            seed: self.seed,
-            size: self.size,
-        }
-    }
 }
 
 pub(super) fn label(
@@ -126,9 +111,7 @@ pub(super) fn label(
         .map(|earns| f32::from(u8::from(earns)))
         .collect();
     Ok(LabelledGame {
-        family: draw.family,
-        seed: draw.seed,
-        size: draw.size,
+        draw,
         features: staffing_features(inst, &TeamOptimum::relax(inst)),
         labels,
         thresholds: inst.task_ids().map(|j| inst.min_team(j)).collect(),
@@ -155,7 +138,7 @@ pub(super) fn read_labels(path: &Path) -> Result<Vec<LabelledGame>, LearnError> 
         .map(|(i, line)| {
             let game: LabelledGame =
                 serde_json::from_str(line).map_err(|e| error(format!("line {}: {e}", i + 1)))?;
-            let m = game.size.tasks;
+            let m = game.draw.size.tasks;
             if game.features.len() != m * STAFF_FEATURES
                 || game.labels.len() != m
                 || game.thresholds.len() != m

@@ -261,19 +261,21 @@ impl StaffingTrainer {
             Some(path) if path.exists() => read_labels(path)?,
             _ => Vec::new(),
         };
-        if let Some(game) = cached.iter().find(|g| !games.contains(&g.draw())) {
+        if let Some(game) = cached.iter().find(|g| !games.contains(&g.draw)) {
             return Err(LearnError::InvalidConfig(format!(
                 "{} holds another run's games (seed {} of {}x{}{}, which this run does not draw); remove it or choose another directory",
                 cache.map_or_else(String::new, |p| p.display().to_string()),
-                game.seed,
-                game.size.robots,
-                game.size.tasks,
-                game.family.map_or_else(String::new, |f| format!(" of {f}")),
+                game.draw.seed,
+                game.draw.size.robots,
+                game.draw.size.tasks,
+                game.draw
+                    .family
+                    .map_or_else(String::new, |f| format!(" of {f}")),
             )));
         }
         cached.iter().for_each(&on_game);
         let todo: Vec<GameDraw> = (games.iter().copied())
-            .filter(|&draw| !cached.iter().any(|g| g.draw() == draw))
+            .filter(|&draw| !cached.iter().any(|g| g.draw == draw))
             .collect();
         let file = std::sync::Mutex::new(cache.map(|path| (path.to_path_buf(), lines_of(&cached))));
         let fresh: Vec<LabelledGame> = todo
@@ -297,7 +299,7 @@ impl StaffingTrainer {
             .map(|&draw| {
                 let at = labelled
                     .iter()
-                    .position(|g| g.as_ref().is_some_and(|g| g.draw() == draw));
+                    .position(|g| g.as_ref().is_some_and(|g| g.draw == draw));
                 at.and_then(|at| labelled[at].take())
                     .expect("every game labelled")
             })
@@ -352,7 +354,7 @@ impl StaffingTrainer {
         let (mut agree, mut tasks, mut percent) = (0usize, 0usize, 0.0);
         for (inst, game) in &self.validation {
             let values = values_of(&mlp, &game.features, reads_skills);
-            let chosen = knapsack(&game.thresholds, &values, game.size.robots);
+            let chosen = knapsack(&game.thresholds, &values, game.draw.size.robots);
             agree += chosen
                 .iter()
                 .zip(&game.labels)
@@ -420,7 +422,7 @@ impl StaffingTrainer {
                         }
                 })
                 .collect();
-            let chosen = knapsack(&game.thresholds, &augmented, game.size.robots);
+            let chosen = knapsack(&game.thresholds, &augmented, game.draw.size.robots);
             for j in 0..m {
                 let diff = f64::from(u8::from(chosen[j])) - f64::from(game.labels[j]);
                 let size = f64::from(game.features[j * STAFF_FEATURES + SIZE]);

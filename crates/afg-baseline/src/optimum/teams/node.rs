@@ -99,10 +99,10 @@ pub(super) struct Search<'a> {
 
 impl<'a> Search<'a> {
     /// The search of the exact solve: every threshold read as the task's smallest
-    /// earning team ([`Instance::smallest_team`]; more than N: it never earns).
+    /// earning team ([`Instance::smallest_teams`]; more than N: it never earns).
     pub(super) fn exact(instance: &'a Instance) -> Self {
-        let thresholds = (instance.task_ids())
-            .map(|j| (instance.smallest_team(j)).unwrap_or(instance.num_robots() + 1))
+        let thresholds = (instance.smallest_teams().into_iter())
+            .map(|k| k.unwrap_or(instance.num_robots() + 1))
             .collect();
         Search {
             thresholds,

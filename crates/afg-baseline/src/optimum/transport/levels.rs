@@ -48,6 +48,31 @@ impl Level {
         }
     }
 
+    /// The finest level of `inst` with `columns`, each `(robot, column, delta)` of
+    /// `adjust` added to that robot's cost there and its skills' worth at
+    /// `skill_prices` taken off (see [`solve_columns`]).
+    pub(super) fn priced(
+        inst: &Instance,
+        columns: &[Column],
+        adjust: &[(usize, usize, f64)],
+        skill_prices: &[f64],
+    ) -> Self {
+        let mut level = Level::new(inst, columns, 1, 0);
+        let m = level.m();
+        for &(robot, column, delta) in adjust {
+            level.costs[robot * m + column] += delta;
+        }
+        if !skill_prices.is_empty() {
+            for i in inst.robot_ids() {
+                let row = &mut level.costs[i.index() * m..][..inst.num_tasks()];
+                for (cost, rebate) in row.iter_mut().zip(skill_rebates(inst, i, skill_prices)) {
+                    *cost -= rebate;
+                }
+            }
+        }
+        level
+    }
+
     /// The finest level of `inst` with `columns`, its costs left out: its counts and
     /// marginal values only.
     pub(super) fn without_costs(inst: &Instance, columns: &[Column]) -> Self {

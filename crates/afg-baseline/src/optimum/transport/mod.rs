@@ -45,7 +45,7 @@ use crate::simple::task_positions;
 pub(in crate::optimum) use columns::{Column, Slots};
 use levels::{Level, cheapest, coarse_prices, cost_row, sink};
 use stopped::interrupted;
-pub(in crate::optimum) use stopped::{Interrupted, NEVER, Stop};
+pub(in crate::optimum) use stopped::{Interrupted, NEVER, Stop, reduced_costs};
 
 /// Each coarser level keeps every `FACTOR`-th robot of the level above.
 const FACTOR: usize = 8;
@@ -129,7 +129,7 @@ pub(super) fn solve_columns(
         return Err(interrupted(inst, columns, prices));
     }
     let flow = Flow::solved(
-        priced_level(inst, columns, adjust, skill_prices),
+        Level::priced(inst, columns, adjust, skill_prices),
         warm,
         stop,
     );
@@ -138,71 +138,6 @@ pub(super) fn solve_columns(
     } else {
         Err(interrupted(inst, columns, &flow.prices()))
     }
-}
-
-/// The finest level of `inst` with `columns`, each `(robot, column, delta)` of `adjust`
-/// added to that robot's cost there and its skills' worth at `skill_prices` taken off
-/// (see [`solve_columns`]).
-fn priced_level(
-    inst: &Instance,
-    columns: &[Column],
-    adjust: &[(usize, usize, f64)],
-    skill_prices: &[f64],
-) -> Level {
-    let mut level = Level::new(inst, columns, 1, 0);
-    let m = level.m();
-    for &(robot, column, delta) in adjust {
-        level.costs[robot * m + column] += delta;
-    }
-    if !skill_prices.is_empty() {
-        for i in inst.robot_ids() {
-            let row = &mut level.costs[i.index() * m..][..inst.num_tasks()];
-            for (cost, rebate) in row.iter_mut().zip(skill_rebates(inst, i, skill_prices)) {
-                *cost -= rebate;
-            }
-        }
-    }
-    level
-}
-
-/// The dual bound of `prices` (one per column) on the problem [`solve_columns`] solves
-/// with these `columns`, `adjust` and `skill_prices` — `Σ_i max_j (π_j − c_ij) + Σ_j
-/// max_n (value_j(n) − n π_j)`, every robot and every column's count chosen apart, an
-/// upper bound on every assignment's welfare there whatever the prices — and every
-/// robot's reduced cost at every column (row-major, a row of `columns.len()` per
-/// robot): how far below its best column's gain that one's is. An assignment that
-/// puts robot i in column j is worth at most the bound less that reduced cost.
-pub(super) fn reduced_costs(
-    inst: &Instance,
-    columns: &[Column],
-    prices: &[f64],
-    adjust: &[(usize, usize, f64)],
-    skill_prices: &[f64],
-) -> (f64, Vec<f64>) {
-    let level = priced_level(inst, columns, adjust, skill_prices);
-    let open = |j: &usize| !matches!(columns[*j], Column::Closed);
-    let mut reduced = vec![f64::INFINITY; level.costs.len()];
-    let mut bound = 0.0;
-    for (row, costs) in reduced
-        .chunks_exact_mut(level.m())
-        .zip(level.costs.chunks_exact(level.m()))
-    {
-        let gain = |j: usize| prices[j] - costs[j];
-        let best = (0..level.m())
-            .filter(open)
-            .map(gain)
-            .fold(f64::NEG_INFINITY, f64::max);
-        bound += best;
-        for j in (0..level.m()).filter(open) {
-            row[j] = best - gain(j);
-        }
-    }
-    for j in (0..level.m()).filter(open) {
-        bound += (1..=level.count_at(j, prices[j]))
-            .map(|k| level.marginal(j, k) - prices[j])
-            .sum::<f64>();
-    }
-    (bound, reduced)
 }
 
 /// What robot i's skills are worth at each task at `skill_prices` (one per task and

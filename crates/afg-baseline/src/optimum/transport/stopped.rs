@@ -40,18 +40,58 @@ pub(super) fn interrupted(inst: &Instance, columns: &[Column], prices: &[f64]) -
             let mut row = Vec::new();
             inst.robots().iter().map(|r| place(&mut row, r)).unzip()
         };
-    let counts: f64 = (0..columns.len())
-        .filter(|&j| !matches!(columns[j], Column::Closed))
+    Interrupted {
+        bound: gains.iter().sum::<f64>() + counts_at(&level, prices),
+        task_of,
+    }
+}
+
+/// `Σ_j max_n (value_j(n) − n π_j)`: what every open column's best count is worth at
+/// its price, the columns' half of a dual bound.
+fn counts_at(level: &Level, prices: &[f64]) -> f64 {
+    (0..level.m())
+        .filter(|&j| !matches!(level.columns[j], Column::Closed))
         .map(|j| {
             (1..=level.count_at(j, prices[j]))
                 .map(|k| level.marginal(j, k) - prices[j])
                 .sum::<f64>()
         })
-        .sum();
-    Interrupted {
-        bound: gains.iter().sum::<f64>() + counts,
-        task_of,
+        .sum()
+}
+
+/// The dual bound of `prices` (one per column) on the problem [`solve_columns`](super::solve_columns) solves
+/// with these `columns`, `adjust` and `skill_prices` — `Σ_i max_j (π_j − c_ij) + Σ_j
+/// max_n (value_j(n) − n π_j)`, every robot and every column's count chosen apart, an
+/// upper bound on every assignment's welfare there whatever the prices — and every
+/// robot's reduced cost at every column (row-major, a row of `columns.len()` per
+/// robot): how far below its best column's gain that one's is. An assignment that
+/// puts robot i in column j is worth at most the bound less that reduced cost.
+pub(in crate::optimum) fn reduced_costs(
+    inst: &Instance,
+    columns: &[Column],
+    prices: &[f64],
+    adjust: &[(usize, usize, f64)],
+    skill_prices: &[f64],
+) -> (f64, Vec<f64>) {
+    let level = Level::priced(inst, columns, adjust, skill_prices);
+    let open = |j: &usize| !matches!(columns[*j], Column::Closed);
+    let mut reduced = vec![f64::INFINITY; level.costs.len()];
+    let mut bound = 0.0;
+    for (row, costs) in reduced
+        .chunks_exact_mut(level.m())
+        .zip(level.costs.chunks_exact(level.m()))
+    {
+        let gain = |j: usize| prices[j] - costs[j];
+        let best = (0..level.m())
+            .filter(open)
+            .map(gain)
+            .fold(f64::NEG_INFINITY, f64::max);
+        bound += best;
+        for j in (0..level.m()).filter(open) {
+            row[j] = best - gain(j);
+        }
     }
+    (bound + counts_at(&level, prices), reduced)
 }
 
 #[cfg(test)]

@@ -21,7 +21,7 @@ use super::{Decision, Node, Pair, Search};
 /// Subgradient steps at the root at most.
 const ROUNDS: usize = 80;
 /// Subgradient steps at every other node, from its parent's skill prices.
-const NODE_ROUNDS: usize = 8;
+const NODE_ROUNDS: usize = 4;
 /// Steps without a lower bound before the step size halves.
 const PATIENCE: usize = 5;
 /// Games with more robot-task pairs than this keep the envelope bound alone: a
