@@ -22,6 +22,7 @@
 #[cfg(doctest)]
 pub struct ReadmeDoctests;
 
+mod climb;
 mod dynamics;
 mod method;
 mod optimum;
@@ -35,6 +36,7 @@ use afg_graph::GraphError;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+pub use climb::climb;
 pub use dynamics::{CentralisedDa, DecentralisedDa, DecentralisedRun};
 pub use method::Method;
 pub use optimum::{

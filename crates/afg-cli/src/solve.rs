@@ -28,7 +28,8 @@ pub struct SolveArgs {
     /// [default: 1, the exact greedy rollout].
     #[arg(long)]
     pub(crate) block: Option<usize>,
-    /// Learned policy: balanced best-response sweeps after the rollout (Def. 3 stable result).
+    /// Learned policy: balanced best-response sweeps after the rollout (Def. 3 stable result);
+    /// with a staffing model, a welfare climb after its placement (robot moves and swaps, ours).
     #[arg(long)]
     pub(crate) repair: bool,
     /// Price model (a run whose manifest names a price model): every robot uses the prices of the
@@ -106,9 +107,7 @@ fn with_flags(error: LearnError) -> anyhow::Error {
         OptionConflict::BlockWithOneShot => "drop --one-shot or --block",
         OptionConflict::OneShotOnQNetwork => "drop --one-shot",
         OptionConflict::BlockWithExactBurn => "drop --block or --exact-burn",
-        OptionConflict::OptionOnStaffingModel => {
-            "drop --block, --repair, --one-shot and --exact-burn"
-        }
+        OptionConflict::OptionOnStaffingModel => "drop --block, --one-shot and --exact-burn",
     };
     anyhow::anyhow!("{conflict}: {fix}")
 }

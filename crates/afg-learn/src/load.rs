@@ -18,7 +18,8 @@ pub struct ModelOptions {
     /// Robots per network evaluation (Q networks and sequential price models; default
     /// 1, the exact greedy rollout).
     pub block: Option<usize>,
-    /// Q networks: balanced best-response sweeps after the rollout.
+    /// Q networks: balanced best-response sweeps after the rollout; staffing models: a
+    /// welfare climb after the placement ([`StaffingPolicy::with_repair`](crate::staffing::StaffingPolicy::with_repair)).
     pub repair: bool,
     /// Price models: every robot uses the prices of the empty state.
     pub one_shot: bool,
@@ -33,8 +34,8 @@ pub enum OptionConflict {
     /// Repair or the exact Burn rollout asked of a price model.
     #[error("repair and the exact Burn rollout apply to Q networks, not price models")]
     QNetworkOptionOnPriceModel,
-    /// Any option with a staffing model (it has none).
-    #[error("block, repair, one-shot and the exact Burn rollout do not apply to a staffing model")]
+    /// An option other than repair with a staffing model.
+    #[error("block, one-shot and the exact Burn rollout do not apply to a staffing model")]
     OptionOnStaffingModel,
     /// A block size with the one-shot mode.
     #[error("a block size applies to the sequential mode, not the one-shot one")]
@@ -71,10 +72,18 @@ pub fn load_model(dir: &Path, options: ModelOptions) -> Result<Box<dyn Allocator
     };
     let kind = RunDir::new(dir).kind().map_err(loading)?;
     if kind == ModelKind::StaffingModel {
-        if options != ModelOptions::default() {
+        let repair = options.repair;
+        if options
+            != (ModelOptions {
+                repair,
+                ..ModelOptions::default()
+            })
+        {
             return bad(OptionConflict::OptionOnStaffingModel);
         }
-        let policy = StaffingPolicy::load(&dir.join(StaffingModel::FILE_NAME)).map_err(loading)?;
+        let policy = StaffingPolicy::load(&dir.join(StaffingModel::FILE_NAME))
+            .map_err(loading)?
+            .with_repair(repair);
         return Ok(Box::new(policy));
     }
     if kind == ModelKind::PriceModel {

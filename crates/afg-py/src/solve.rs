@@ -212,7 +212,9 @@ impl PyModel {
     }
 }
 
-/// Loads the trained model of a run directory: a Q network or a price model.
+/// Loads the trained model of a run directory: a Q network, a price model or a staffing
+/// model. `repair`: balanced best-response sweeps after a Q network's rollout, or a
+/// welfare climb after a staffing model's placement (ours).
 #[pyfunction]
 #[pyo3(signature = (path, block=None, repair=false, one_shot=false))]
 fn load_model(

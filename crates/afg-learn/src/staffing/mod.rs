@@ -139,6 +139,7 @@ impl StaffingModel {
 pub struct StaffingPolicy {
     mlp: TaskMlp,
     reads_skills: bool,
+    repair: bool,
 }
 
 impl StaffingPolicy {
@@ -159,7 +160,11 @@ impl StaffingPolicy {
                 ));
             }
         };
-        Ok(StaffingPolicy { mlp, reads_skills })
+        Ok(StaffingPolicy {
+            mlp,
+            reads_skills,
+            repair: false,
+        })
     }
 
     /// The untrained network of `config` (every correction 0), reading the skill
@@ -174,7 +179,30 @@ impl StaffingPolicy {
         StaffingPolicy {
             mlp: TaskMlp::from_burn(&net),
             reads_skills,
+            repair: false,
         }
+    }
+
+    /// Whether a welfare climb ([`afg_baseline::climb`]: robot moves and pairwise swaps,
+    /// each taken while it raises the welfare) follows the placement (ours). With skills
+    /// the placement brings each staffed team the skills it lacks one robot at a time,
+    /// and the climb takes back what that costs.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_baseline::Allocator;
+    /// use afg_learn::price::PriceNetConfig;
+    /// use afg_learn::staffing::StaffingPolicy;
+    /// let inst = afg_game::Family::SparseSkills.config(60, 6, 2)?.generate()?;
+    /// let policy = StaffingPolicy::untrained(PriceNetConfig { hidden: 8, seed: 0 }, true);
+    /// let placed = policy.allocate(&inst)?.assignment;
+    /// let climbed = policy.with_repair(true).allocate(&inst)?.assignment;
+    /// assert!(inst.welfare(&climbed) >= inst.welfare(&placed));
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn with_repair(mut self, repair: bool) -> Self {
+        self.repair = repair;
+        self
     }
 
     /// The policy of a saved model.
@@ -333,11 +361,16 @@ impl Allocator for StaffingPolicy {
             });
         }
         let start = std::time::Instant::now();
-        let (assignment, _) = staff_by_values(instance, &self.values(instance))?;
+        let (mut assignment, _) = staff_by_values(instance, &self.values(instance))?;
+        let moves = if self.repair {
+            afg_baseline::climb(instance, &mut assignment)
+        } else {
+            0
+        };
         Ok(Allocation {
             assignment,
             stats: AllocStats {
-                iterations: 2, // the relaxation and the placement
+                iterations: 2 + moves, // the relaxation, the placement, each change of the climb
                 wall_time: start.elapsed(),
                 ..AllocStats::default()
             },
