@@ -259,14 +259,7 @@ impl TeamOptimum {
         search.dive(&root, &out_of_time, &mut |node, fractional| {
             Self::half_rounding(instance, &node.relaxation(m), fractional)
         });
-        if instance.has_skill_rules()
-            && instance.num_robots() * instance.num_tasks() <= node::MAX_PAIRS
-        {
-            root.bound = root.bound.min(search.price_skills(&root, &out_of_time));
-        }
-        if instance.num_robots() * instance.num_tasks() <= node::MAX_PAIRS {
-            search.fix_pairs(&root);
-        }
+        search.price_root(&mut root, &out_of_time);
         let mut open = BinaryHeap::from([root]);
         let bound =
             |open: &BinaryHeap<Node>, best: f64| open.peek().map_or(best, |n| n.bound.max(best));

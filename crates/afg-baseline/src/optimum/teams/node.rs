@@ -10,6 +10,7 @@ use super::super::transport::{
 };
 
 mod branching;
+mod count;
 mod fixing;
 mod lagrange;
 mod rounding;
@@ -92,6 +93,8 @@ pub(super) struct Search<'a> {
     bonus: f64,
     skill_prices: Vec<f64>,
     skill_step: f64,
+    /// The price of a task's earning in the relaxations (module `count`; 0: none).
+    count_price: f64,
     best: Assignment,
     best_welfare: f64,
     nodes: u64,
@@ -159,6 +162,7 @@ impl<'a> Search<'a> {
             bonus: 2.0 * (max_cost + max_reward) + 1.0,
             skill_prices: Vec::new(),
             skill_step: 0.0,
+            count_price: 0.0,
             best: Assignment::unassigned(instance.num_robots(), instance.num_tasks()),
             best_welfare: f64::NEG_INFINITY,
             nodes: 0,
@@ -265,7 +269,7 @@ impl<'a> Search<'a> {
         let mut columns: Vec<Column> = inst
             .task_ids()
             .map(|j| {
-                let (column, _) = self.task_column(j, decisions[j.index()], 0.0);
+                let (column, _) = self.task_column(j, decisions[j.index()], self.count_price);
                 if let Column::Task { capacity, .. } = column {
                     room = room.saturating_add(capacity);
                 }
@@ -396,10 +400,11 @@ impl<'a> Search<'a> {
         if !self.keeps(&assignment, &pairs) {
             return None; // no assignment keeps every robot where the node fixed it
         }
-        let mut bound = -inst
-            .robot_ids()
-            .map(|i| assignment.task_of(i).map_or(0.0, |j| inst.cost(i, j)))
-            .sum::<f64>();
+        let mut bound = self.count_price * self.count_cap() as f64
+            - inst
+                .robot_ids()
+                .map(|i| assignment.task_of(i).map_or(0.0, |j| inst.cost(i, j)))
+                .sum::<f64>();
         for j in inst.task_ids() {
             let Column::Task { value, .. } = columns[j.index()] else {
                 unreachable!("tasks come first")

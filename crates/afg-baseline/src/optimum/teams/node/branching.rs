@@ -20,8 +20,9 @@ impl Search<'_> {
     /// Where a node branches: first an open task whose relaxed coalition is between 0
     /// and its threshold (the most envelope value at stake), then the earning task short
     /// of a skill with the most value at stake — the task itself where it is open, else
-    /// the cheapest robot free to bring the skill; `None` when there is neither (the
-    /// relaxation is a real assignment, worth its bound).
+    /// the cheapest robot free to bring the skill; where the relaxation prices earning
+    /// tasks and fewer earn in it than may, an open task (module `count`); `None` when
+    /// there is none of these (the relaxation is a real assignment, worth its bound).
     pub(in super::super) fn branch(&self, node: &Node) -> Option<Branch> {
         let inst = self.instance;
         let sizes = &node.sizes;
@@ -41,11 +42,12 @@ impl Search<'_> {
         }
         // An open task short of a skill is decided first: not staffed, or staffed
         // (then its skills are branched on robot by robot).
-        match self.skill_branch(node)? {
-            Branch::Pair(_, j) if node.decisions[j.index()] == Decision::Open => {
+        match self.skill_branch(node) {
+            Some(Branch::Pair(_, j)) if node.decisions[j.index()] == Decision::Open => {
                 Some(Branch::Task(j.index()))
             }
-            branch => Some(branch),
+            Some(branch) => Some(branch),
+            None => self.count_branch(node),
         }
     }
 
