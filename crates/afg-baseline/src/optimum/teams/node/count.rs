@@ -9,7 +9,8 @@
 //! alike and N not a multiple of it, say — the price takes that fraction of a team
 //! back. The root chooses μ by bisection on the subgradient C − Σ_j y_j (y_j, the share
 //! of its team a task holds in the relaxed optimum), and every node after it is priced
-//! at that μ.
+//! at that μ where it closes a good share of the root's gap ([`KEEP_SHARE`]; a price
+//! that closes little only makes every node's relaxation harder to close).
 
 use super::super::super::transport::{self, NEVER};
 use afg_game::TaskId;
@@ -18,6 +19,9 @@ use super::{Branch, Decision, MAX_PAIRS, Node, Search};
 
 /// Bisection steps on the count price at the root.
 const BISECTIONS: usize = 12;
+/// The share of the root's gap (its bound less the best found) the price must close
+/// for the nodes to be priced at it.
+const KEEP_SHARE: f64 = 0.25;
 
 impl Search<'_> {
     /// The most tasks that can earn at once: thresholds within N, smallest first, while
@@ -79,11 +83,11 @@ impl Search<'_> {
         Some((node.bound, teams))
     }
 
-    /// Prices the root after its dive: the count of earning tasks, then (in a game with
-    /// skills) the skills, each lowering its bound, then the pairs its dual rules out
-    /// (where a Lagrangian solve may read every pair, [`MAX_PAIRS`]).
+    /// Prices the root after its dive: in a game with skills the skills, then the pairs
+    /// its dual rules out (where a Lagrangian solve may read every pair, [`MAX_PAIRS`]),
+    /// then the count of earning tasks, each lowering its bound. The count comes last:
+    /// the assignments its solves find would move the target of the skills' steps.
     pub(in super::super) fn price_root(&mut self, root: &mut Node, out_of_time: &dyn Fn() -> bool) {
-        root.bound = root.bound.min(self.price_count(root, out_of_time));
         let inst = self.instance;
         let small = inst.num_robots() * inst.num_tasks() <= MAX_PAIRS;
         if inst.has_skill_rules() && small {
@@ -92,6 +96,7 @@ impl Search<'_> {
         if small {
             self.fix_pairs(root);
         }
+        root.bound = root.bound.min(self.price_count(root, out_of_time));
     }
 
     /// Chooses the price of an earning task at the root (bisection on the subgradient,
@@ -128,7 +133,9 @@ impl Search<'_> {
                 high = price;
             }
         }
-        self.count_price = best.1;
+        // A price that closes little of the root's gap only slows every node down.
+        let closed = (root.bound - best.0) / (root.bound - self.best_welfare);
+        self.count_price = if closed >= KEEP_SHARE { best.1 } else { 0.0 };
         best.0
     }
 
