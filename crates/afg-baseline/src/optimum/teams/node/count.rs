@@ -83,9 +83,10 @@ impl Search<'_> {
         Some((node.bound, teams))
     }
 
-    /// Prices the root after its dive: in a game with skills the skills, then the pairs
-    /// its dual rules out (where a Lagrangian solve may read every pair, [`MAX_PAIRS`]),
-    /// then the count of earning tasks, each lowering its bound. The count comes last:
+    /// Prices the root after its dive, where a Lagrangian solve may read every pair
+    /// ([`MAX_PAIRS`]; beyond, one root solve is already long): in a game with skills
+    /// the skills, then the pairs its dual rules out, then the count of earning tasks,
+    /// each lowering its bound. The count comes last:
     /// the assignments its solves find would move the target of the skills' steps.
     pub(in super::super) fn price_root(&mut self, root: &mut Node, out_of_time: &dyn Fn() -> bool) {
         let inst = self.instance;
@@ -95,8 +96,8 @@ impl Search<'_> {
         }
         if small {
             self.fix_pairs(root);
+            root.bound = root.bound.min(self.price_count(root, out_of_time));
         }
-        root.bound = root.bound.min(self.price_count(root, out_of_time));
     }
 
     /// Chooses the price of an earning task at the root (bisection on the subgradient,
