@@ -74,29 +74,23 @@ impl Coalitions<'_> {
         at_a + at_b - self.cost(i, b) - self.cost(k, a) + self.cost(i, a) + self.cost(k, b)
     }
 
-    fn leave(&mut self, i: RobotId, j: Option<TaskId>) {
-        if let Some(j) = j {
-            self.sizes[j.index()] -= 1;
-            let s = self.num_skills;
-            for (h, &q) in self.held[j.index() * s..][..s]
-                .iter_mut()
-                .zip(self.instance.skills(i))
-            {
-                *h -= u64::from(q);
-            }
-        }
-    }
-
-    fn join(&mut self, i: RobotId, j: Option<TaskId>) {
-        if let Some(j) = j {
-            self.sizes[j.index()] += 1;
-            let s = self.num_skills;
-            for (h, &q) in self.held[j.index() * s..][..s]
-                .iter_mut()
-                .zip(self.instance.skills(i))
-            {
-                *h += u64::from(q);
-            }
+    /// Robot i leaves coalition j (`joins` false) or joins it.
+    fn shift(&mut self, i: RobotId, j: Option<TaskId>, joins: bool) {
+        let Some(j) = j else {
+            return; // the void holds no coalition
+        };
+        let s = self.num_skills;
+        let size = &mut self.sizes[j.index()];
+        *size = if joins { *size + 1 } else { *size - 1 };
+        for (h, &q) in self.held[j.index() * s..][..s]
+            .iter_mut()
+            .zip(self.instance.skills(i))
+        {
+            *h = if joins {
+                *h + u64::from(q)
+            } else {
+                *h - u64::from(q)
+            };
         }
     }
 }
@@ -151,8 +145,8 @@ pub fn climb(instance: &Instance, assignment: &mut Assignment) -> u64 {
                     && state.move_gain(i, from, to) > MIN_GAIN
             });
             if let Some(to) = to {
-                state.leave(i, from);
-                state.join(i, to);
+                state.shift(i, from, false);
+                state.shift(i, to, true);
                 assignment.set(i, to);
                 changes += 1;
             }
@@ -161,10 +155,10 @@ pub fn climb(instance: &Instance, assignment: &mut Assignment) -> u64 {
             for &k in &robots[x + 1..] {
                 let (a, b) = (assignment.task_of(i), assignment.task_of(k));
                 if a != b && state.swap_gain((i, a), (k, b)) > MIN_GAIN {
-                    state.leave(i, a);
-                    state.leave(k, b);
-                    state.join(i, b);
-                    state.join(k, a);
+                    state.shift(i, a, false);
+                    state.shift(k, b, false);
+                    state.shift(i, b, true);
+                    state.shift(k, a, true);
                     assignment.set(i, b);
                     assignment.set(k, a);
                     changes += 1;
