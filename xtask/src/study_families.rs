@@ -250,7 +250,7 @@ fn table(args: &StudyFamiliesArgs, rows: &[Row]) -> String {
     let cell = |s: &Share| format!("{:.2} / {:.2}", s.mean, s.worst);
     let mut out = format!(
         "Staffing models (ours) on {} held-out games per family ({}×{}, seeds {}–{}), % of the exact solver's optimum (its bound where it stops at {} s): mean / worst game. \
-         Each trained on {} games per family, labelled at {} s, {} epochs; repaired: the welfare climb (robot moves and swaps) after the placement, `--repair`:\n\n",
+         Each trained on {} games per family, labelled at {} s, {} epochs; repaired: the welfare climb (robot moves, swaps, whole teams dissolved or staffed) after the placement, `--repair`:\n\n",
         args.instances,
         SIZE.robots,
         SIZE.tasks,

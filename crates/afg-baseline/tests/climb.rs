@@ -3,7 +3,7 @@
 //! (checked against the game's own welfare, change by change).
 
 use afg_baseline::climb;
-use afg_game::{Assignment, Family, Instance, RobotId, TaskId};
+use afg_game::{Assignment, Family, Instance, Point, RobotId, Task, TaskId};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -92,4 +92,64 @@ fn the_climb_gains_until_no_move_or_swap_does_on_every_family() {
         }
     }
     assert!(climbed > games / 2, "{climbed} of {games} climbed");
+}
+
+/// Two robots at the origin with three tasks there, rewards and thresholds `(reward,
+/// min_team)`, starting at tasks `start`: no cost, so the welfare is the coalitions'
+/// values alone.
+fn stuck_game(tasks: [(f64, usize); 3], start: [u32; 2]) -> (Instance, Assignment) {
+    let task = |reward| Task {
+        position: Point::new(0.0, 0.0),
+        reward,
+        eps: 2.0,
+        capacity: None,
+    };
+    let inst = Instance::new(
+        vec![Point::new(0.0, 0.0); 2],
+        tasks.iter().map(|&(r, _)| task(r)).collect(),
+        1.0,
+    )
+    .unwrap()
+    .with_teams(tasks.iter().map(|&(_, k)| k).collect(), &[], &[])
+    .unwrap();
+    let a = Assignment::from_tasks(&inst, start.map(|j| Some(TaskId(j))).to_vec()).unwrap();
+    (inst, a)
+}
+
+/// The best welfare of any assignment of a two-robot game, by brute force.
+fn brute_force_best(inst: &Instance) -> f64 {
+    let tasks: Vec<TaskId> = inst.task_ids().collect();
+    let mut best = f64::NEG_INFINITY;
+    for &x in &tasks {
+        for &y in &tasks {
+            let a = Assignment::from_tasks(inst, vec![Some(x), Some(y)]).unwrap();
+            best = best.max(inst.welfare(&a));
+        }
+    }
+    best
+}
+
+/// Where no single move or swap gains, the climb still dissolves a team worth less
+/// than its members elsewhere (a pair earning F(2) = 2 ln 3 / ln 2 ≈ 3.17 at task 2,
+/// against 2 + 2 apart) and staffs a task no single robot can open (a pair earning
+/// 10 ln 3 / ln 2 ≈ 15.85 against 1 + 1): both reach the brute-force optimum.
+#[test]
+fn the_climb_dissolves_and_staffs_whole_teams_where_no_single_change_gains() {
+    let dissolve = stuck_game([(2.0, 1), (2.0, 1), (2.0, 2)], [2, 2]);
+    let open = stuck_game([(1.0, 1), (1.0, 1), (10.0, 2)], [0, 1]);
+    for (name, (inst, mut a), ends_at) in [("dissolve", dissolve, [0, 1]), ("open", open, [2, 2])] {
+        let start = inst.welfare(&a);
+        assert!(
+            best_neighbour(&inst, &a) <= start + 1e-12,
+            "{name}: not stuck"
+        );
+        assert!(climb(&inst, &mut a) > 0, "{name}");
+        let mut tasks: Vec<usize> = a.tasks().iter().map(|t| t.unwrap().index()).collect();
+        tasks.sort_unstable();
+        assert_eq!(tasks, ends_at, "{name}");
+        assert!(
+            (inst.welfare(&a) - brute_force_best(&inst)).abs() < 1e-12,
+            "{name}"
+        );
+    }
 }

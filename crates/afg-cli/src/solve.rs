@@ -29,7 +29,7 @@ pub struct SolveArgs {
     #[arg(long)]
     pub(crate) block: Option<usize>,
     /// Learned policy: balanced best-response sweeps after the rollout (Def. 3 stable result);
-    /// with a staffing model, a welfare climb after its placement (robot moves and swaps, ours).
+    /// with a staffing model, a welfare climb after its placement (robot moves, swaps, whole teams dissolved or staffed; ours).
     #[arg(long)]
     pub(crate) repair: bool,
     /// Price model (a run whose manifest names a price model): every robot uses the prices of the

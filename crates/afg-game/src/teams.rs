@@ -199,8 +199,25 @@ impl Instance {
             .all(|(&need, &have)| have >= u64::from(need))
     }
 
-    /// Which tasks earn in `assignment`: their coalition at or above the threshold and
-    /// holding every skill they require.
+    /// Whether task j earns with a coalition of `size` robots holding `held[s]` of every
+    /// skill: at or above its threshold and holding every skill it requires.
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_game::{Instance, Point, Task, TaskId};
+    /// let task = Task { position: Point::new(0.0, 0.0), reward: 1.0, eps: 2.0, capacity: None };
+    /// let robots = vec![Point::new(1.0, 0.0), Point::new(2.0, 0.0)];
+    /// let inst = Instance::new(robots, vec![task], 1.0)?.with_teams(vec![2], &[vec![0], vec![1]], &[vec![1]])?;
+    /// assert!(!inst.earns(TaskId(0), 1, &[1])); // below the threshold of 2
+    /// assert!(!inst.earns(TaskId(0), 2, &[0])); // without the skill
+    /// assert!(inst.earns(TaskId(0), 2, &[1]));
+    /// # Ok::<(), afg_game::GameError>(())
+    /// ```
+    pub fn earns(&self, task: TaskId, size: usize, held: &[u64]) -> bool {
+        size >= self.min_team(task) && self.skills_met(task, held)
+    }
+
+    /// Which tasks earn in `assignment` ([`Instance::earns`] for every coalition).
     ///
     /// # Examples
     /// ```
@@ -218,10 +235,7 @@ impl Instance {
         let held = self.skills_held(assignment);
         let s = self.num_skills();
         self.task_ids()
-            .map(|j| {
-                assignment.size(j) >= self.min_team(j)
-                    && self.skills_met(j, &held[j.index() * s..][..s])
-            })
+            .map(|j| self.earns(j, assignment.size(j), &held[j.index() * s..][..s]))
             .collect()
     }
 

@@ -31,14 +31,15 @@ fn hand_knapsack(skills: bool) -> afg_learn::staffing::StaffingPolicy {
     )
 }
 
-/// The shares of the reference that `learned` and `hand` reach on four held-out games
-/// of `family` (100 robots × 20 tasks, seeds 54–57), the reference at most 2 s a game.
+/// The shares of the reference that `learned` and `hand` reach on held-out games of
+/// `family` (100 robots × 20 tasks, `seeds`), the reference at most 2 s a game.
 fn family_shares(
     family: Family,
+    seeds: std::ops::Range<u64>,
     learned: &dyn Allocator,
     hand: &dyn Allocator,
 ) -> (Vec<f64>, Vec<f64>) {
-    (54..58)
+    seeds
         .map(|seed| {
             let inst = family.config(100, 20, seed).unwrap().generate().unwrap();
             let reference = reference(&inst, 2.0);
@@ -145,7 +146,7 @@ fn the_committed_staffing_models_carry_to_the_families_docs_name() {
         )
         .unwrap();
         let hand = hand_knapsack(name == "staffing_skills");
-        let (learned, knapsack) = family_shares(family, policy.as_ref(), &hand);
+        let (learned, knapsack) = family_shares(family, 54..58, policy.as_ref(), &hand);
         let worst = worst(&learned);
         assert!(worst >= 0.90, "{name} on {family}: worst {worst}");
         assert!(
@@ -175,7 +176,7 @@ fn models_trained_without_a_family_carry_to_it() {
         let model = StaffingModel::load(&dir.join(StaffingModel::FILE_NAME)).unwrap();
         assert!(!model.training.families.contains(&family));
         let policy = load_model(&dir, ModelOptions::default()).unwrap();
-        let (shares, hand_shares) = family_shares(family, policy.as_ref(), &hand);
+        let (shares, hand_shares) = family_shares(family, 54..58, policy.as_ref(), &hand);
         let (mean, worst) = (mean(&shares), worst(&shares));
         assert!(
             mean >= 0.98 && worst >= 0.95,
@@ -192,28 +193,34 @@ fn models_trained_without_a_family_carry_to_it() {
     );
 }
 
-/// The committed skill model with its placement climbed (`--repair`, ours) on held-out
-/// games of the two skill families it falls short on: at least 98 % of the optimum on
-/// average on `sparse-skills`, at least 97 % on `mixed`, no game below 93 %, and on
-/// each family at least two points above the model without the climb, as
+/// The committed staffing models with their placement climbed (`--repair`: moves, swaps
+/// and dissolved teams, ours) on held-out games of the families they fall short on
+/// without it (for `heavy-tail`, the seeds where the threshold model's own placement
+/// falls to 88.5 % and 97.3 %): at least 98 % of the optimum on average, no game below
+/// 95 %, and at least half a point above the model without the climb, as
 /// docs/families.md says. A staffing model that is refused an option gets a typed error.
 #[test]
-fn the_skill_model_climbed_after_its_placement_reaches_98_percent_on_sparse_skills() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/ours/staffing_skills");
+fn the_committed_models_climbed_after_their_placement_reach_98_percent_where_they_fell_short() {
+    let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/ours");
     let repaired = ModelOptions {
         repair: true,
         ..ModelOptions::default()
     };
-    let climbed = load_model(&dir, repaired).unwrap();
-    let plain = load_model(&dir, ModelOptions::default()).unwrap();
-    for (family, floor) in [(Family::SparseSkills, 0.98), (Family::Mixed, 0.97)] {
-        let (with, without) = family_shares(family, climbed.as_ref(), plain.as_ref());
+    for (model, family, seeds) in [
+        ("staffing_skills", Family::SparseSkills, 54..58),
+        ("staffing_skills", Family::Mixed, 54..58),
+        ("staffing_teams", Family::HeavyTail, 58..63),
+    ] {
+        let climbed = load_model(&models.join(model), repaired).unwrap();
+        let plain = load_model(&models.join(model), ModelOptions::default()).unwrap();
+        let (with, without) = family_shares(family, seeds, climbed.as_ref(), plain.as_ref());
         let (mean_with, mean_without) = (mean(&with), mean(&without));
         assert!(
-            mean_with >= floor && worst(&with) >= 0.93 && mean_with >= mean_without + 0.02,
-            "{family}: {with:?} climbed against {without:?}"
+            mean_with >= 0.98 && worst(&with) >= 0.95 && mean_with >= mean_without + 0.005,
+            "{model} on {family}: {with:?} climbed against {without:?}"
         );
     }
+    let dir = models.join("staffing_skills");
     let block = ModelOptions {
         block: Some(2),
         repair: true,

@@ -183,8 +183,9 @@ impl StaffingPolicy {
         }
     }
 
-    /// Whether a welfare climb ([`afg_baseline::climb`]: robot moves and pairwise swaps,
-    /// each taken while it raises the welfare) follows the placement (ours). With skills
+    /// Whether a welfare climb ([`afg_baseline::climb`]: robot moves, pairwise swaps and
+    /// whole teams dissolved or staffed, each taken while it raises the welfare) follows
+    /// the placement (ours). With skills
     /// the placement brings each staffed team the skills it lacks one robot at a time,
     /// and the climb takes back what that costs.
     ///
