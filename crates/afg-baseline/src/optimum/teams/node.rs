@@ -85,16 +85,18 @@ impl Node {
 pub(super) struct Search<'a> {
     instance: &'a Instance,
     thresholds: Vec<usize>,
-    /// The pairs that no assignment better than the best found uses (row-major N × M;
-    /// empty: none yet), and the same as cost changes for the relaxations.
+    /// The pairs that no assignment better than the best found uses: a row-major N × M
+    /// lookup (empty: none yet), and the same pairs listed for the relaxations' costs.
     forbidden: Vec<bool>,
-    kept_out: Vec<(usize, usize, f64)>,
+    kept_out: Vec<(usize, usize)>,
     root_dual: Option<fixing::RootDual>,
     bonus: f64,
     skill_prices: Vec<f64>,
     skill_step: f64,
     /// The price of a task's earning in the relaxations (module `count`; 0: none).
     count_price: f64,
+    /// The most tasks that can earn at once ([`count::count_cap`]).
+    count_cap: usize,
     best: Assignment,
     best_welfare: f64,
     nodes: u64,
@@ -104,10 +106,11 @@ impl<'a> Search<'a> {
     /// The search of the exact solve: every threshold read as the task's smallest
     /// earning team ([`Instance::smallest_teams`]; more than N: it never earns).
     pub(super) fn exact(instance: &'a Instance) -> Self {
-        let thresholds = (instance.smallest_teams().into_iter())
+        let thresholds: Vec<usize> = (instance.smallest_teams().into_iter())
             .map(|k| k.unwrap_or(instance.num_robots() + 1))
             .collect();
         Search {
+            count_cap: count::count_cap(&thresholds, instance.num_robots()),
             thresholds,
             ..Search::new(instance)
         }
@@ -151,9 +154,11 @@ impl<'a> Search<'a> {
             .iter()
             .map(|t| t.reward)
             .fold(0.0, f64::max);
+        let thresholds: Vec<usize> = instance.task_ids().map(|j| instance.min_team(j)).collect();
         Search {
             instance,
-            thresholds: instance.task_ids().map(|j| instance.min_team(j)).collect(),
+            count_cap: count::count_cap(&thresholds, instance.num_robots()),
+            thresholds,
             forbidden: Vec::new(),
             kept_out: Vec::new(),
             root_dual: None,
@@ -400,7 +405,7 @@ impl<'a> Search<'a> {
         if !self.keeps(&assignment, &pairs) {
             return None; // no assignment keeps every robot where the node fixed it
         }
-        let mut bound = self.count_price * self.count_cap() as f64
+        let mut bound = self.count_price * self.count_cap as f64
             - inst
                 .robot_ids()
                 .map(|i| assignment.task_of(i).map_or(0.0, |j| inst.cost(i, j)))
@@ -439,7 +444,7 @@ impl<'a> Search<'a> {
         pairs
             .iter()
             .map(|&(i, j, fixed)| (i.index(), j.index(), if fixed { -fix } else { fix }))
-            .chain(self.kept_out.iter().copied())
+            .chain(self.kept_out.iter().map(|&(i, j)| (i, j, fix)))
             .collect()
     }
 

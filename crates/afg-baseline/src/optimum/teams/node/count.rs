@@ -23,29 +23,23 @@ const BISECTIONS: usize = 12;
 /// for the nodes to be priced at it.
 const KEEP_SHARE: f64 = 0.25;
 
-impl Search<'_> {
-    /// The most tasks that can earn at once: thresholds within N, smallest first, while
-    /// they fit.
-    pub(super) fn count_cap(&self) -> usize {
-        let n = self.instance.num_robots();
-        let mut thresholds: Vec<usize> = self
-            .thresholds
-            .iter()
-            .copied()
-            .filter(|&k| k <= n)
-            .collect();
-        thresholds.sort_unstable();
-        let mut left = n;
-        thresholds
-            .into_iter()
-            .take_while(|&k| {
-                let fits = k <= left;
-                left = left.saturating_sub(k);
-                fits
-            })
-            .count()
-    }
+/// The most tasks that can earn at once among N robots: `thresholds` within N,
+/// smallest first, while they fit.
+pub(super) fn count_cap(thresholds: &[usize], n: usize) -> usize {
+    let mut thresholds: Vec<usize> = thresholds.iter().copied().filter(|&k| k <= n).collect();
+    thresholds.sort_unstable();
+    let mut left = n;
+    thresholds
+        .into_iter()
+        .take_while(|&k| {
+            let fits = k <= left;
+            left -= k.min(left);
+            fits
+        })
+        .count()
+}
 
+impl Search<'_> {
     /// The root's relaxation priced at `price` per earning task: its bound and the
     /// teams it holds (Σ_j y_j); `None` where it cannot keep the root's fixed robots.
     fn priced_root(&mut self, root: &Node, price: f64) -> Option<(f64, f64)> {
@@ -108,7 +102,7 @@ impl Search<'_> {
         root: &Node,
         out_of_time: &dyn Fn() -> bool,
     ) -> f64 {
-        let cap = self.count_cap() as f64;
+        let cap = self.count_cap as f64;
         let mut best = (root.bound, 0.0);
         let teams_at_zero = (root.sizes.iter().zip(&root.decisions))
             .filter(|&(&n, d)| n > 0 && *d != Decision::Unstaffed)
@@ -170,7 +164,7 @@ impl Search<'_> {
             .filter(|j| node.decisions[j.index()] != Decision::Unstaffed)
             .filter(|j| node.sizes[j.index()] >= self.threshold(*j))
             .count();
-        if earning >= self.count_cap() {
+        if earning >= self.count_cap {
             return None;
         }
         (open.into_iter())
@@ -249,7 +243,7 @@ mod tests {
             }
             search.count_price = 0.0;
             let teams = root.sizes.iter().filter(|&&n| n > 0).count();
-            if teams > search.count_cap() && root.bound > best + tol {
+            if teams > search.count_cap && root.bound > best + tol {
                 binding += 1;
                 let priced = search.price_count(&root, &|| false);
                 assert!(priced >= best - tol, "{at}: {priced} < {best}");

@@ -56,7 +56,7 @@ impl Search<'_> {
                     && dual.bound - dual.reduced[i * width + j] <= best + tolerance
                 {
                     self.forbidden[i * m + j] = true;
-                    self.kept_out.push((i, j, self.keep_out_cost()));
+                    self.kept_out.push((i, j));
                 }
             }
         }
