@@ -18,17 +18,23 @@ pub(super) fn parse(text: &str) -> Result<Vec<Family>, String> {
 }
 
 /// The committed staffing models, each labelled "(ours)": the threshold model and
-/// the skill model (each refuses the games it was not made for).
+/// the skill model (each refuses the games it was not made for), each also with its
+/// repair (`--repair`: the welfare climb after the placement).
 pub(super) fn staffing_models() -> Result<Vec<(String, Box<dyn Allocator>)>> {
-    ["staffing_teams", "staffing_skills"]
-        .into_iter()
-        .map(|name| {
-            let dir = crate::repo_root().join("models/ours").join(name);
-            let model = load_model(&dir, ModelOptions::default())
-                .with_context(|| format!("loading {}", dir.display()))?;
-            Ok((format!("{name} (ours)"), model))
-        })
-        .collect()
+    let mut models = Vec::new();
+    for name in ["staffing_teams", "staffing_skills"] {
+        let dir = crate::repo_root().join("models/ours").join(name);
+        for (repair, label) in [(false, ""), (true, " + repair")] {
+            let options = ModelOptions {
+                repair,
+                ..ModelOptions::default()
+            };
+            let model =
+                load_model(&dir, options).with_context(|| format!("loading {}", dir.display()))?;
+            models.push((format!("{name}{label} (ours)"), model));
+        }
+    }
+    Ok(models)
 }
 
 /// The geometric mean of `values`.
