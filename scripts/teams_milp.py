@@ -67,7 +67,7 @@ def game(instance):
     return cost, slots, min_team, capacity, skills, requires
 
 
-def cpsat(instance, time_limit, threads):
+def cpsat(instance, time_limit, threads, log=False):
     from ortools.sat.python import cp_model
 
     cost, slots, min_team, capacity, skills, requires = game(instance)
@@ -98,6 +98,7 @@ def cpsat(instance, time_limit, threads):
     solver = cp_model.CpSolver()
     solver.parameters.max_time_in_seconds = time_limit
     solver.parameters.num_workers = threads
+    solver.parameters.log_search_progress = log
     start = time.perf_counter()
     status = solver.solve(model)
     seconds = time.perf_counter() - start
@@ -113,7 +114,7 @@ def cpsat(instance, time_limit, threads):
     }
 
 
-def highs(instance, time_limit, threads):
+def highs(instance, time_limit, threads, log=False):
     import highspy
 
     cost, slots, min_team, capacity, skills, requires = game(instance)
@@ -149,7 +150,7 @@ def highs(instance, time_limit, threads):
                 rows.append((0.0, inf, np.concatenate([members, [nx + j]]),
                              np.concatenate([skills[:, s].astype(float), [-float(requires[j, s])]])))
     h = highspy.Highs()
-    h.setOptionValue("output_flag", False)
+    h.setOptionValue("output_flag", log)
     h.setOptionValue("time_limit", float(time_limit))
     h.setOptionValue("threads", int(threads))
     # HiGHS stops by default at a relative gap of 1e-4, which is not a proof; afg's
@@ -186,11 +187,13 @@ def main():
     parser.add_argument("--solver", choices=["cpsat", "highs"], required=True)
     parser.add_argument("--time-limit", type=float, required=True)
     parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--log", action="store_true",
+                        help="print the solver's own log (its bound and cuts, round by round)")
     args = parser.parse_args()
     solve = cpsat if args.solver == "cpsat" else highs
     with open(args.instances) as f:
         instances = [json.loads(line) for line in f if line.strip()]
-    results = [solve(inst, args.time_limit, args.threads) for inst in instances]
+    results = [solve(inst, args.time_limit, args.threads, args.log) for inst in instances]
     with open(args.out, "w") as f:
         json.dump(results, f, allow_nan=False)
 
