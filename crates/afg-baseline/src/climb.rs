@@ -1,8 +1,8 @@
 //! Hill climbing on the welfare (ours): robot moves, pairwise swaps and whole teams.
 //!
-//! A finish for any allocator of a team game: robots move to another task (or to the
-//! void where the game has one) and pairs of robots at different tasks swap, each change
-//! taken as soon as it raises the welfare. A change touches two coalitions, so each is
+//! A finish for any allocator of a team game: each robot moves to the task (or the void
+//! where the game has one) where it gains most, and pairs of robots at different tasks
+//! swap, each change taken where it raises the welfare. A change touches two coalitions, so each is
 //! priced from their sizes and held skills in O(S). Where no single change gains, whole
 //! teams change: an earning coalition is dissolved (its members go where they gain most)
 //! or a task that earns nothing is staffed (robots join it until it earns), each
