@@ -39,6 +39,11 @@ impl Coalitions<'_> {
         &self.held[j.index() * self.num_skills..][..self.num_skills]
     }
 
+    /// What task j earns now.
+    fn value_now(&self, j: TaskId) -> f64 {
+        self.value(j, self.sizes[j.index()], self.held(j))
+    }
+
     /// Task j's value now, and with robot `out` leaving and robot `into` joining.
     fn change(&mut self, j: TaskId, out: Option<RobotId>, into: Option<RobotId>) -> f64 {
         let s = self.num_skills;
@@ -58,8 +63,7 @@ impl Coalitions<'_> {
                 *h -= u64::from(q);
             }
         }
-        let gained =
-            self.value(j, size, &held) - self.value(j, self.sizes[j.index()], self.held(j));
+        let gained = self.value(j, size, &held) - self.value_now(j);
         self.scratch = held;
         gained
     }
@@ -180,7 +184,7 @@ impl Coalitions<'_> {
     /// The welfare gained (mostly lost), or `None` where no robot can lessen it.
     fn staff(&mut self, assignment: &mut Assignment, j: TaskId) -> Option<f64> {
         let mut gain = 0.0;
-        while self.value(j, self.sizes[j.index()], self.held(j)) == 0.0 {
+        while self.value_now(j) == 0.0 {
             let mut best: Option<(f64, f64, RobotId)> = None;
             for i in self.instance.robot_ids() {
                 let from = assignment.task_of(i);
@@ -233,7 +237,7 @@ impl Coalitions<'_> {
         j: TaskId,
     ) -> bool {
         let kept = (assignment.clone(), self.sizes.clone(), self.held.clone());
-        let earns = self.value(j, self.sizes[j.index()], self.held(j)) > 0.0;
+        let earns = self.value_now(j) > 0.0;
         let changed = if earns {
             self.dissolve(assignment, places, j)
         } else {
@@ -259,7 +263,8 @@ impl Coalitions<'_> {
 
 /// Climbs from `assignment` by robot moves, pairwise swaps, dissolved and staffed teams
 /// until none raises the welfare; returns the number of changes made (a team change
-/// counts once). The welfare never falls, capacities are kept, and a robot goes to the void only in a game that has one.
+/// counts once). The welfare never falls, capacities are kept, and a robot goes to the
+/// void only in a game that has one.
 ///
 /// # Examples
 /// ```

@@ -106,18 +106,20 @@ impl<'a> Search<'a> {
     /// The search of the exact solve: every threshold read as the task's smallest
     /// earning team ([`Instance::smallest_teams`]; more than N: it never earns).
     pub(super) fn exact(instance: &'a Instance) -> Self {
-        let thresholds: Vec<usize> = (instance.smallest_teams().into_iter())
+        let thresholds = (instance.smallest_teams().into_iter())
             .map(|k| k.unwrap_or(instance.num_robots() + 1))
             .collect();
-        Search {
-            count_cap: count::count_cap(&thresholds, instance.num_robots()),
-            thresholds,
-            ..Search::new(instance)
-        }
+        Search::with_thresholds(instance, thresholds)
     }
 
     /// The search of a rounding or a staffing (the dives): the thresholds as they are.
     pub(super) fn new(instance: &'a Instance) -> Self {
+        let thresholds = instance.task_ids().map(|j| instance.min_team(j)).collect();
+        Search::with_thresholds(instance, thresholds)
+    }
+
+    /// The search that reads `thresholds` as the tasks' thresholds.
+    fn with_thresholds(instance: &'a Instance, thresholds: Vec<usize>) -> Self {
         // Every robot lies in the box of their positions: no distance to a task
         // exceeds the one to the box's farthest corner (O(N + M), not N M).
         let far = Point {
@@ -154,7 +156,6 @@ impl<'a> Search<'a> {
             .iter()
             .map(|t| t.reward)
             .fold(0.0, f64::max);
-        let thresholds: Vec<usize> = instance.task_ids().map(|j| instance.min_team(j)).collect();
         Search {
             instance,
             count_cap: count::count_cap(&thresholds, instance.num_robots()),
