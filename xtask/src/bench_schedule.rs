@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use afg_schedule::{
-    Family, Generate, Schedule, ScheduleInstance, SolveOptions, Solved, read_instances,
+    Family, Generate, Schedule, ScheduleInstance, SolveOptions, Solved, TimeUse, read_instances,
 };
 use anyhow::{Context, Result, bail};
 use clap::Args;
@@ -60,7 +60,11 @@ const PUBLISHED: [&str; 4] = ["CTAS-D_300s", "OR-Tools", "REINFORCE_IA", "REINFO
 /// or no schedule found or a replay that breaks max_wait), the published makespans.
 struct Row {
     bound: f64,
+    /// The load bound's parts per robot: the work, the least driving.
+    load: (f64, f64),
     afg: Vec<f64>,
+    /// Where afg's robots' time goes, at each time.
+    time_use: Vec<TimeUse>,
     cpsat: Vec<Option<f64>>,
     published: Vec<f64>,
 }
@@ -153,11 +157,11 @@ fn measure(
     args: &BenchScheduleArgs,
     dir: &Path,
 ) -> Result<Row> {
-    let afg = args
+    let solved = args
         .times
         .iter()
-        .map(|&t| solve(inst, t, args.max_wait).map(|s| s.makespan()))
-        .collect::<Result<_>>()?;
+        .map(|&t| solve(inst, t, args.max_wait))
+        .collect::<Result<Vec<_>>>()?;
     let cpsat = match &args.python {
         Some(python) if line < args.cpsat_instances => args
             .cpsat_times
@@ -166,9 +170,13 @@ fn measure(
             .collect::<Result<_>>()?,
         _ => vec![None; args.cpsat_times.len()],
     };
+    let bound = inst.lower_bound();
+    let n = inst.num_robots() as f64;
     Ok(Row {
-        bound: inst.lower_bound().makespan,
-        afg,
+        bound: bound.makespan,
+        load: (bound.work / n, bound.driving / n),
+        afg: solved.iter().map(Solved::makespan).collect(),
+        time_use: solved.iter().map(|s| s.run.time_use()).collect(),
         cpsat,
         published: Vec::new(),
     })
@@ -271,6 +279,7 @@ fn published_tables(rows: &[Row], args: &BenchScheduleArgs) -> String {
         "| lower bound (ours) | {:.3} | — | 1 |\n\n",
         mean(rows.iter().map(|r| r.bound))
     );
+    out += &time_table(rows, args);
     out += &cpsat_lines(rows, args);
     out += "Instance by instance (makespans):\n\n| # | bound |";
     for t in &args.times {
@@ -346,7 +355,32 @@ fn skill_table(rows: &[Row], args: &BenchScheduleArgs) -> String {
         "| lower bound (ours) | {:.3} | 1 |\n\n",
         mean(rows.iter().map(|r| r.bound))
     );
-    out + &cpsat_lines(rows, args)
+    out + &time_table(rows, args) + &cpsat_lines(rows, args)
+}
+
+/// Where afg's robots' time goes at its longest time, beside the load bound's own parts.
+fn time_table(rows: &[Row], args: &BenchScheduleArgs) -> String {
+    let Some(last) = args.times.len().checked_sub(1) else {
+        return String::new();
+    };
+    let part = |f: fn(&TimeUse) -> f64| mean(rows.iter().map(|r| f(&r.time_use[last])));
+    let (work, driving) = (
+        mean(rows.iter().map(|r| r.load.0)),
+        mean(rows.iter().map(|r| r.load.1)),
+    );
+    format!(
+        "Where the time goes, per robot (means over the instances; the parts add up to the makespan):\n\n\
+         | | working | driving | waiting for a team | idle | makespan |\n|---|---|---|---|---|---|\n\
+         | afg (ours), {} s | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} |\n\
+         | all robots' load (ours): the fewest robots' work, the least driving | {work:.3} | {driving:.3} | 0 | 0 | {:.3} |\n\n",
+        args.times[last],
+        part(|u| u.working),
+        part(|u| u.driving),
+        part(|u| u.waiting),
+        part(|u| u.idle),
+        mean(rows.iter().map(|r| r.afg[last])),
+        work + driving,
+    )
 }
 
 fn scale_table(args: &BenchScheduleArgs) -> Result<String> {

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use afg_game::fs::write_atomic_making_dirs;
 use afg_schedule::{
-    Family, Generate, ScheduleInstance, ScheduleRecord, SolveOptions, read_instances,
+    Family, Generate, ScheduleInstance, ScheduleRecord, SolveOptions, TimeUse, read_instances,
     read_schedules,
 };
 use anyhow::{Context, Result, bail};
@@ -172,6 +172,8 @@ struct SolvedLine {
     waiting: f64,
     longest_wait: f64,
     max_wait: f64,
+    /// Where the robots' time goes: means per robot that add up to the makespan.
+    time_use: TimeUse,
     steps: u64,
     seconds: f64,
 }
@@ -203,6 +205,7 @@ fn solve(args: &SolveArgs) -> Result<()> {
             waiting: run.waiting,
             longest_wait: run.longest_wait,
             max_wait,
+            time_use: run.time_use(),
             steps: solved.steps,
             seconds: solved.seconds,
         };
@@ -222,6 +225,7 @@ fn solve(args: &SolveArgs) -> Result<()> {
                 out.steps,
                 out.seconds
             );
+            println!("  {}", per_robot(&out.time_use));
         }
         let record = ScheduleRecord {
             index: inst.index,
@@ -244,6 +248,14 @@ fn solve(args: &SolveArgs) -> Result<()> {
         write_atomic_making_dirs(out, records.as_bytes())?;
     }
     Ok(())
+}
+
+/// Where the robots' time goes, in words.
+fn per_robot(use_: &TimeUse) -> String {
+    format!(
+        "per robot: working {:.3}  driving {:.3}  waiting {:.3}  idle {:.3}",
+        use_.working, use_.driving, use_.waiting, use_.idle
+    )
 }
 
 /// The schedules of a file, one per instance.
@@ -277,6 +289,7 @@ fn score(args: &ScoreArgs) -> Result<()> {
                 "travel": run.travel, "waiting": run.waiting, "longest_wait": run.longest_wait,
                 "max_wait": run.max_wait, "long_waits": run.long_waits,
                 "released_before_arrival": run.released_before_arrival,
+                "time_use": run.time_use(),
             });
             println!("{value}");
             continue;
@@ -289,6 +302,7 @@ fn score(args: &ScoreArgs) -> Result<()> {
             run.longest_wait,
             if run.is_valid() { "valid" } else { "INVALID" }
         );
+        println!("  {}", per_robot(&run.time_use()));
         for w in &run.long_waits {
             println!(
                 "  robot {} waits {:.3} at task {}, longer than max_wait {}",

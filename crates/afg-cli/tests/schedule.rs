@@ -75,6 +75,12 @@ fn gen_solve_score_and_show_agree_with_each_other() {
         for (s, c) in solved.iter().zip(&scored) {
             assert_eq!(s["makespan"], c["makespan"]);
             assert_eq!(c["valid"], true);
+            assert_eq!(s["time_use"], c["time_use"]);
+            let parts: f64 = ["working", "driving", "waiting", "idle"]
+                .iter()
+                .map(|p| s["time_use"][p].as_f64().unwrap())
+                .sum();
+            assert!((parts - s["makespan"].as_f64().unwrap()).abs() < 1e-9);
             assert!(s["bound"].as_f64().unwrap() <= s["makespan"].as_f64().unwrap());
             let gap = 1.0 - s["bound"].as_f64().unwrap() / s["makespan"].as_f64().unwrap();
             assert!((s["gap"].as_f64().unwrap() - gap).abs() < 1e-12);

@@ -170,8 +170,10 @@ fn routes_from(routes: &Bound<'_, PyAny>) -> PyResult<Schedule> {
     Ok(Schedule { routes: out })
 }
 
-/// A played schedule as a dict: numbers, per-task start and finish (numpy), the waits
-/// beyond `max_wait` as an (k, 3) array of robot, task, wait.
+/// A played schedule as a dict: numbers, per-task start and finish (numpy), where the
+/// robots' time goes (`time_use`: working, driving, waiting, idle, means per robot that
+/// add up to the makespan), the waits beyond `max_wait` as an (k, 3) array of robot,
+/// task, wait.
 fn evaluation_dict<'py>(py: Python<'py>, run: &Evaluation) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("makespan", run.makespan)?;
@@ -183,6 +185,13 @@ fn evaluation_dict<'py>(py: Python<'py>, run: &Evaluation) -> PyResult<Bound<'py
     d.set_item("start", run.start.clone().into_pyarray(py))?;
     d.set_item("finish", run.finish.clone().into_pyarray(py))?;
     d.set_item("back", run.back.clone().into_pyarray(py))?;
+    let use_ = run.time_use();
+    let time_use = PyDict::new(py);
+    time_use.set_item("working", use_.working)?;
+    time_use.set_item("driving", use_.driving)?;
+    time_use.set_item("waiting", use_.waiting)?;
+    time_use.set_item("idle", use_.idle)?;
+    d.set_item("time_use", time_use)?;
     let flat: Vec<f64> = run
         .long_waits
         .iter()

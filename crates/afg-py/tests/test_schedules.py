@@ -40,6 +40,8 @@ def test_a_hand_schedule():
     run = afg.score_schedule(inst, [[0], [1, 0]])
     assert run["makespan"] == 15.0 and run["longest_wait"] == 5.0 and run["waiting"] == 2.5
     np.testing.assert_array_equal(run["start"], [9.0, 3.0])
+    # per robot: working (2 + 3) / 2, driving (8 + 12) / 2, waiting 5 / 2, nobody idle
+    assert run["time_use"] == {"working": 2.5, "driving": 10.0, "waiting": 2.5, "idle": 0.0}
     assert "robots=2, tasks=2" in repr(inst)
 
 

@@ -52,19 +52,45 @@ impl Bound {
 }
 
 impl ScheduleInstance {
-    /// The fewest robots that can make up task j's team: its `min_team`, and enough
-    /// robots to hold each skill it requires (counting the most any one robot holds).
+    /// The fewest robots that can make up task j's team: its `min_team`, enough robots
+    /// to hold each skill it requires (counting the most any one robot holds), and
+    /// enough to hold all the units it requires together (counting the most useful
+    /// units any one robot holds: one robot per skill where each holds one).
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_schedule::ScheduleInstance;
+    /// let inst = ScheduleInstance::from_json(r#"{"speed":1,"max_wait":10,"skills":3,"depots":[[0,0]],
+    ///   "robots":[{"x":0,"y":0,"depot":0,"skills":[1,0,0]},{"x":0,"y":0,"depot":0,"skills":[0,1,0]},
+    ///             {"x":0,"y":0,"depot":0,"skills":[0,0,1]}],
+    ///   "tasks":[{"x":0,"y":1,"requires":[1,1,1],"duration":1}]}"#)?;
+    /// assert_eq!(inst.fewest_robots(0), 3);
+    /// # Ok::<(), afg_schedule::ScheduleError>(())
+    /// ```
     pub fn fewest_robots(&self, task: usize) -> usize {
         let mut fewest = self.tasks[task].team_floor();
-        for s in 0..self.num_skills() {
+        let needs: Vec<u32> = (0..self.num_skills())
+            .map(|s| self.task_requires(task, s))
+            .collect();
+        for (s, &need) in needs.iter().enumerate() {
             let most = (0..self.num_robots())
                 .map(|i| self.robot_skill(i, s))
                 .max()
                 .unwrap_or(0);
-            let need = self.task_requires(task, s);
             if need > 0 && most > 0 {
                 fewest = fewest.max(need.div_ceil(most) as usize);
             }
+        }
+        let useful = |i: usize| -> u32 {
+            needs
+                .iter()
+                .enumerate()
+                .map(|(s, &need)| self.robot_skill(i, s).min(need))
+                .sum()
+        };
+        let most_useful = (0..self.num_robots()).map(useful).max().unwrap_or(0);
+        if most_useful > 0 {
+            fewest = fewest.max(needs.iter().sum::<u32>().div_ceil(most_useful) as usize);
         }
         fewest
     }

@@ -142,10 +142,69 @@ pub struct Evaluation {
     pub released_before_arrival: Vec<(usize, usize)>,
 }
 
+/// Where the robots' time goes up to the makespan, as means over the robots: the four
+/// add up to the makespan.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct TimeUse {
+    /// At tasks, as a member of their teams, from start to finish.
+    pub working: f64,
+    /// On the way: to each task set off for, and home.
+    pub driving: f64,
+    /// At tasks, not working: a member waiting for the rest of its team, an extra
+    /// waiting to be released.
+    pub waiting: f64,
+    /// The rest: home before the makespan.
+    pub idle: f64,
+}
+
 impl Evaluation {
     /// True when nobody waits beyond `max_wait` and no extra relies on an early release.
     pub fn is_valid(&self) -> bool {
         self.long_waits.is_empty() && self.released_before_arrival.is_empty()
+    }
+
+    /// Where the robots' time goes ([`TimeUse`]).
+    ///
+    /// # Examples
+    /// ```
+    /// use afg_schedule::{Schedule, ScheduleInstance};
+    /// let inst = ScheduleInstance::from_json(r#"{"speed":1,"max_wait":10,"depots":[[0,0]],
+    ///   "robots":[{"x":0,"y":0,"depot":0},{"x":0,"y":0,"depot":0}],
+    ///   "tasks":[{"x":0,"y":2,"min_team":2,"duration":1},{"x":0,"y":4,"min_team":1,"duration":3}]}"#)?;
+    /// let use_ = inst.evaluate(&Schedule { routes: vec![vec![0, 1], vec![0]] })?.time_use();
+    /// // Robot 0: 8 driving, 4 working, back at 12; robot 1: 4 driving, 1 working, back at 5.
+    /// assert_eq!((use_.working, use_.driving, use_.waiting, use_.idle), (2.5, 6.0, 0.0, 3.5));
+    /// # Ok::<(), afg_schedule::ScheduleError>(())
+    /// ```
+    pub fn time_use(&self) -> TimeUse {
+        let mut sum = TimeUse::default();
+        for (visits, &back) in self.visits.iter().zip(&self.back) {
+            let mut free = 0.0;
+            let mut robot = TimeUse::default();
+            for v in visits.iter().filter(|v| v.role != Role::Skipped) {
+                robot.driving += v.arrive - v.depart;
+                if v.role == Role::Team {
+                    robot.working += self.finish[v.task] - self.start[v.task];
+                    robot.waiting += self.start[v.task] - v.arrive;
+                } else {
+                    robot.waiting += (v.leave - v.arrive).max(0.0);
+                }
+                free = v.leave;
+            }
+            robot.driving += back - free;
+            robot.idle = self.makespan - robot.working - robot.driving - robot.waiting;
+            sum.working += robot.working;
+            sum.driving += robot.driving;
+            sum.waiting += robot.waiting;
+            sum.idle += robot.idle;
+        }
+        let n = self.back.len().max(1) as f64;
+        TimeUse {
+            working: sum.working / n,
+            driving: sum.driving / n,
+            waiting: sum.waiting / n,
+            idle: sum.idle / n,
+        }
     }
 }
 

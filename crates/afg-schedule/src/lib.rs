@@ -33,7 +33,9 @@ mod transport;
 
 pub use bound::{Bound, TRANSPORT_LIMIT};
 pub use error::ScheduleError;
-pub use evaluate::{Evaluation, LongWait, Role, Schedule, ScheduleRecord, Visit, read_schedules};
+pub use evaluate::{
+    Evaluation, LongWait, Role, Schedule, ScheduleRecord, TimeUse, Visit, read_schedules,
+};
 pub use generate::{Family, Generate, MAX_SIZE};
 pub use instance::{Metric, Place, Robot, Rules, ScheduleInstance, Task, read_instances};
 pub use solve::{SolveOptions, Solved};

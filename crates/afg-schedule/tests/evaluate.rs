@@ -42,6 +42,12 @@ fn a_team_waits_for_its_last_member_and_the_makespan_is_the_last_return() {
         "robot 0 waited 5, robot 1 nothing: the mean is 2.5"
     );
     assert!(run.is_valid());
+    // Per robot: working (2 + 3) / 2, driving (8 + 12) / 2, waiting 5 / 2, no one idle.
+    let use_ = run.time_use();
+    assert_eq!(
+        (use_.working, use_.driving, use_.waiting, use_.idle),
+        (2.5, 10.0, 2.5, 0.0)
+    );
     // Under a rule of 4, robot 0's wait of 5 breaks it, and the report says who and where.
     let strict = inst.evaluate_with(&routes(&[&[0], &[1, 0]]), 4.0).unwrap();
     assert!(!strict.is_valid());
@@ -82,10 +88,32 @@ fn an_extra_robot_is_released_at_the_finish_or_skips_the_task_under_heteromrta()
     assert_eq!(run.visits[2][0].role, Role::Extra);
     assert_eq!(run.visits[2][0].leave, 7.0);
     assert_eq!((run.makespan, run.travel), (12.0, 30.0));
+    // The extra waits from its arrival at 5 to its release at 7; it works nothing.
+    let use_ = run.time_use();
+    assert_eq!(
+        (
+            use_.working * 3.0,
+            use_.driving * 3.0,
+            use_.waiting * 3.0,
+            use_.idle
+        ),
+        (4.0, 30.0, 2.0, 0.0)
+    );
     inst.rules = Rules::Heteromrta;
     let run = inst.evaluate(&routes(&[&[0], &[0], &[0]])).unwrap();
     assert_eq!(run.visits[2][0].role, Role::Skipped);
     assert_eq!((run.makespan, run.travel, run.back[2]), (12.0, 20.0, 0.0));
+    // The robot that skips never leaves: idle all 12.
+    let use_ = run.time_use();
+    assert_eq!(
+        (
+            use_.working * 3.0,
+            use_.driving * 3.0,
+            use_.waiting,
+            use_.idle * 3.0
+        ),
+        (4.0, 20.0, 0.0, 12.0)
+    );
 }
 
 #[test]

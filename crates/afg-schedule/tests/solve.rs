@@ -258,7 +258,20 @@ proptest! {
         prop_assert!(run.long_waits.is_empty() && run.longest_wait <= inst.max_wait);
         prop_assert_eq!(run.makespan, solved.makespan());
         prop_assert!(run.visits.iter().flatten().all(|v| v.role == afg_schedule::Role::Team), "no robot is sent where it is not needed");
-        prop_assert!(inst.lower_bound().makespan <= run.makespan + 1e-9);
+        let bound = inst.lower_bound();
+        prop_assert!(bound.makespan <= run.makespan + 1e-9);
+        // Where the time goes adds up to the makespan, and each part is what the run
+        // says: the driving is the travel at the instance's speed, the working each
+        // team's members times its duration, and neither is below the bound's.
+        let use_ = run.time_use();
+        let n = robots as f64;
+        prop_assert!([use_.working, use_.driving, use_.waiting, use_.idle].iter().all(|&t| t >= -1e-9));
+        prop_assert!((use_.working + use_.driving + use_.waiting + use_.idle - run.makespan).abs() <= 1e-9 * run.makespan.max(1.0));
+        prop_assert!((use_.driving * n * inst.speed - run.travel).abs() <= 1e-9 * run.travel.max(1.0));
+        let members = |j: usize| solved.schedule.routes.iter().filter(|r| r.contains(&j)).count() as f64;
+        let work: f64 = inst.tasks.iter().enumerate().map(|(j, t)| members(j) * t.duration).sum();
+        prop_assert!((use_.working * n - work).abs() <= 1e-9 * work.max(1.0));
+        prop_assert!(bound.work <= work + 1e-9 && bound.driving <= use_.driving * n + 1e-9);
     }
 }
 
