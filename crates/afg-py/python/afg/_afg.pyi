@@ -374,4 +374,5 @@ def score_schedule(
 ) -> Dict[str, Any]:
     """Plays anyone's routes under the instance's rules: ``makespan``, ``travel``,
     ``waiting``, ``longest_wait``, ``valid``, ``long_waits`` (robot, task, wait rows),
-    ``start``/``finish`` per task."""
+    ``start``/``finish`` per task, ``time_use`` (``working``, ``driving``, ``waiting``,
+    ``idle``: means per robot that add up to the makespan)."""
