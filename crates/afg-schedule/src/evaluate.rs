@@ -153,7 +153,8 @@ pub struct TimeUse {
     /// At tasks, not working: a member waiting for the rest of its team, an extra
     /// waiting to be released.
     pub waiting: f64,
-    /// The rest: home before the makespan.
+    /// The rest: back home before the makespan. (Where an extra is released before it
+    /// arrives, which no valid schedule does, its legs overlap and this can fall below 0.)
     pub idle: f64,
 }
 
