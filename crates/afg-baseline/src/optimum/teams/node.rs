@@ -89,6 +89,9 @@ pub(super) struct Search<'a> {
     /// lookup (empty: none yet), and the same pairs listed for the relaxations' costs.
     forbidden: Vec<bool>,
     kept_out: Vec<(usize, usize)>,
+    /// The tasks that earn in no assignment better than the best found (empty: none
+    /// known yet), decided unstaffed in every node.
+    cannot_earn: Vec<bool>,
     root_dual: Option<fixing::RootDual>,
     bonus: f64,
     skill_prices: Vec<f64>,
@@ -162,6 +165,7 @@ impl<'a> Search<'a> {
             thresholds,
             forbidden: Vec::new(),
             kept_out: Vec::new(),
+            cannot_earn: Vec::new(),
             root_dual: None,
             // More than any other member or move is worth: a staffed task's first k
             // members come before anything else.
@@ -252,11 +256,14 @@ impl<'a> Search<'a> {
     /// The columns of a node's relaxation; `None` where no assignment meets its
     /// decisions (staffed thresholds above N, a staffed task that can no longer get its
     /// skills, or too little room in all). An open task that can no longer get its
-    /// skills is decided unstaffed.
+    /// skills, or earns in no assignment better than the best found, is decided
+    /// unstaffed.
     fn columns(&self, decisions: &mut [Decision], pairs: &[Pair]) -> Option<Vec<Column>> {
         let inst = self.instance;
         for j in inst.task_ids() {
-            if decisions[j.index()] != Decision::Unstaffed && !self.skills_reachable(j, pairs) {
+            let hopeless = self.cannot_earn.get(j.index()).copied().unwrap_or(false)
+                || !self.skills_reachable(j, pairs);
+            if decisions[j.index()] != Decision::Unstaffed && hopeless {
                 if decisions[j.index()] == Decision::Staffed {
                     return None;
                 }

@@ -8,6 +8,14 @@
 //! alone takes the bound to the best welfare found, no better assignment puts i at
 //! j: the pair is kept out of every node's relaxation, which tightens them all. Each
 //! better assignment found keeps out more.
+//!
+//! **Tasks ruled out.** The same dual bounds an assignment in which task j earns by
+//! the reduced costs of the team it needs there: at least its threshold of robots, and
+//! for every skill it requires, robots holding that much of it. Where even the cheapest
+//! such team ([`cheapest_team`], a lower bound on it) takes the bound to the best
+//! found, no better assignment lets j earn: it is decided unstaffed in every node.
+
+use afg_game::{Instance, TaskId};
 
 use super::super::super::transport;
 use super::{Node, Search};
@@ -60,13 +68,86 @@ impl Search<'_> {
                 }
             }
         }
+        if self.cannot_earn.is_empty() {
+            self.cannot_earn = vec![false; m];
+        }
+        let mut reduced = Vec::with_capacity(n);
+        for j in self.instance.task_ids() {
+            if self.cannot_earn[j.index()] {
+                continue;
+            }
+            reduced.clear();
+            reduced.extend((0..n).map(|i| dual.reduced[i * width + j.index()]));
+            let cheapest = cheapest_team(self.instance, j, self.threshold(j), &reduced);
+            self.cannot_earn[j.index()] = dual.bound - cheapest <= best + tolerance;
+        }
     }
+}
+
+/// The most states [`cheapest_team`] covers all of a task's needs at once in.
+const JOINT_STATES: usize = 1 << 12;
+
+/// A lower bound on the summed reduced costs (`reduced[i]`: robot i's at task j) of any
+/// team that lets task j earn: the cheapest robots that together hold its `threshold`
+/// of members and every skill it requires (a covering knapsack, exact by dynamic
+/// programming over the units still lacking), or where that has more than
+/// [`JOINT_STATES`] states, the largest of each need's own cheapest cover.
+fn cheapest_team(instance: &Instance, j: TaskId, threshold: usize, reduced: &[f64]) -> f64 {
+    let needs = needs(instance, j, threshold);
+    let states = needs
+        .iter()
+        .try_fold(1usize, |n, (need, _)| n.checked_mul(need + 1));
+    match states {
+        Some(states) if states <= JOINT_STATES => cover(&needs, states, reduced),
+        _ => (needs.iter())
+            .map(|need| cover(std::slice::from_ref(need), need.0 + 1, reduced))
+            .fold(0.0, f64::max),
+    }
+}
+
+/// Task j's needs: how much of each (its `threshold` of members, then every skill it
+/// requires), and how much of it each robot holds.
+fn needs(instance: &Instance, j: TaskId, threshold: usize) -> Vec<(usize, Vec<usize>)> {
+    let mut needs = vec![(threshold, vec![1; instance.num_robots()])];
+    for (s, &need) in instance.requires(j).iter().enumerate() {
+        if need > 0 {
+            let held = instance.robot_ids().map(|i| instance.skills(i)[s] as usize);
+            needs.push((need as usize, held.collect()));
+        }
+    }
+    needs
+}
+
+/// The least summed reduced cost of robots that together meet every need (a state: the
+/// units met of each need, capped at the need, in mixed radix), over `states` states.
+fn cover(needs: &[(usize, Vec<usize>)], states: usize, reduced: &[f64]) -> f64 {
+    let mut cost = vec![f64::INFINITY; states];
+    cost[0] = 0.0;
+    let mut next = cost.clone();
+    for (i, &r) in reduced.iter().enumerate() {
+        if needs.iter().all(|(_, held)| held[i] == 0) {
+            continue;
+        }
+        for (state, &c) in cost.iter().enumerate().filter(|(_, c)| c.is_finite()) {
+            let (mut rest, mut to, mut radix) = (state, 0, 1);
+            for (need, held) in needs {
+                let met = rest % (need + 1);
+                rest /= need + 1;
+                to += (met + held[i]).min(*need) * radix;
+                radix *= need + 1;
+            }
+            next[to] = next[to].min(c + r);
+        }
+        cost.copy_from_slice(&next);
+    }
+    cost[states - 1]
 }
 
 #[cfg(test)]
 mod tests {
     use super::super::Search;
     use super::super::lagrange::tests::{every_assignment, skill_knobs};
+    use super::{cheapest_team, cover, needs};
 
     /// The root's dual bounds every assignment less its robots' reduced costs (so the
     /// pairs it keeps out are used by no assignment better than the best found), on
@@ -118,5 +199,94 @@ mod tests {
             fixed += usize::from(!search.kept_out.is_empty());
         }
         assert!(2 * fixed >= games, "{fixed} of {games}");
+    }
+
+    /// A task the root's dual rules out earns in no assignment better than the best
+    /// found, on small skill games whose best found is set a little below the optimum;
+    /// and some are ruled out.
+    #[test]
+    fn the_tasks_ruled_out_earn_in_no_better_assignment() {
+        let (mut tasks, mut ruled_out) = (0, 0);
+        for seed in 0..60 {
+            let inst = skill_knobs(0.4, (0, 2))
+                .config(6, 3, seed)
+                .unwrap()
+                .generate()
+                .unwrap();
+            let mut search = Search::exact(&inst);
+            let root = search
+                .node(search.root_decisions(), Vec::new(), None)
+                .unwrap();
+            search.price_skills(&root, &|| false);
+            let assignments: Vec<_> = every_assignment(&inst).collect();
+            let optimum = (assignments.iter())
+                .map(|a| inst.welfare(a))
+                .fold(f64::NEG_INFINITY, f64::max);
+            search.best_welfare = optimum - 0.02 * optimum.abs();
+            search.fix_pairs(&root);
+            let tol = 1e-9 * optimum.abs().max(1.0);
+            for a in assignments
+                .iter()
+                .filter(|a| inst.welfare(a) > search.best_welfare + tol)
+            {
+                let held = inst.skills_held(a);
+                let s = inst.num_skills();
+                for j in inst.task_ids().filter(|&j| search.cannot_earn[j.index()]) {
+                    let earns = inst.earns(j, a.size(j), &held[j.index() * s..][..s]);
+                    assert!(!earns, "seed {seed}: task {} earns", j.index());
+                }
+            }
+            tasks += inst.num_tasks();
+            ruled_out += search.cannot_earn.iter().filter(|&&c| c).count();
+        }
+        assert!(ruled_out * 10 >= tasks, "{ruled_out} of {tasks}");
+    }
+
+    /// The cheapest team is the least reduced cost over every team that holds the
+    /// threshold and the skills (brute force over the subsets of 7 robots), and its
+    /// fallback for many needs is a lower bound on it.
+    #[test]
+    fn the_cheapest_team_is_the_cheapest_covering_subset() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        for seed in 0..40 {
+            let inst = skill_knobs(0.5, (0, 3))
+                .config(7, 2, seed)
+                .unwrap()
+                .generate()
+                .unwrap();
+            let reduced: Vec<f64> = (0..7).map(|_| rng.random_range(0.0..1.0)).collect();
+            for j in inst.task_ids() {
+                let k = inst.min_team(j);
+                let brute = (0u32..1 << 7)
+                    .filter(|set| set.count_ones() as usize >= k)
+                    .filter(|set| {
+                        let mut held = vec![0u64; inst.num_skills()];
+                        for i in inst.robot_ids().filter(|i| set >> i.index() & 1 == 1) {
+                            for (h, &q) in held.iter_mut().zip(inst.skills(i)) {
+                                *h += u64::from(q);
+                            }
+                        }
+                        inst.skills_met(j, &held)
+                    })
+                    .map(|set| {
+                        (0..7)
+                            .filter(|i| set >> i & 1 == 1)
+                            .map(|i| reduced[i])
+                            .sum()
+                    })
+                    .fold(f64::INFINITY, f64::min);
+                let cheapest = cheapest_team(&inst, j, k, &reduced);
+                assert!(
+                    (cheapest - brute).abs() < 1e-12 || cheapest == brute,
+                    "{cheapest} {brute}"
+                );
+                let apart = needs(&inst, j, k)
+                    .iter()
+                    .map(|need| cover(std::slice::from_ref(need), need.0 + 1, &reduced))
+                    .fold(0.0, f64::max);
+                assert!(apart <= cheapest + 1e-12);
+            }
+        }
     }
 }
