@@ -10,7 +10,8 @@
 //! the first k members that is taken off again) or **unstaffed** (worth nothing, room
 //! for k − 1). Where the relaxed optimum leaves no undecided task between 0 and k
 //! members it is a real assignment worth exactly its bound, and the node is closed;
-//! otherwise the task with the most envelope value at stake is branched on, both ways.
+//! otherwise the task with the most envelope value at stake is branched on, both ways
+//! (with skills, first a task the Lagrangian relaxation below holds a share of).
 //! Every node's assignment is a feasible one whose true welfare may improve the best
 //! found; a dive from the root (rounding every fractional task to the nearer side at
 //! once, re-solved until none is left) finds a good one before the search, which takes the open node of highest bound first. A

@@ -45,6 +45,9 @@ pub(super) struct Node {
     pub(super) bound: f64,
     prices: Vec<f64>,
     skill_prices: Vec<f64>,
+    /// How much of each task's team the Lagrangian relaxation at those prices holds
+    /// (empty: none solved), which the branching reads first.
+    skill_earns: Vec<f64>,
     pub(super) sizes: Vec<usize>,
     assignment: Option<Assignment>,
 }
@@ -372,9 +375,9 @@ impl<'a> Search<'a> {
         });
         // The Lagrangian bound first: where it closes the node, the envelope's
         // relaxation (the one branched on) need not be solved.
-        let (skill_bound, skill_prices) = match parent {
+        let (skill_bound, skill_prices, skill_earns) = match parent {
             Some(p) => self.skill_bound(&decisions, &pairs, p)?,
-            None => (f64::INFINITY, Vec::new()),
+            None => (f64::INFINITY, Vec::new(), Vec::new()),
         };
         if self.closes(skill_bound) {
             return None;
@@ -388,6 +391,7 @@ impl<'a> Search<'a> {
         let node = self.node_of(decisions, pairs, skill_prices, &columns, solution)?;
         Some(Node {
             bound: node.bound.min(skill_bound),
+            skill_earns,
             ..node
         })
     }
@@ -433,6 +437,7 @@ impl<'a> Search<'a> {
             pairs,
             bound,
             skill_prices,
+            skill_earns: Vec::new(),
             prices,
             sizes: assignment.sizes().to_vec(),
             assignment: inst.has_skill_rules().then_some(assignment),

@@ -17,8 +17,11 @@ pub(in super::super) enum Branch {
 }
 
 impl Search<'_> {
-    /// Where a node branches: first an open task whose relaxed coalition is between 0
-    /// and its threshold (the most envelope value at stake), then the earning task short
+    /// Where a node branches: first an open task that the node's Lagrangian relaxation
+    /// (where skills are priced) holds a share of, neither none nor all of its team
+    /// (the most value at stake: the smaller share times the team's value), as a
+    /// MILP solver branches on its LP's fractions; then an open task whose envelope
+    /// coalition is between 0 and its threshold (the most envelope value at stake), then the earning task short
     /// of a skill with the most value at stake — the task itself where it is open, else
     /// the cheapest robot free to bring the skill; where the relaxation prices earning
     /// tasks and fewer earn in it than may, an open task (module `count`); `None` when
@@ -26,6 +29,18 @@ impl Search<'_> {
     pub(in super::super) fn branch(&self, node: &Node) -> Option<Branch> {
         let inst = self.instance;
         let sizes = &node.sizes;
+        let split = (inst.task_ids().zip(&node.skill_earns))
+            .filter(|&(j, &e)| {
+                node.decisions[j.index()] == Decision::Open && e > 1e-9 && e < 1.0 - 1e-9
+            })
+            .map(|(j, &e)| {
+                let team = inst.value_function(j).value(self.threshold(j));
+                (j.index(), e.min(1.0 - e) * team)
+            })
+            .max_by(|a, b| a.1.total_cmp(&b.1));
+        if let Some((j, _)) = split {
+            return Some(Branch::Task(j));
+        }
         let task = inst
             .task_ids()
             .filter(|j| node.decisions[j.index()] == Decision::Open)
@@ -161,5 +176,42 @@ mod tests {
                 .node(unstaffed.0, unstaffed.1, Some(&staffed))
                 .is_some()
         );
+    }
+
+    /// A task that the Lagrangian relaxation holds a share of is branched on before
+    /// any the envelope splits, the larger value at stake first; where it holds none
+    /// or all of every team, the envelope's choice stands.
+    #[test]
+    fn a_share_of_a_team_in_the_lagrangian_relaxation_is_branched_on_first() {
+        let task = |x, reward| Task {
+            position: Point::new(x, 0.0),
+            reward,
+            eps: 2.0,
+            capacity: None,
+        };
+        let robots = vec![Point::new(0.1, 0.0), Point::new(0.9, 0.0)];
+        let tasks = vec![task(0.0, 1.0), task(1.0, 1.0), task(0.5, 3.0)];
+        let inst = Instance::new(robots, tasks, 1.0)
+            .unwrap()
+            .with_teams(
+                vec![1, 1, 1],
+                &[vec![0], vec![1]],
+                &[vec![1], vec![], vec![]],
+            )
+            .unwrap();
+        let mut search = Search::new(&inst);
+        let mut root = search
+            .node(search.root_decisions(), Vec::new(), None)
+            .unwrap();
+        let envelope = format!("{:?}", search.branch(&root));
+        root.skill_earns = vec![0.0, 0.5, 0.1];
+        assert!(matches!(search.branch(&root), Some(Branch::Task(1))));
+        root.skill_earns = vec![0.0, 0.5, 0.4]; // 0.4 of 3 is more at stake than 0.5 of 1
+        assert!(matches!(search.branch(&root), Some(Branch::Task(2))));
+        root.decisions[2] = Decision::Staffed;
+        assert!(matches!(search.branch(&root), Some(Branch::Task(1))));
+        root.decisions[2] = Decision::Open;
+        root.skill_earns = vec![1.0, 0.0, 1.0];
+        assert_eq!(format!("{:?}", search.branch(&root)), envelope);
     }
 }

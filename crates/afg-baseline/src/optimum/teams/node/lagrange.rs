@@ -133,9 +133,9 @@ impl Search<'_> {
         decisions: &[Decision],
         pairs: &[Pair],
         parent: &Node,
-    ) -> Option<(f64, Vec<f64>)> {
+    ) -> Option<(f64, Vec<f64>, Vec<f64>)> {
         if self.skill_prices.is_empty() {
-            return Some((f64::INFINITY, Vec::new()));
+            return Some((f64::INFINITY, Vec::new(), Vec::new()));
         }
         let lambda = if parent.skill_prices.is_empty() {
             self.skill_prices.clone()
@@ -147,7 +147,7 @@ impl Search<'_> {
             size: self.skill_step,
         };
         let best = self.subgradient(decisions, pairs, lambda, &parent.prices, steps, &|| false)?;
-        Some((best.bound, best.lambda))
+        Some((best.bound, best.lambda, best.earns))
     }
 
     /// Chooses the skill prices from the root by subgradient steps, keeps those of the
@@ -215,6 +215,7 @@ impl Search<'_> {
                     bound: relaxed.bound,
                     lambda: lambda.clone(),
                     step_size,
+                    earns: relaxed.earns.clone(),
                 });
                 stalled = 0;
             } else {
@@ -264,6 +265,7 @@ struct Dual {
     bound: f64,
     lambda: Vec<f64>,
     step_size: f64,
+    earns: Vec<f64>,
 }
 
 #[cfg(test)]
