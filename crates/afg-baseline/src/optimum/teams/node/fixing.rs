@@ -145,9 +145,28 @@ fn cover(needs: &[(usize, Vec<usize>)], states: usize, reduced: &[f64]) -> f64 {
 
 #[cfg(test)]
 mod tests {
+    use afg_game::{Assignment, Instance};
+
     use super::super::Search;
     use super::super::lagrange::tests::{every_assignment, skill_knobs};
     use super::{cheapest_team, cover, needs};
+
+    /// Every assignment of `inst`, its optimum, and its search with the root priced and
+    /// the pairs and tasks ruled out for a best found `below` the optimum (a share).
+    fn ruled_out(inst: &Instance, below: f64) -> (Search<'_>, Vec<Assignment>, f64) {
+        let mut search = Search::exact(inst);
+        let root = search
+            .node(search.root_decisions(), Vec::new(), None)
+            .unwrap();
+        search.price_skills(&root, &|| false);
+        let assignments: Vec<_> = every_assignment(inst).collect();
+        let optimum = (assignments.iter())
+            .map(|a| inst.welfare(a))
+            .fold(f64::NEG_INFINITY, f64::max);
+        search.best_welfare = optimum - below * optimum.abs();
+        search.fix_pairs(&root);
+        (search, assignments, optimum)
+    }
 
     /// The root's dual bounds every assignment less its robots' reduced costs (so the
     /// pairs it keeps out are used by no assignment better than the best found), on
@@ -162,17 +181,7 @@ mod tests {
                 .unwrap()
                 .generate()
                 .unwrap();
-            let mut search = Search::new(&inst);
-            let root = search
-                .node(search.root_decisions(), Vec::new(), None)
-                .unwrap();
-            search.price_skills(&root, &|| false);
-            let assignments: Vec<_> = every_assignment(&inst).collect();
-            let optimum = (assignments.iter())
-                .map(|a| inst.welfare(a))
-                .fold(f64::NEG_INFINITY, f64::max);
-            search.best_welfare = optimum - 0.05 * optimum.abs();
-            search.fix_pairs(&root);
+            let (search, assignments, optimum) = ruled_out(&inst, 0.05);
             let dual = search.root_dual.as_ref().unwrap();
             let width = dual.reduced.len() / inst.num_robots();
             let tol = 1e-9 * optimum.abs().max(1.0);
@@ -206,24 +215,14 @@ mod tests {
     /// and some are ruled out.
     #[test]
     fn the_tasks_ruled_out_earn_in_no_better_assignment() {
-        let (mut tasks, mut ruled_out) = (0, 0);
+        let (mut tasks, mut ruled) = (0, 0);
         for seed in 0..60 {
             let inst = skill_knobs(0.4, (0, 2))
                 .config(6, 3, seed)
                 .unwrap()
                 .generate()
                 .unwrap();
-            let mut search = Search::exact(&inst);
-            let root = search
-                .node(search.root_decisions(), Vec::new(), None)
-                .unwrap();
-            search.price_skills(&root, &|| false);
-            let assignments: Vec<_> = every_assignment(&inst).collect();
-            let optimum = (assignments.iter())
-                .map(|a| inst.welfare(a))
-                .fold(f64::NEG_INFINITY, f64::max);
-            search.best_welfare = optimum - 0.02 * optimum.abs();
-            search.fix_pairs(&root);
+            let (search, assignments, optimum) = ruled_out(&inst, 0.02);
             let tol = 1e-9 * optimum.abs().max(1.0);
             for a in assignments
                 .iter()
@@ -237,9 +236,9 @@ mod tests {
                 }
             }
             tasks += inst.num_tasks();
-            ruled_out += search.cannot_earn.iter().filter(|&&c| c).count();
+            ruled += search.cannot_earn.iter().filter(|&&c| c).count();
         }
-        assert!(ruled_out * 10 >= tasks, "{ruled_out} of {tasks}");
+        assert!(ruled * 10 >= tasks, "{ruled} of {tasks}");
     }
 
     /// The cheapest team is the least reduced cost over every team that holds the
