@@ -84,24 +84,36 @@ impl Search<'_> {
     }
 }
 
-/// The most states [`cheapest_team`] covers all of a task's needs at once in.
+/// The most states, and states times robots, in which [`cheapest_team`] covers all of
+/// a task's needs at once.
 const JOINT_STATES: usize = 1 << 12;
+const JOINT_WORK: usize = 1 << 20;
 
 /// A lower bound on the summed reduced costs (`reduced[i]`: robot i's at task j) of any
 /// team that lets task j earn: the cheapest robots that together hold its `threshold`
 /// of members and every skill it requires (a covering knapsack, exact by dynamic
-/// programming over the units still lacking), or where that has more than
-/// [`JOINT_STATES`] states, the largest of each need's own cheapest cover.
+/// programming over the units still lacking), or where that takes more than
+/// [`JOINT_STATES`] states or [`JOINT_WORK`] steps, the largest of each need's own
+/// cheapest cover (the members': the `threshold` lowest reduced costs).
 fn cheapest_team(instance: &Instance, j: TaskId, threshold: usize, reduced: &[f64]) -> f64 {
     let needs = needs(instance, j, threshold);
     let states = needs
         .iter()
-        .try_fold(1usize, |n, (need, _)| n.checked_mul(need + 1));
+        .try_fold(1usize, |n, (need, _)| n.checked_mul(need + 1))
+        .filter(|&states| states <= JOINT_STATES && states * reduced.len() <= JOINT_WORK);
     match states {
-        Some(states) if states <= JOINT_STATES => cover(&needs, states, reduced),
-        _ => (needs.iter())
-            .map(|need| cover(std::slice::from_ref(need), need.0 + 1, reduced))
-            .fold(0.0, f64::max),
+        Some(states) if needs.len() > 1 => cover(&needs, states, reduced),
+        _ => {
+            let k = threshold.min(reduced.len());
+            let mut lowest = reduced.to_vec();
+            if k > 0 {
+                lowest.select_nth_unstable_by(k - 1, f64::total_cmp);
+            }
+            let members: f64 = lowest[..k].iter().sum();
+            (needs[1..].iter())
+                .map(|need| cover(std::slice::from_ref(need), need.0 + 1, reduced))
+                .fold(members, f64::max)
+        }
     }
 }
 
@@ -285,6 +297,15 @@ mod tests {
                     .map(|need| cover(std::slice::from_ref(need), need.0 + 1, &reduced))
                     .fold(0.0, f64::max);
                 assert!(apart <= cheapest + 1e-12);
+                // the members alone: the k lowest reduced costs
+                let mut sorted = reduced.clone();
+                sorted.sort_by(f64::total_cmp);
+                let members: f64 = sorted[..k].iter().sum();
+                let alone = cover(&needs(&inst, j, k)[..1], k + 1, &reduced);
+                assert!((alone - members).abs() < 1e-12, "{alone} {members}");
+                if inst.requires(j).iter().all(|&r| r == 0) {
+                    assert!((cheapest - members).abs() < 1e-12);
+                }
             }
         }
     }
