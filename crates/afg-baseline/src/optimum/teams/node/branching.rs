@@ -21,8 +21,9 @@ impl Search<'_> {
     /// (where skills are priced) holds a share of, neither none nor all of its team
     /// (the most value at stake: the smaller share times the team's value), as a
     /// MILP solver branches on its LP's fractions; then an open task whose envelope
-    /// coalition is between 0 and its threshold (the most envelope value at stake), then the earning task short
-    /// of a skill with the most value at stake — the task itself where it is open, else
+    /// coalition is between 0 and its threshold (the most envelope value at stake), then
+    /// the earning task short of a skill with the most value at stake — the task itself
+    /// where it is open, else
     /// the cheapest robot free to bring the skill; where the relaxation prices earning
     /// tasks and fewer earn in it than may, an open task (module `count`); `None` when
     /// there is none of these (the relaxation is a real assignment, worth its bound).

@@ -46,7 +46,8 @@ impl Search<'_> {
         self.forbid();
     }
 
-    /// Keeps out every pair the root's dual rules out for the best welfare found.
+    /// Keeps out every pair, and rules out every task, that the root's dual rules out
+    /// for the best welfare found.
     pub(super) fn forbid(&mut self) {
         let Some(dual) = &self.root_dual else {
             return;
@@ -56,12 +57,10 @@ impl Search<'_> {
         if self.forbidden.is_empty() {
             self.forbidden = vec![false; n * m];
         }
-        let best = self.best_welfare;
-        let tolerance = 1e-9 * best.abs().max(1.0);
         for i in 0..n {
             for j in 0..m {
                 if !self.forbidden[i * m + j]
-                    && dual.bound - dual.reduced[i * width + j] <= best + tolerance
+                    && self.closes(dual.bound - dual.reduced[i * width + j])
                 {
                     self.forbidden[i * m + j] = true;
                     self.kept_out.push((i, j));
@@ -79,7 +78,7 @@ impl Search<'_> {
             reduced.clear();
             reduced.extend((0..n).map(|i| dual.reduced[i * width + j.index()]));
             let cheapest = cheapest_team(self.instance, j, self.threshold(j), &reduced);
-            self.cannot_earn[j.index()] = dual.bound - cheapest <= best + tolerance;
+            self.cannot_earn[j.index()] = self.closes(dual.bound - cheapest);
         }
     }
 }
