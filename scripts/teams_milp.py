@@ -21,7 +21,7 @@ is null where the solver has none (CP-SAT before its first solution, HiGHS befor
 first bound).
 
 Usage: python scripts/teams_milp.py INSTANCES.jsonl OUT.json --solver cpsat|highs
-           --time-limit SECONDS [--threads K]
+           --time-limit SECONDS [--threads K] [--log] [--assignments AFG.jsonl]
 Needs: pip install ortools highspy numpy
 """
 
@@ -189,6 +189,9 @@ def main():
     parser.add_argument("--threads", type=int, default=1)
     parser.add_argument("--log", action="store_true",
                         help="print the solver's own log (its bound and cuts, round by round)")
+    parser.add_argument("--assignments", metavar="FILE",
+                        help="also write each answer as an afg-assignment line (what "
+                             "`afg solve --method opt --start FILE` starts from)")
     args = parser.parse_args()
     solve = cpsat if args.solver == "cpsat" else highs
     with open(args.instances) as f:
@@ -196,6 +199,14 @@ def main():
     results = [solve(inst, args.time_limit, args.threads, args.log) for inst in instances]
     with open(args.out, "w") as f:
         json.dump(results, f, allow_nan=False)
+    if args.assignments:
+        if any(r["tasks"] is None for r in results):
+            raise SystemExit(f"{args.solver} found no assignment of some instance within "
+                             f"{args.time_limit} s: nothing written to {args.assignments}")
+        with open(args.assignments, "w") as f:
+            for r in results:
+                tasks = [None if t < 0 else t for t in r["tasks"]]
+                f.write(json.dumps({"format": "afg-assignment", "version": 1, "tasks": tasks}) + "\n")
 
 
 if __name__ == "__main__":

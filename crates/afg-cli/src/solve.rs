@@ -6,6 +6,7 @@ use afg_baseline::{Allocator, Method, TeamOptimum};
 use afg_eval::solve::{Against, Report, Row};
 use afg_game::fs::write_atomic_making_dirs;
 use afg_game::io::read_instances;
+use afg_game::realloc::PreviousAssignment;
 use afg_game::{Assignment, Instance};
 use afg_learn::LearnError;
 use afg_learn::run::{ModelOptions, OptionConflict, load_model};
@@ -75,6 +76,12 @@ pub struct SolveArgs {
     /// stderr every second.
     #[arg(long, value_name = "FRACTION", allow_negative_numbers = true)]
     pub(crate) gap: Option<f64>,
+    /// The exact optimum (--method opt) starts from these assignments: one
+    /// "afg-assignment" line per instance, in order (another method's --out, an earlier
+    /// solve's). Each is its search's best found before the root, so the search prunes
+    /// from its first node, and the answer is never worse than it.
+    #[arg(long, value_name = "FILE", conflicts_with = "from")]
+    pub(crate) start: Option<PathBuf>,
     /// "% of OPT" on a team game solves the game exactly first, which can cost far more
     /// than the method: the exact solver stops after SECS seconds per instance, and the
     /// share is then of its certified bound (said beside it). The paper's game is
@@ -157,6 +164,7 @@ pub fn run(args: SolveArgs) -> Result<()> {
     }
     crate::warn_unstaffable(&instances);
     let (name, method) = allocator(&args)?;
+    let started = started(&args, &instances)?;
     let (against, measuring) = reference(&args, &instances)?;
     let bar = afg_eval::report::progress(
         instances.len() as u64,
@@ -164,8 +172,12 @@ pub fn run(args: SolveArgs) -> Result<()> {
     );
     let (rows, assignments): (Vec<Row>, Vec<Assignment>) = instances
         .iter()
-        .map(|inst| {
-            let row = Row::compute(inst, method.as_ref(), against);
+        .enumerate()
+        .map(|(k, inst)| {
+            let method = started
+                .as_ref()
+                .map_or(method.as_ref(), |all| &all[k] as &dyn Allocator);
+            let row = Row::compute(inst, method, against);
             bar.inc(1);
             row
         })
@@ -221,6 +233,47 @@ fn allocator(args: &SolveArgs) -> Result<(String, Box<dyn Allocator>)> {
         }
         (None, None) => unreachable!("clap requires an allocator"),
     })
+}
+
+/// `--start FILE`: the exact optimum of every instance from its line's assignment, with
+/// the limits and the progress line of `--method opt` (`None` without `--start`).
+fn started(args: &SolveArgs, instances: &[Instance]) -> Result<Option<Vec<TeamOptimum>>> {
+    let Some(path) = &args.start else {
+        return Ok(None);
+    };
+    let (Some(Method::Opt), None) = (args.method, &args.model) else {
+        anyhow::bail!("--start is for the exact optimum (--method opt) only");
+    };
+    let shown = path.display();
+    let text = std::fs::read_to_string(path).with_context(|| format!("--start {shown}"))?;
+    let lines: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty()).collect();
+    if lines.len() != instances.len() {
+        anyhow::bail!(
+            "--start {shown}: {} assignment lines for {} instances (one per instance, in order)",
+            lines.len(),
+            instances.len()
+        );
+    }
+    let exact = Method::Opt
+        .exact(args.time_limit, args.gap)
+        .context("--time-limit / --gap")?
+        .unwrap_or_default();
+    (lines.iter().zip(instances).enumerate())
+        .map(|(k, (line, inst))| {
+            let at = || format!("--start {shown} line {}", k + 1);
+            let previous = PreviousAssignment::from_json(line).with_context(at)?;
+            if !(previous.left_robots.is_empty() && previous.left_tasks.is_empty()) {
+                anyhow::bail!("{}: names robots or tasks that left; a start is an assignment of this instance", at());
+            }
+            let start = Assignment::from_tasks(inst, previous.tasks).with_context(at)?;
+            Ok(TeamOptimum {
+                start: Some(start),
+                progress: Some(crate::exact_progress::print_progress),
+                ..exact.clone()
+            })
+        })
+        .collect::<Result<_>>()
+        .map(Some)
 }
 
 fn reference(args: &SolveArgs, instances: &[Instance]) -> Result<(Against, String)> {

@@ -45,6 +45,7 @@ use crate::{AllocError, AllocStats, Allocation, Allocator, timed};
 
 mod deadline;
 mod node;
+mod start;
 use deadline::Deadline;
 use node::{Decision, Node, Search};
 
@@ -84,6 +85,11 @@ pub struct TeamOptimum {
     /// Told the search's state after the dive and after every node (at most every
     /// millisecond or so: rate-limit what it prints).
     pub progress: Option<fn(&TeamProgress)>,
+    /// A start: an assignment of the instance (from a heuristic, a learned model, an
+    /// earlier solve) that the search takes as its best found before its root, so that
+    /// its welfare prunes from the first node, as a MIP solver's start does. The
+    /// answer is never worse than it. `None`: the search finds its own.
+    pub start: Option<Assignment>,
 }
 
 /// Where [`TeamOptimum`]'s search stands, as [`TeamOptimum::progress`] is told.
@@ -242,6 +248,10 @@ impl TeamOptimum {
         };
         let out_of_time = || deadline.near() || stopped();
         let mut search = Search::exact(instance);
+        if let Some(start) = &self.start {
+            start::check(instance, start)?;
+            search.offer(start);
+        }
         let root = search.root(&|| deadline.root_over() || stopped());
         let mut root = match root {
             Ok(root) => root,
@@ -466,6 +476,9 @@ impl Allocator for TeamOptimum {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
+        if let Some(start) = &self.start {
+            start::check(instance, start)?;
+        }
         if !instance.has_teams() {
             return Optimum.allocate(instance);
         }

@@ -482,7 +482,7 @@ impl<'a> Search<'a> {
     }
 
     /// Offers `assignment` to the best found (a better one rules out more pairs).
-    fn offer(&mut self, assignment: &Assignment) {
+    pub(super) fn offer(&mut self, assignment: &Assignment) {
         let welfare = self.instance.welfare(assignment);
         if welfare > self.best_welfare {
             self.best_welfare = welfare;
