@@ -25,7 +25,7 @@ const NODE_ROUNDS: usize = 4;
 /// How far below the best found Polyak's step aims, as a share of the bound: a step
 /// towards the best found alone shrinks as the best found nears the bound and stalls
 /// the prices (on 12 seeds of each skill family at 100 × 20, aiming 10 % lower proved
-/// them 1.6× to 5× sooner in geometric mean than aiming at the best found).
+/// them 1.5× to 5× sooner in geometric mean than aiming at the best found).
 const TARGET_BELOW: f64 = 0.1;
 /// Steps without a lower bound before the step size halves.
 const PATIENCE: usize = 5;
