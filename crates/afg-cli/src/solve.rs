@@ -2,16 +2,17 @@
 
 use std::path::PathBuf;
 
-use afg_baseline::{Allocator, Method, TeamOptimum};
+use afg_baseline::{Allocator, Method};
 use afg_eval::solve::{Against, Report, Row};
 use afg_game::fs::write_atomic_making_dirs;
 use afg_game::io::read_instances;
-use afg_game::realloc::PreviousAssignment;
 use afg_game::{Assignment, Instance};
 use afg_learn::LearnError;
 use afg_learn::run::{ModelOptions, OptionConflict, load_model};
 use anyhow::{Context, Result};
 use clap::Args;
+
+mod exact;
 
 /// `afg solve`: an allocator, a source of instances and what to write.
 #[derive(Args)]
@@ -164,7 +165,7 @@ pub fn run(args: SolveArgs) -> Result<()> {
     }
     crate::warn_unstaffable(&instances);
     let (name, method) = allocator(&args)?;
-    let started = started(&args, &instances)?;
+    let started = exact::started(&args, &instances)?;
     let (against, measuring) = reference(&args, &instances)?;
     let bar = afg_eval::report::progress(
         instances.len() as u64,
@@ -203,12 +204,7 @@ pub fn run(args: SolveArgs) -> Result<()> {
 fn allocator(args: &SolveArgs) -> Result<(String, Box<dyn Allocator>)> {
     Ok(match (&args.method, &args.model) {
         (Some(m), _) => {
-            let exact = (m.exact(args.time_limit, args.gap))
-                .context("--time-limit / --gap")?
-                .map(|exact| TeamOptimum {
-                    progress: Some(crate::exact_progress::print_progress),
-                    ..exact
-                });
+            let exact = exact::solver(args, *m)?;
             let allocator = m
                 .allocator_with(args.seed, exact)
                 .context("--time-limit / --gap")?;
@@ -233,47 +229,6 @@ fn allocator(args: &SolveArgs) -> Result<(String, Box<dyn Allocator>)> {
         }
         (None, None) => unreachable!("clap requires an allocator"),
     })
-}
-
-/// `--start FILE`: the exact optimum of every instance from its line's assignment, with
-/// the limits and the progress line of `--method opt` (`None` without `--start`).
-fn started(args: &SolveArgs, instances: &[Instance]) -> Result<Option<Vec<TeamOptimum>>> {
-    let Some(path) = &args.start else {
-        return Ok(None);
-    };
-    let (Some(Method::Opt), None) = (args.method, &args.model) else {
-        anyhow::bail!("--start is for the exact optimum (--method opt) only");
-    };
-    let shown = path.display();
-    let text = std::fs::read_to_string(path).with_context(|| format!("--start {shown}"))?;
-    let lines: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty()).collect();
-    if lines.len() != instances.len() {
-        anyhow::bail!(
-            "--start {shown}: {} assignment lines for {} instances (one per instance, in order)",
-            lines.len(),
-            instances.len()
-        );
-    }
-    let exact = Method::Opt
-        .exact(args.time_limit, args.gap)
-        .context("--time-limit / --gap")?
-        .unwrap_or_default();
-    (lines.iter().zip(instances).enumerate())
-        .map(|(k, (line, inst))| {
-            let at = || format!("--start {shown} line {}", k + 1);
-            let previous = PreviousAssignment::from_json(line).with_context(at)?;
-            if !(previous.left_robots.is_empty() && previous.left_tasks.is_empty()) {
-                anyhow::bail!("{}: names robots or tasks that left; a start is an assignment of this instance", at());
-            }
-            let start = Assignment::from_tasks(inst, previous.tasks).with_context(at)?;
-            Ok(TeamOptimum {
-                start: Some(start),
-                progress: Some(crate::exact_progress::print_progress),
-                ..exact.clone()
-            })
-        })
-        .collect::<Result<_>>()
-        .map(Some)
 }
 
 fn reference(args: &SolveArgs, instances: &[Instance]) -> Result<(Against, String)> {

@@ -476,10 +476,11 @@ impl Allocator for TeamOptimum {
     }
 
     fn allocate(&self, instance: &Instance) -> Result<Allocation, AllocError> {
-        if let Some(start) = &self.start {
-            start::check(instance, start)?;
-        }
         if !instance.has_teams() {
+            // No search to start; the start is still checked (`solve` checks it itself).
+            if let Some(start) = &self.start {
+                start::check(instance, start)?;
+            }
             return Optimum.allocate(instance);
         }
         let (solution, wall_time) = timed(|| self.solve(instance));
