@@ -26,7 +26,10 @@
 //! team ([`Instance::smallest_team`]: more than k where its skills need more robots),
 //! which tightens the envelope of a task that needs few robots but many skills. (The
 //! dives a rounding or a staffing takes, [`TeamOptimum::dive`] and
-//! [`TeamOptimum::staff`], read the thresholds as they are.)
+//! [`TeamOptimum::staff`], read the thresholds as they are.) Once a skill game has
+//! taken 2 000 nodes, the staffing neighbourhood (ours) looks for a better best found
+//! among the staffings one task away from the best found's, each finished by the
+//! search itself (a skill dive and a small search below it).
 //!
 //! **Pairs ruled out.** The root's relaxation, priced, bounds every assignment less the
 //! reduced costs of where it puts its robots; a robot-task pair whose reduced cost
@@ -47,7 +50,7 @@ mod deadline;
 mod node;
 mod start;
 use deadline::Deadline;
-use node::{Decision, Node, Search};
+use node::{AFTER_NODES, Decision, Node, Search};
 
 use super::transport::NEVER;
 
@@ -271,6 +274,8 @@ impl TeamOptimum {
             Self::half_rounding(instance, &node.relaxation(m), fractional)
         });
         search.price_root(&mut root, &out_of_time);
+        // With skills, the staffing neighbourhood once the search runs long.
+        let mut staffing_after = instance.has_skill_rules().then(|| root.clone());
         let mut open = BinaryHeap::from([root]);
         let bound =
             |open: &BinaryHeap<Node>, best: f64| open.peek().map_or(best, |n| n.bound.max(best));
@@ -296,17 +301,11 @@ impl TeamOptimum {
             {
                 break;
             }
-            let node = open.pop().expect("peeked");
-            let Some(branch) = search.branch(&node) else {
-                continue; // closed: its assignment was offered to the best
-            };
-            for (decisions, pairs) in search.children(&node, branch) {
-                if let Some(child) = search.node(decisions, pairs, Some(&node))
-                    && !search.closes(child.bound)
-                {
-                    open.push(child);
-                }
+            if let Some(root) = staffing_after.take_if(|_| search.nodes() >= AFTER_NODES) {
+                search.flip_staffing(&root, &out_of_time);
             }
+            let node = open.pop().expect("peeked");
+            open.extend(search.expand(&node));
         }
         let (best, best_welfare, nodes) = search.into_best();
         Ok(TeamSolution {

@@ -14,8 +14,10 @@ mod count;
 mod fixing;
 mod lagrange;
 mod rounding;
+mod staffing;
 pub(super) use branching::Branch;
 pub(super) use lagrange::MAX_PAIRS;
+pub(super) use staffing::AFTER_NODES;
 
 /// What a node decides of one task.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

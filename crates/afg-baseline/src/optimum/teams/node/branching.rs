@@ -27,7 +27,7 @@ impl Search<'_> {
     /// the cheapest robot free to bring the skill; where the relaxation prices earning
     /// tasks and fewer earn in it than may, an open task (module `count`); `None` when
     /// there is none of these (the relaxation is a real assignment, worth its bound).
-    pub(in super::super) fn branch(&self, node: &Node) -> Option<Branch> {
+    pub(super) fn branch(&self, node: &Node) -> Option<Branch> {
         let inst = self.instance;
         let sizes = &node.sizes;
         let split = (inst.task_ids().zip(&node.skill_earns))
@@ -99,11 +99,7 @@ impl Search<'_> {
     }
 
     /// The two children of a branch: its decisions and fixed robots.
-    pub(in super::super) fn children(
-        &self,
-        node: &Node,
-        branch: Branch,
-    ) -> [(Vec<Decision>, Vec<Pair>); 2] {
+    pub(super) fn children(&self, node: &Node, branch: Branch) -> [(Vec<Decision>, Vec<Pair>); 2] {
         let with = |decision: Option<(usize, Decision)>, pair: Option<Pair>| {
             let mut decisions = node.decisions.clone();
             if let Some((j, d)) = decision {
@@ -123,6 +119,22 @@ impl Search<'_> {
                 with(None, Some((i, j, false))),
             ],
         }
+    }
+
+    /// A node's children, solved, that the best found does not close (none where the
+    /// node's relaxation is a real assignment: it was offered to the best found when
+    /// solved).
+    pub(in super::super) fn expand(&mut self, node: &Node) -> Vec<Node> {
+        let Some(branch) = self.branch(node) else {
+            return Vec::new();
+        };
+        self.children(node, branch)
+            .into_iter()
+            .filter_map(|(decisions, pairs)| {
+                let child = self.node(decisions, pairs, Some(node))?;
+                (!self.closes(child.bound)).then_some(child)
+            })
+            .collect()
     }
 }
 
