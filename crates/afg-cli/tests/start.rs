@@ -57,6 +57,8 @@ fn the_exact_optimum_starts_from_a_file_and_refuses_one_that_does_not_fit() {
         "6",
         "--count",
         "2",
+        "--seed",
+        "6",
         "--out",
         g,
     ]);
@@ -78,6 +80,13 @@ fn the_exact_optimum_starts_from_a_file_and_refuses_one_that_does_not_fit() {
     );
     assert_eq!(proven, [true, true]);
     assert!((again - welfare).abs() < 1e-9, "{again} vs {welfare}");
+    // Stopped at its first certified gap under 50 %, the search alone answers its
+    // first dives' assignments, short of the optima; from the optima, the optima.
+    let f = first.to_str().unwrap();
+    let (alone, _) = solve(&games, &["--method", "opt", "--gap", "0.5"]);
+    assert!(alone < welfare - 1e-9, "{alone} vs {welfare}");
+    let (started, _) = solve(&games, &["--method", "opt", "--gap", "0.5", "--start", f]);
+    assert!((started - welfare).abs() < 1e-9, "{started} vs {welfare}");
 
     let refused = |extra: &[&str], says: &str| {
         let args = [&["solve", "--input", g, "--no-reference"], extra].concat();
@@ -87,11 +96,17 @@ fn the_exact_optimum_starts_from_a_file_and_refuses_one_that_does_not_fit() {
         assert_eq!(text.lines().count(), 1, "{text}");
         assert!(text.contains(says), "{text} lacks {says:?}");
     };
-    let f = first.to_str().unwrap();
     refused(
         &["--method", "da", "--start", f],
         "--start is for the exact optimum",
     );
+    // A warm start from an earlier assignment (--from) is another thing: refused by
+    // the argument parser beside --start.
+    let both = afg(&[
+        "solve", "--input", g, "--method", "opt", "--start", f, "--from", f,
+    ]);
+    assert_eq!(both.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&both.stderr).contains("cannot be used with"));
     let one = scratch("one.jsonl");
     let text = std::fs::read_to_string(&first).unwrap();
     std::fs::write(&one, text.lines().next().unwrap()).unwrap();

@@ -290,12 +290,15 @@ fn method(name: &str) -> PyResult<Method> {
 /// (seconds, `opt` only) stops the exact search with the best found, and so does a
 /// certified `gap` target (`opt` only; 0.001: within 0.1 % of the bound) or Ctrl-C
 /// (at the search's next step, then `KeyboardInterrupt`); `stats` then has its
-/// proven `bound` and `gap`, as for every exact solve of a team game. On a
+/// proven `bound` and `gap`, as for every exact solve of a team game. `start`
+/// (`opt` only: robot i's task, -1 for none, as `score` takes it) is the exact
+/// search's first best found — another method's answer, an earlier solve's — so it
+/// prunes from its first node and never answers worse. On a
 /// team game the "% of OPT" solves the game exactly first, stopped after
 /// `reference_time_limit` seconds (the share is then of its certified bound:
 /// `stats["reference_proven"]` is 0); `reference=False` measures nothing.
 #[pyfunction]
-#[pyo3(signature = (instance, method=None, model=None, seed=0, time_limit=None, gap=None, reference=true, reference_time_limit=10.0))]
+#[pyo3(signature = (instance, method=None, model=None, seed=0, time_limit=None, gap=None, reference=true, reference_time_limit=10.0, start=None))]
 #[allow(clippy::too_many_arguments)]
 fn solve(
     py: Python<'_>,
@@ -307,8 +310,15 @@ fn solve(
     gap: Option<f64>,
     reference: bool,
     reference_time_limit: f64,
+    start: Option<IntVector<'_>>,
 ) -> PyResult<SolveResult> {
     let against = against(reference, reference_time_limit)?;
+    let start = start.map(|tasks| instance.assignment(&tasks)).transpose()?;
+    if start.is_some() && method.map(self::method).transpose()? != Some(Method::Opt) {
+        return Err(crate::bad_input(
+            "start: a start is for the exact optimum (method opt) only",
+        ));
+    }
     if (time_limit.is_some() || gap.is_some()) && method.is_none() {
         return Err(crate::bad_input(
             "time_limit / gap: a time limit or a gap is for the exact optimum (method opt) only",
@@ -322,6 +332,7 @@ fn solve(
                 .map(|exact| {
                     exact.map(|exact| TeamOptimum {
                         stop: Some(Arc::clone(&stop)),
+                        start,
                         ..exact
                     })
                 })

@@ -121,8 +121,7 @@ def test_the_exact_optimum_reports_its_bound_and_gap() -> None:
 
 def _slow_skill_game() -> afg.Instance:
     """A skill game whose proof takes the exact search longer than ten seconds (the
-    `sparse-skills` game that docs/families.md names, unproven after 10 s with a gap of
-    about 3 %)."""
+    `sparse-skills` game that docs/families.md names, unproven after 10 s)."""
     return afg.generate(100, 20, seed=4, family="sparse-skills")
 
 
@@ -131,6 +130,23 @@ def test_a_gap_target_stops_the_exact_search_with_a_certified_gap() -> None:
     near = afg.solve(inst, method="opt", gap=0.1, reference=False)
     assert 0.0 < near.stats["gap"] <= 0.1
     assert near.stats["bound"] == pytest.approx(near.welfare * (1 + near.stats["gap"]))
+
+
+def test_the_exact_search_starts_from_an_assignment_given() -> None:
+    inst = afg.generate(30, 6, seed=6, family="sparse-skills")
+    best = afg.solve(inst, method="opt", reference=False)
+    assert best.stats["gap"] == 0
+    # Stopped at its first certified gap under 50 %, the search alone answers its
+    # first dive's assignment, short of the optimum; from the optimum, the optimum.
+    alone = afg.solve(inst, method="opt", gap=0.5, reference=False)
+    assert alone.welfare < best.welfare - 1e-9
+    started = afg.solve(inst, method="opt", gap=0.5, reference=False, start=best.tasks)
+    assert started.welfare == pytest.approx(best.welfare, abs=1e-9)
+    assert list(started.tasks) == list(best.tasks)
+    with pytest.raises(afg.InvalidInputError, match="for the exact optimum"):
+        afg.solve(inst, method="nearest", start=best.tasks)
+    with pytest.raises(afg.InvalidInputError):
+        afg.solve(inst, method="opt", start=best.tasks[:-1])
 
 
 def test_ctrl_c_stops_the_exact_search_at_its_next_step() -> None:

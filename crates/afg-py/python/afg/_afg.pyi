@@ -128,6 +128,7 @@ def solve(
     gap: Optional[float] = None,
     reference: bool = True,
     reference_time_limit: float = 10.0,
+    start: Optional[_Tasks] = None,
 ) -> Result: ...
 def score(instance: Instance, tasks: _Tasks) -> Result: ...
 def load_model(
