@@ -101,6 +101,8 @@ pub(super) struct Search<'a> {
     bonus: f64,
     skill_prices: Vec<f64>,
     skill_step: f64,
+    /// Subgradient steps at every node but the root (module `lagrange`).
+    node_rounds: usize,
     /// The price of a task's earning in the relaxations (module `count`; 0: none).
     count_price: f64,
     /// The most tasks that can earn at once ([`count::count_cap`]).
@@ -177,6 +179,7 @@ impl<'a> Search<'a> {
             bonus: 2.0 * (max_cost + max_reward) + 1.0,
             skill_prices: Vec::new(),
             skill_step: 0.0,
+            node_rounds: 0,
             count_price: 0.0,
             best: Assignment::unassigned(instance.num_robots(), instance.num_tasks()),
             best_welfare: f64::NEG_INFINITY,
