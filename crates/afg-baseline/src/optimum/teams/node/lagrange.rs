@@ -313,7 +313,7 @@ pub(super) mod tests {
     }
 
     /// The best welfare over every assignment.
-    fn brute_force(inst: &Instance) -> f64 {
+    pub(in super::super) fn brute_force(inst: &Instance) -> f64 {
         every_assignment(inst)
             .map(|a| inst.welfare(&a))
             .fold(f64::NEG_INFINITY, f64::max)

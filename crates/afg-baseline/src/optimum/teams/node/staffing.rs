@@ -76,7 +76,7 @@ impl Search<'_> {
 #[cfg(test)]
 mod tests {
     use super::super::Search;
-    use super::super::lagrange::tests::{every_assignment, skill_knobs};
+    use super::super::lagrange::tests::{brute_force, skill_knobs};
 
     /// From the root's own offer, the neighbourhood reaches the optimum (brute force)
     /// on most small skill games where that offer falls short (16 of 18; the other two
@@ -88,9 +88,7 @@ mod tests {
         let (mut short, mut reached) = (0, 0);
         for seed in 0..60 {
             let inst = knobs.config(6, 3, seed).unwrap().generate().unwrap();
-            let optimum = (every_assignment(&inst))
-                .map(|a| inst.welfare(&a))
-                .fold(f64::NEG_INFINITY, f64::max);
+            let optimum = brute_force(&inst);
             let mut search = Search::exact(&inst);
             let root = search
                 .node(search.root_decisions(), Vec::new(), None)
