@@ -340,25 +340,17 @@ fn solve(
                 .map_err(|e| crate::bad_input(format!("time_limit / gap: {e}")))?;
             run(py, instance, exact.as_ref(), against, &stop)
         }
-        (None, Some(model)) => match model.cast::<PyModel>() {
-            Ok(m) => run(
-                py,
-                instance,
-                m.get().allocator.as_ref(),
-                against,
-                &AtomicBool::default(),
-            ),
-            Err(_) => {
-                let path: PathBuf = model.extract()?;
-                run(
-                    py,
-                    instance,
-                    load_model(path, None, false, false)?.allocator.as_ref(),
-                    against,
-                    &AtomicBool::default(),
-                )
-            }
-        },
+        (None, Some(model)) => {
+            let loaded;
+            let allocator = match model.cast::<PyModel>() {
+                Ok(m) => m.get().allocator.as_ref(),
+                Err(_) => {
+                    loaded = load_model(model.extract()?, None, false, false)?;
+                    loaded.allocator.as_ref()
+                }
+            };
+            run(py, instance, allocator, against, &AtomicBool::default())
+        }
         _ => Err(crate::bad_input(
             "pass exactly one of method=NAME or model=PATH_OR_MODEL",
         )),
