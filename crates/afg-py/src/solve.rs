@@ -313,8 +313,9 @@ fn solve(
     start: Option<IntVector<'_>>,
 ) -> PyResult<SolveResult> {
     let against = against(reference, reference_time_limit)?;
+    let method = method.map(self::method).transpose()?;
     let start = start.map(|tasks| instance.assignment(&tasks)).transpose()?;
-    if start.is_some() && method.map(self::method).transpose()? != Some(Method::Opt) {
+    if start.is_some() && method != Some(Method::Opt) {
         return Err(crate::bad_input(
             "start: a start is for the exact optimum (method opt) only",
         ));
@@ -325,8 +326,7 @@ fn solve(
         ));
     }
     match (method, model) {
-        (Some(name), None) => {
-            let method = self::method(name)?;
+        (Some(method), None) => {
             let stop = Arc::new(AtomicBool::new(false));
             let exact = (method.exact(time_limit, gap))
                 .map(|exact| {
