@@ -239,28 +239,6 @@ impl<'a> Search<'a> {
         }
     }
 
-    /// Whether task j can still get every skill it requires from the robots free to
-    /// join it (not kept out of it, not fixed elsewhere).
-    fn skills_reachable(&self, j: TaskId, pairs: &[Pair]) -> bool {
-        let inst = self.instance;
-        if inst.num_skills() == 0 {
-            return true;
-        }
-        let free = |i: RobotId| {
-            self.allowed(i, j)
-                && !pairs
-                    .iter()
-                    .any(|&(r, t, fixed)| r == i && (if fixed { t != j } else { t == j }))
-        };
-        let mut held = vec![0u64; inst.num_skills()];
-        for i in inst.robot_ids().filter(|&i| free(i)) {
-            for (h, &q) in held.iter_mut().zip(inst.skills(i)) {
-                *h += u64::from(q);
-            }
-        }
-        inst.skills_met(j, &held)
-    }
-
     /// The columns of a node's relaxation; `None` where no assignment meets its
     /// decisions (staffed thresholds above N, a staffed task that can no longer get its
     /// skills, or too little room in all). An open task that can no longer get its
@@ -268,10 +246,14 @@ impl<'a> Search<'a> {
     /// unstaffed.
     fn columns(&self, decisions: &mut [Decision], pairs: &[Pair]) -> Option<Vec<Column>> {
         let inst = self.instance;
+        let barred = (inst.num_skills() > 0).then(|| self.barred(pairs));
         for j in inst.task_ids() {
+            if decisions[j.index()] == Decision::Unstaffed {
+                continue;
+            }
             let hopeless = self.cannot_earn.get(j.index()).copied().unwrap_or(false)
-                || !self.skills_reachable(j, pairs);
-            if decisions[j.index()] != Decision::Unstaffed && hopeless {
+                || barred.as_ref().is_some_and(|b| !self.skills_reachable(j, b));
+            if hopeless {
                 if decisions[j.index()] == Decision::Staffed {
                     return None;
                 }

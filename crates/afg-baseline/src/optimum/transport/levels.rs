@@ -1,6 +1,8 @@
 //! The coarse-to-fine levels: every `FACTOR`-th robot of the level above, each level's
 //! cost matrix, and the prices a coarser level hands down.
 
+use std::collections::BinaryHeap;
+
 use super::*;
 
 /// The prices of the subsample of every `stride`-th robot, solved from the prices of
@@ -131,45 +133,60 @@ impl Level {
     }
 
     /// A sink potential μ at which `prices` buy N slots in all (or, where ties make that
-    /// impossible, the least above), by bisection from a bracket grown around `near`
-    /// (or from where no price buys a slot): the flow starts with the sink balanced.
+    /// impossible, the least above): `near` where it does, else between the N-th
+    /// cheapest slot and the next. Slot k of column j is bought once μ passes
+    /// `π_j − marginal(j, k)`, which rises with k (the columns are concave), so the N
+    /// cheapest slots come from merging the columns' rising lists: O(N log M) marginal
+    /// values, not a bisection over every column's count.
     pub(super) fn balancing_offset(&self, prices: &[f64], near: Option<f64>) -> f64 {
-        let bought = |mu: f64| {
-            (0..self.m())
-                .map(|j| self.count_at(j, prices[j] - mu))
-                .sum::<usize>()
+        let opens_at = |j: usize, k: usize| Slot {
+            mu: prices[j] - self.marginal(j, k),
+            column: j,
+            k,
         };
-        // At `none` every price is at least its task's first marginal value: none buys.
-        let none = (0..self.m())
-            .map(|j| prices[j] - self.marginal(j, 1))
-            .fold(f64::INFINITY, f64::min);
-        let start = near.map_or(none, |mu| mu.max(none));
-        let mut step = near.map_or(1.0, |mu| 1e-9 * mu.abs().max(1.0));
-        let (mut lo, mut hi) = (start, start);
-        // Grow the bracket (lo, hi] until bought(lo) < N ≤ bought(hi).
-        while bought(hi) < self.n {
-            lo = hi;
-            hi = start + step;
-            step *= 2.0;
-        }
-        if lo == hi {
-            step = 1e-9 * hi.abs().max(1.0);
-            lo = hi - step;
-            while lo > none && bought(lo) >= self.n {
-                hi = lo;
-                step *= 2.0;
-                lo = (start - step).max(none);
+        let mut next: BinaryHeap<Reverse<Slot>> = (0..self.m())
+            .filter(|&j| self.capacity(j) > 0)
+            .map(|j| Reverse(opens_at(j, 1)))
+            .collect();
+        let mut last = f64::NEG_INFINITY;
+        for _ in 0..self.n {
+            let Some(Reverse(slot)) = next.pop() else {
+                break; // fewer slots than robots: every one is bought
+            };
+            last = slot.mu;
+            if slot.k < self.capacity(slot.column) {
+                next.push(Reverse(opens_at(slot.column, slot.k + 1)));
             }
         }
-        for _ in 0..64 {
-            let mid = 0.5 * (lo + hi);
-            match bought(mid).cmp(&self.n) {
-                Ordering::Equal => return mid,
-                Ordering::Greater => hi = mid,
-                Ordering::Less => lo = mid,
-            }
+        let after = next.peek().map_or(f64::INFINITY, |Reverse(slot)| slot.mu);
+        match near {
+            Some(mu) if last < mu && mu <= after => mu,
+            _ if after.is_finite() && last < after => 0.5 * (last + after),
+            _ => last + 1e-9 * last.abs().max(1.0),
         }
-        hi
+    }
+}
+
+/// A slot of a column and the sink potential from which its price buys it, ordered by
+/// that potential (then column and rank, for a fixed order among ties).
+#[derive(Clone, Copy, PartialEq)]
+struct Slot {
+    mu: f64,
+    column: usize,
+    k: usize,
+}
+
+impl Eq for Slot {}
+
+impl PartialOrd for Slot {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Slot {
+    fn cmp(&self, other: &Self) -> Ordering {
+        (self.mu.total_cmp(&other.mu)).then((self.column, self.k).cmp(&(other.column, other.k)))
     }
 }
 
@@ -214,4 +231,58 @@ pub(super) fn cheapest(row: &[f64], prices: &[f64], columns: &[Column]) -> u32 {
 /// The index of the sink node among the potentials and imbalances.
 pub(super) fn sink(m: usize) -> usize {
     m
+}
+
+#[cfg(test)]
+mod tests {
+    use afg_game::Family;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    use super::*;
+
+    /// Against every slot's potential, sorted: the sink potential buys exactly N slots
+    /// where the N-th and the next differ (the least above where they tie), and keeps a
+    /// `near` that does so — on every family, finest and coarser levels, a closed column.
+    #[test]
+    fn the_balancing_offset_buys_every_robot() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let mut exact = 0;
+        for (case, family) in Family::ALL.iter().cycle().take(60).enumerate() {
+            let inst = (family.config(30, 6, case as u64).unwrap())
+                .generate()
+                .unwrap();
+            let level = Level::new(&inst, &task_columns(&inst), [1, 1, 4][case % 3], 1);
+            let prices: Vec<f64> = (0..level.m())
+                .map(|j| rng.random_range(-1.0..1.5) * level.marginal(j, 1).max(1.0))
+                .collect();
+            let mut opens: Vec<f64> = (0..level.m())
+                .flat_map(|j| (1..=level.capacity(j)).map(move |k| (j, k)))
+                .map(|(j, k)| prices[j] - level.marginal(j, k))
+                .collect();
+            opens.sort_by(f64::total_cmp);
+            let bought = |mu: f64| {
+                (0..level.m())
+                    .map(|j| level.count_at(j, prices[j] - mu))
+                    .sum::<usize>()
+            };
+            let (nth, after) = (opens[level.n - 1], opens.get(level.n).copied());
+            let mu = level.balancing_offset(&prices, None);
+            match after {
+                Some(after) if after - nth > 1e-6 => {
+                    exact += 1;
+                    assert_eq!(bought(mu), level.n, "{family}");
+                    let near = nth + rng.random_range(0.01..1.0) * (after - nth);
+                    assert_eq!(level.balancing_offset(&prices, Some(near)), near);
+                    let far = level.balancing_offset(&prices, Some(after + 1.0));
+                    assert_eq!(bought(far), level.n, "{family}");
+                }
+                _ => {
+                    assert!(bought(mu) >= level.n, "{family}");
+                    assert!(mu - nth < 1e-6 * nth.abs().max(1.0), "{family}: {mu} vs {nth}");
+                }
+            }
+        }
+        assert!(exact >= 40, "{exact} of 60 without ties");
+    }
 }

@@ -15,10 +15,10 @@
 //! such team ([`cheapest_team`], a lower bound on it) takes the bound to the best
 //! found, no better assignment lets j earn: it is decided unstaffed in every node.
 
-use afg_game::{Instance, TaskId};
+use afg_game::{Instance, RobotId, TaskId};
 
 use super::super::super::transport;
-use super::{Node, Search};
+use super::{Node, Pair, Search};
 
 /// The root's dual bound and every robot's reduced cost at every column (row-major).
 pub(super) struct RootDual {
@@ -80,6 +80,35 @@ impl Search<'_> {
             let cheapest = cheapest_team(self.instance, j, self.threshold(j), &reduced);
             self.cannot_earn[j.index()] = self.closes(dual.bound - cheapest);
         }
+    }
+
+    /// Whether task j can still get every skill it requires from the robots free to
+    /// join it: allowed there, and not `barred` (see [`Search::barred`]).
+    pub(super) fn skills_reachable(&self, j: TaskId, barred: &[bool]) -> bool {
+        let inst = self.instance;
+        let m = inst.num_tasks();
+        let mut held = vec![0u64; inst.num_skills()];
+        let free = |i: &RobotId| self.allowed(*i, j) && !barred[i.index() * m + j.index()];
+        for i in inst.robot_ids().filter(free) {
+            for (h, &q) in held.iter_mut().zip(inst.skills(i)) {
+                *h += u64::from(q);
+            }
+        }
+        inst.skills_met(j, &held)
+    }
+
+    /// Where `pairs` bar robot i from task j (fixed elsewhere, or kept out of it):
+    /// row-major N × M.
+    pub(super) fn barred(&self, pairs: &[Pair]) -> Vec<bool> {
+        let m = self.instance.num_tasks();
+        let mut barred = vec![false; self.instance.num_robots() * m];
+        for &(i, j, fixed) in pairs {
+            let row = &mut barred[i.index() * m..][..m];
+            for (k, bar) in row.iter_mut().enumerate() {
+                *bar |= if fixed { k != j.index() } else { k == j.index() };
+            }
+        }
+        barred
     }
 }
 
