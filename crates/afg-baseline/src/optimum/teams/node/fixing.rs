@@ -105,7 +105,7 @@ impl Search<'_> {
         for &(i, j, fixed) in pairs {
             let row = &mut barred[i.index() * m..][..m];
             for (k, bar) in row.iter_mut().enumerate() {
-                *bar |= if fixed { k != j.index() } else { k == j.index() };
+                *bar |= (k == j.index()) != fixed;
             }
         }
         barred
