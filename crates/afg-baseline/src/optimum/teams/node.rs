@@ -252,7 +252,9 @@ impl<'a> Search<'a> {
                 continue;
             }
             let hopeless = self.cannot_earn.get(j.index()).copied().unwrap_or(false)
-                || barred.as_ref().is_some_and(|b| !self.skills_reachable(j, b));
+                || barred
+                    .as_ref()
+                    .is_some_and(|b| !self.skills_reachable(j, b));
             if hopeless {
                 if decisions[j.index()] == Decision::Staffed {
                     return None;

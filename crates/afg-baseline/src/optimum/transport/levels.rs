@@ -279,7 +279,10 @@ mod tests {
                 }
                 _ => {
                     assert!(bought(mu) >= level.n, "{family}");
-                    assert!(mu - nth < 1e-6 * nth.abs().max(1.0), "{family}: {mu} vs {nth}");
+                    assert!(
+                        mu - nth < 1e-6 * nth.abs().max(1.0),
+                        "{family}: {mu} vs {nth}"
+                    );
                 }
             }
         }
