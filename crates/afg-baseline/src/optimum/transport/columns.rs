@@ -29,6 +29,8 @@ pub(in crate::optimum) struct Slots {
     bonus: f64,
     penalty: f64,
     worthless: bool,
+    /// What each of the first `flat` members is worth (kept: read at every slot).
+    share: f64,
 }
 
 impl Slots {
@@ -40,6 +42,7 @@ impl Slots {
             bonus: 0.0,
             penalty: 0.0,
             worthless: false,
+            share: 0.0,
         }
     }
 
@@ -47,18 +50,27 @@ impl Slots {
     /// `k`.
     pub(in crate::optimum) fn envelope(value: ValueFunction, k: usize, bonus: f64) -> Self {
         Slots {
-            value,
             flat: k,
             bonus,
-            penalty: 0.0,
-            worthless: false,
+            ..Slots::concave(value)
         }
+        .shared()
     }
 
     /// The same slots less `penalty` once the task earns (a staffed task's: its first
     /// members carry a bonus that keeps them concave).
     pub(in crate::optimum) fn less(self, penalty: f64) -> Self {
-        Slots { penalty, ..self }
+        Slots { penalty, ..self }.shared()
+    }
+
+    /// The same slots with `share` set from the others.
+    fn shared(self) -> Self {
+        let share = if self.flat == 0 {
+            0.0
+        } else {
+            (self.value.value(self.flat) - self.penalty) / self.flat as f64 + self.bonus
+        };
+        Slots { share, ..self }
     }
 
     /// The concave envelope of `max(0, F(n) − penalty)` earned from `k` members on, at
@@ -96,8 +108,7 @@ impl Slots {
         if self.worthless || n == 0 {
             0.0
         } else if n <= self.flat {
-            n as f64
-                * ((self.value.value(self.flat) - self.penalty) / self.flat as f64 + self.bonus)
+            n as f64 * self.share
         } else {
             self.value.value(n) - self.penalty + self.flat as f64 * self.bonus
         }
@@ -109,7 +120,7 @@ impl Slots {
         if self.worthless {
             0.0
         } else if n <= self.flat {
-            (self.value.value(self.flat) - self.penalty) / self.flat as f64 + self.bonus
+            self.share
         } else {
             self.value.marginal(n)
         }

@@ -216,16 +216,14 @@ pub(super) fn cost_row(robot: Point, tasks: &[Point], beta: f64, row: &mut [f64]
 
 /// The cheapest open column of `row` under `prices` (the lowest such index).
 pub(super) fn cheapest(row: &[f64], prices: &[f64], columns: &[Column]) -> u32 {
-    let mut best = None;
-    for j in 0..row.len() {
-        if matches!(columns[j], Column::Closed) {
-            continue;
-        }
-        if best.is_none_or(|b: usize| row[j] - prices[j] < row[b] - prices[b]) {
-            best = Some(j);
+    let mut best: Option<(usize, f64)> = None;
+    for (j, ((&cost, &price), column)) in row.iter().zip(prices).zip(columns).enumerate() {
+        let reduced = cost - price;
+        if best.is_none_or(|(_, least)| reduced < least) && !matches!(column, Column::Closed) {
+            best = Some((j, reduced));
         }
     }
-    best.expect("a problem has an open column") as u32
+    best.expect("a problem has an open column").0 as u32
 }
 
 /// The index of the sink node among the potentials and imbalances.
