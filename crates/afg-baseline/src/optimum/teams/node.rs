@@ -378,8 +378,10 @@ impl<'a> Search<'a> {
             unreachable!("never stopped")
         };
         let node = self.node_of(decisions, pairs, skill_prices, &columns, solution)?;
+        // A child's assignments are its parent's too: its bound is at most the parent's.
+        let inherited = parent.map_or(f64::INFINITY, |p| p.bound);
         Some(Node {
-            bound: node.bound.min(skill_bound),
+            bound: node.bound.min(skill_bound).min(inherited),
             skill_earns,
             ..node
         })

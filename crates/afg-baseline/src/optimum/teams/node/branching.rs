@@ -140,10 +140,39 @@ impl Search<'_> {
 
 #[cfg(test)]
 mod tests {
-    use afg_game::{Instance, Point, RobotId, Task, TaskId};
+    use afg_game::{Family, Instance, Point, RobotId, Task, TaskId};
 
     use super::super::{Decision, Search};
     use super::Branch;
+
+    /// A child's assignments are its parent's too, so its bound is never above its
+    /// parent's, however the subgradient steps from the parent's skill prices land: in
+    /// the first nodes of a best-first search of `sparse-skills` games (where those
+    /// steps alone leave some children above).
+    #[test]
+    fn no_child_is_bounded_above_its_parent() {
+        let mut children = 0;
+        for seed in [6, 7] {
+            let inst = (Family::SparseSkills.config(100, 20, seed).unwrap())
+                .generate()
+                .unwrap();
+            let mut search = Search::exact(&inst);
+            let mut root = search
+                .node(search.root_decisions(), Vec::new(), None)
+                .unwrap();
+            search.price_root(&mut root, &|| false);
+            let mut open = std::collections::BinaryHeap::from([root]);
+            for _ in 0..300 {
+                let Some(parent) = open.pop() else { break };
+                for child in search.expand(&parent) {
+                    assert!(child.bound <= parent.bound, "seed {seed}");
+                    children += 1;
+                    open.push(child);
+                }
+            }
+        }
+        assert!(children >= 300, "{children} children");
+    }
 
     /// An open task short of a skill is branched on itself first; once it is staffed,
     /// on the cheapest robot that could bring the skill; and where every such robot
