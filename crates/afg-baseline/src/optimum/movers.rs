@@ -85,10 +85,30 @@ impl Movers {
             absorbed: vec![0; m * m],
             closed,
         };
+        // What `enter` does for every robot, in one tight pass: robots come in index
+        // order, so a later one with the same key never displaces an earlier one.
         for (robot, &task) in task_of.iter().enumerate() {
-            if task != NOWHERE {
-                let row = &costs[robot * m..][..m];
-                movers.enter(robot as u32, task as usize, row);
+            if task == NOWHERE {
+                continue;
+            }
+            let (j, row) = (task as usize, &costs[robot * m..][..m]);
+            movers.members[j].push(robot as u32);
+            let keys = &mut movers.key[j * m..][..m];
+            let robots = &mut movers.robot[j * m..][..m];
+            for (k, &cost) in row.iter().enumerate() {
+                let key = cost - row[j];
+                if key < keys[k] {
+                    keys[k] = key;
+                    robots[k] = robot as u32;
+                }
+            }
+        }
+        // No robot moves to its own column or to a closed one.
+        for j in 0..m {
+            for k in 0..m {
+                if k == j || movers.closed[k] {
+                    movers.set_top(j * m + k, Entry::NONE);
+                }
             }
         }
         movers
