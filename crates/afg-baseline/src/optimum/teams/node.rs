@@ -11,6 +11,7 @@ use super::super::transport::{
 
 mod branching;
 mod count;
+mod cover;
 mod fixing;
 mod lagrange;
 mod rounding;
@@ -364,13 +365,20 @@ impl<'a> Search<'a> {
         });
         // The Lagrangian bound first: where it closes the node, the envelope's
         // relaxation (the one branched on) need not be solved.
-        let (skill_bound, skill_prices, skill_earns) = match parent {
+        let dual = match parent {
             Some(p) => self.skill_bound(&decisions, &pairs, p)?,
-            None => (f64::INFINITY, Vec::new(), Vec::new()),
+            None => None,
         };
+        let skill_bound = dual.as_ref().map_or(f64::INFINITY, |d| d.relaxed.bound);
         if self.closes(skill_bound) {
             return None;
         }
+        let mut pairs = pairs;
+        if let Some(dual) = &dual {
+            self.keep_out_below(&decisions, &mut pairs, &dual.relaxed);
+        }
+        let (skill_prices, skill_earns) =
+            dual.map_or((Vec::new(), Vec::new()), |d| (d.lambda, d.relaxed.earns));
         let adjust = self.adjust(&pairs);
         let Ok(solution) =
             transport::solve_columns(inst, &columns, warm.as_deref(), &adjust, &[], NEVER)

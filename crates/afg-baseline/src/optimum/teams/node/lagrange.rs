@@ -50,9 +50,11 @@ pub(super) struct Relaxed {
     pub(super) bound: f64,
     assignment: Assignment,
     pub(super) prices: Vec<f64>,
-    earns: Vec<f64>,
+    pub(super) earns: Vec<f64>,
     /// The relaxation's columns (its tasks' at λ, then the void's).
     pub(super) columns: Vec<Column>,
+    /// λ as the relaxation priced it (zero at tasks that may not earn).
+    pub(super) lambda: Vec<f64>,
 }
 
 impl Search<'_> {
@@ -135,21 +137,22 @@ impl Search<'_> {
             prices: solution.prices,
             earns,
             columns,
+            lambda,
         })
     }
 
-    /// A node's Lagrangian bound and its skill prices (infinite and none where the root
-    /// priced no skills): a few subgradient steps from its parent's prices (or the
-    /// root's), the flow solved from the parent's, every relaxed optimum offered to the
-    /// best found; `None` where no assignment keeps the node's fixed robots.
+    /// A node's Lagrangian dual: a few subgradient steps from its parent's skill prices
+    /// (or the root's), the flow solved from the parent's, every relaxed optimum offered
+    /// to the best found; `Some(None)` where the root priced no skills, `None` where no
+    /// assignment keeps the node's fixed robots.
     pub(super) fn skill_bound(
         &mut self,
         decisions: &[Decision],
         pairs: &[Pair],
         parent: &Node,
-    ) -> Option<(f64, Vec<f64>, Vec<f64>)> {
+    ) -> Option<Option<Dual>> {
         if self.skill_prices.is_empty() {
-            return Some((f64::INFINITY, Vec::new(), Vec::new()));
+            return Some(None);
         }
         let lambda = if parent.skill_prices.is_empty() {
             self.skill_prices.clone()
@@ -161,7 +164,7 @@ impl Search<'_> {
             size: self.skill_step,
         };
         let best = self.subgradient(decisions, pairs, lambda, &parent.prices, steps, &|| false)?;
-        Some((best.bound, best.lambda, best.earns))
+        Some(Some(best))
     }
 
     /// Chooses the skill prices from the root by subgradient steps, keeps those of the
@@ -188,15 +191,16 @@ impl Search<'_> {
             out_of_time,
         ) {
             Some(best) => {
+                let bound = best.relaxed.bound;
                 self.skill_prices = best.lambda;
                 self.skill_step = best.step_size;
-                let lowered = (root.bound - best.bound) / best.bound.abs().max(f64::MIN_POSITIVE);
+                let lowered = (root.bound - bound) / bound.abs().max(f64::MIN_POSITIVE);
                 self.node_rounds = if lowered > BINDING {
                     BINDING_NODE_ROUNDS
                 } else {
                     NODE_ROUNDS
                 };
-                best.bound
+                bound
             }
             None => root.bound,
         }
@@ -222,29 +226,11 @@ impl Search<'_> {
         let mut prices = warm.to_vec();
         let (mut step_size, mut stalled) = (steps.size, 0);
         for _ in 0..steps.rounds {
-            if out_of_time() || best.as_ref().is_some_and(|b| self.closes(b.bound)) {
+            if out_of_time() || best.as_ref().is_some_and(|b| self.closes(b.relaxed.bound)) {
                 break;
             }
             let relaxed = self.relax(decisions, pairs, &lambda, &prices)?;
             self.offer(&relaxed.assignment);
-            if best
-                .as_ref()
-                .is_none_or(|b| relaxed.bound < b.bound - 1e-12 * b.bound.abs().max(1.0))
-            {
-                best = Some(Dual {
-                    bound: relaxed.bound,
-                    lambda: lambda.clone(),
-                    step_size,
-                    earns: relaxed.earns.clone(),
-                });
-                stalled = 0;
-            } else {
-                stalled += 1;
-                if stalled == PATIENCE {
-                    step_size /= 2.0;
-                    stalled = 0;
-                }
-            }
             // The subgradient: each required skill held at each task, less what the
             // task's share of earning asks for.
             let held = inst.skills_held(&relaxed.assignment);
@@ -258,16 +244,34 @@ impl Search<'_> {
                     }
                 }
             }
+            let bound = relaxed.bound;
+            prices.clone_from(&relaxed.prices);
+            if best
+                .as_ref()
+                .is_none_or(|b| bound < b.relaxed.bound - 1e-12 * b.relaxed.bound.abs().max(1.0))
+            {
+                best = Some(Dual {
+                    lambda: lambda.clone(),
+                    step_size,
+                    relaxed,
+                });
+                stalled = 0;
+            } else {
+                stalled += 1;
+                if stalled == PATIENCE {
+                    step_size /= 2.0;
+                    stalled = 0;
+                }
+            }
             let norm: f64 = gradient.iter().map(|g| g * g).sum();
             if norm == 0.0 {
                 break; // λ is optimal: the relaxation meets every skill it prices
             }
-            let target = self.best_welfare - TARGET_BELOW * relaxed.bound.abs();
-            let step = step_size * (relaxed.bound - target) / norm;
+            let target = self.best_welfare - TARGET_BELOW * bound.abs();
+            let step = step_size * (bound - target) / norm;
             for (l, g) in lambda.iter_mut().zip(&gradient) {
                 *l = (*l - step * g).max(0.0);
             }
-            prices = relaxed.prices;
         }
         best
     }
@@ -280,13 +284,12 @@ struct Steps {
     size: f64,
 }
 
-/// The best point of a subgradient search: its bound, its skill prices, and the step
-/// size reached.
-struct Dual {
-    bound: f64,
-    lambda: Vec<f64>,
+/// The best point of a subgradient search: its skill prices, the step size reached,
+/// and the relaxation solved there.
+pub(super) struct Dual {
+    pub(super) lambda: Vec<f64>,
     step_size: f64,
-    earns: Vec<f64>,
+    pub(super) relaxed: Relaxed,
 }
 
 #[cfg(test)]
