@@ -9,6 +9,11 @@
 //! j: the pair is kept out of every node's relaxation, which tightens them all. Each
 //! better assignment found keeps out more.
 //!
+//! **Below a node** (ours). Where skills are priced, every node's Lagrangian relaxation
+//! has a dual of its own, as tight as the node's bound: the pairs it rules out are
+//! kept out of that node and every node below it ([`Search::keep_out_below`]), which
+//! shortens the chains of "this robot may not bring the skill" branches.
+//!
 //! **Tasks ruled out.** The same dual bounds an assignment in which task j earns by
 //! the reduced costs of the team it needs there: at least its threshold of robots, and
 //! for every skill it requires, robots holding that much of it. Where even the cheapest
