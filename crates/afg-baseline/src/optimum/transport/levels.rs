@@ -65,10 +65,22 @@ impl Level {
             level.costs[robot * m + column] += delta;
         }
         if !skill_prices.is_empty() {
+            // `skill_rebates`, summed over the skills the robot holds only (the others
+            // add exact zeros): most robots hold few of them, many none.
+            let s = inst.num_skills();
+            let mut held = Vec::with_capacity(s);
             for i in inst.robot_ids() {
+                held.clear();
+                held.extend((inst.skills(i).iter().enumerate()).filter(|&(_, &q)| q > 0));
+                if held.is_empty() {
+                    continue;
+                }
                 let row = &mut level.costs[i.index() * m..][..inst.num_tasks()];
-                for (cost, rebate) in row.iter_mut().zip(skill_rebates(inst, i, skill_prices)) {
-                    *cost -= rebate;
+                for (cost, prices) in row.iter_mut().zip(skill_prices.chunks_exact(s)) {
+                    *cost -= held
+                        .iter()
+                        .map(|&(t, &q)| prices[t] * f64::from(q))
+                        .sum::<f64>();
                 }
             }
         }
