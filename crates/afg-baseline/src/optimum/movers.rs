@@ -4,6 +4,10 @@
 use dary_heap::QuaternaryHeap as Heap;
 use std::cmp::Ordering;
 
+/// Tasks that at most this many robots ever entered refresh a pair by a scan of them,
+/// not a heap.
+const SCAN: usize = 32;
+
 /// Marks a robot that is in no heap's task (unassigned, or fixed where it is).
 pub(super) const NOWHERE: u32 = u32::MAX;
 
@@ -165,6 +169,26 @@ impl Movers {
                 continue;
             }
             let (m, members) = (self.m, &self.members[j]);
+            if members.len() <= SCAN && self.heaps[pair].is_none() {
+                // Few robots ever entered j: a scan finds the cheapest live one sooner
+                // than a heap is built.
+                let mut top = Entry::NONE;
+                for &r in members
+                    .iter()
+                    .filter(|&&r| task_of[r as usize] as usize == j)
+                {
+                    let row = &costs[r as usize * m..][..m];
+                    let entry = Entry {
+                        key: row[k] - row[j],
+                        robot: r,
+                    };
+                    if entry > top {
+                        top = entry;
+                    }
+                }
+                self.set_top(pair, top);
+                continue;
+            }
             // Those that entered since the heap last took robots (all, for a new heap).
             let fresh = members[self.absorbed[pair]..]
                 .iter()
