@@ -6,7 +6,7 @@ use std::cmp::Ordering;
 use afg_game::{Assignment, Instance, Point, RobotId, TaskId};
 
 use super::super::transport::{
-    self, Column, Interrupted, NEVER, Slots, Solution, Stop, assignment_of,
+    self, Column, Costs, Interrupted, NEVER, Slots, Solution, Stop, assignment_of,
 };
 
 mod branching;
@@ -92,9 +92,12 @@ pub(super) struct Search<'a> {
     instance: &'a Instance,
     thresholds: Vec<usize>,
     /// The pairs that no assignment better than the best found uses: a row-major N × M
-    /// lookup (empty: none yet), and the same pairs listed for the relaxations' costs.
+    /// lookup (empty: none yet).
     forbidden: Vec<bool>,
-    kept_out: Vec<(usize, usize)>,
+    /// Every robot's travel cost at every column, those pairs' raised by
+    /// [`Search::keep_out_cost`]: computed once for every relaxation ([`Costs::travel`];
+    /// empty, computed by each, beyond [`MAX_PAIRS`]).
+    travel: Vec<f64>,
     /// The tasks that earn in no assignment better than the best found (empty: none
     /// known yet), decided unstaffed in every node.
     cannot_earn: Vec<bool>,
@@ -172,7 +175,11 @@ impl<'a> Search<'a> {
             count_cap: count::count_cap(&thresholds, instance.num_robots()),
             thresholds,
             forbidden: Vec::new(),
-            kept_out: Vec::new(),
+            travel: if instance.num_robots() * instance.num_tasks() <= MAX_PAIRS {
+                transport::travel_costs(instance)
+            } else {
+                Vec::new()
+            },
             cannot_earn: Vec::new(),
             root_dual: None,
             // More than any other member or move is worth: a staffed task's first k
@@ -320,7 +327,7 @@ impl<'a> Search<'a> {
         let mut decisions = self.root_decisions();
         let columns = (self.columns(&mut decisions, &[]))
             .expect("the root is feasible: the instance holds every robot");
-        match transport::solve_columns(self.instance, &columns, None, &[], &[], stop) {
+        match transport::solve_columns(self.instance, &columns, None, Costs::default(), stop) {
             Ok(solution) => Ok(self
                 .node_of(decisions, Vec::new(), Vec::new(), &columns, solution)
                 .expect("the root fixes no robot")),
@@ -380,9 +387,13 @@ impl<'a> Search<'a> {
         let (skill_prices, skill_earns) =
             dual.map_or((Vec::new(), Vec::new()), |d| (d.lambda, d.relaxed.earns));
         let adjust = self.adjust(&pairs);
-        let Ok(solution) =
-            transport::solve_columns(inst, &columns, warm.as_deref(), &adjust, &[], NEVER)
-        else {
+        let Ok(solution) = transport::solve_columns(
+            inst,
+            &columns,
+            warm.as_deref(),
+            self.costs(&adjust, &[]),
+            NEVER,
+        ) else {
             unreachable!("never stopped")
         };
         let node = self.node_of(decisions, pairs, skill_prices, &columns, solution)?;
@@ -449,15 +460,28 @@ impl<'a> Search<'a> {
         4.0 * self.bonus
     }
 
-    /// The cost changes that fix robots at tasks or keep them out: `pairs`', and the
-    /// pairs the root's dual rules out.
+    /// The cost changes that fix robots at tasks or keep them out: `pairs`'.
     fn adjust(&self, pairs: &[Pair]) -> Vec<(usize, usize, f64)> {
         let fix = self.keep_out_cost();
         pairs
             .iter()
             .map(|&(i, j, fixed)| (i.index(), j.index(), if fixed { -fix } else { fix }))
-            .chain(self.kept_out.iter().map(|&(i, j)| (i, j, fix)))
             .collect()
+    }
+
+    /// A relaxation's costs: the travel costs with the pairs the root's dual rules out
+    /// kept out, `adjust` (see [`Search::adjust`]), and the skills' worth at
+    /// `skill_prices`.
+    fn costs<'s>(
+        &'s self,
+        adjust: &'s [(usize, usize, f64)],
+        skill_prices: &'s [f64],
+    ) -> Costs<'s> {
+        Costs {
+            travel: (!self.travel.is_empty()).then_some(self.travel.as_slice()),
+            adjust,
+            skill_prices,
+        }
     }
 
     /// Whether robot i may join task j at all (the root's dual does not rule it out).

@@ -50,20 +50,22 @@ impl Level {
         }
     }
 
-    /// The finest level of `inst` with `columns`, each `(robot, column, delta)` of
-    /// `adjust` added to that robot's cost there and its skills' worth at
-    /// `skill_prices` taken off (see [`solve_columns`]).
-    pub(super) fn priced(
-        inst: &Instance,
-        columns: &[Column],
-        adjust: &[(usize, usize, f64)],
-        skill_prices: &[f64],
-    ) -> Self {
-        let mut level = Level::new(inst, columns, 1, 0);
+    /// The finest level of `inst` with `columns` at `costs`.
+    pub(super) fn priced(inst: &Instance, columns: &[Column], costs: Costs) -> Self {
+        let mut level = match costs.travel {
+            Some(travel) => Level {
+                stride: 1,
+                n: inst.num_robots(),
+                columns: columns.to_vec(),
+                costs: travel.to_vec(),
+            },
+            None => Level::new(inst, columns, 1, 0),
+        };
         let m = level.m();
-        for &(robot, column, delta) in adjust {
+        for &(robot, column, delta) in costs.adjust {
             level.costs[robot * m + column] += delta;
         }
+        let skill_prices = costs.skill_prices;
         if !skill_prices.is_empty() {
             // `skill_rebates`, summed over the skills the robot holds only (the others
             // add exact zeros): most robots hold few of them, many none.

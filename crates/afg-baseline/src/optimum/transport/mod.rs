@@ -99,25 +99,41 @@ pub(super) fn task_columns(inst: &Instance) -> Vec<Column> {
     columns
 }
 
-/// Solves the problem of `inst`'s robots and costs with other `columns` (one per task,
+/// How a solve's costs differ from the instance's travel costs `β d(i, j)` (0 at the
+/// void): those costs already computed, with changes of the caller's own (`travel`,
+/// row-major, a row of the columns per robot; `None`: computed anew), each `(robot,
+/// column, delta)` of `adjust` added to that robot's cost there, and each robot's cost
+/// at task j lowered by `Σ_s skill_prices[j S + s] · skills[s]` where `skill_prices` is
+/// not empty.
+#[derive(Clone, Copy, Default)]
+pub(in crate::optimum) struct Costs<'a> {
+    pub travel: Option<&'a [f64]>,
+    pub adjust: &'a [(usize, usize, f64)],
+    pub skill_prices: &'a [f64],
+}
+
+impl Costs<'_> {
+    /// Whether these are the instance's own travel costs.
+    fn unchanged(&self) -> bool {
+        self.travel.is_none() && self.adjust.is_empty() && self.skill_prices.is_empty()
+    }
+}
+
+/// Solves the problem of `inst`'s robots at `costs` with other `columns` (one per task,
 /// then the void's where the instance allows it) exactly, from `warm` prices (or from
-/// its subsamples' where there are none), each `(robot, column, delta)` of `adjust`
-/// added to that robot's cost there, and each robot's cost at task j lowered by
-/// `Σ_s skill_prices[j S + s] · skills[s]` where `skill_prices` is not empty (both
-/// without subsamples); or, where `stop` says so first (a root's solve: neither
-/// `adjust` nor `skill_prices`), where it stood.
+/// its subsamples' where there are none: only at unchanged costs); or, where `stop`
+/// says so first (a root's solve, at unchanged costs), where it stood.
 pub(super) fn solve_columns(
     inst: &Instance,
     columns: &[Column],
     warm: Option<&[f64]>,
-    adjust: &[(usize, usize, f64)],
-    skill_prices: &[f64],
+    costs: Costs,
     stop: Stop,
 ) -> Result<Solution, Interrupted> {
     let coarse;
     let warm = match warm {
         Some(prices) => Some(prices),
-        None if adjust.is_empty() && skill_prices.is_empty() => {
+        None if costs.unchanged() => {
             coarse = coarse_prices(inst, columns, FACTOR, stop);
             coarse.as_deref()
         }
@@ -128,16 +144,18 @@ pub(super) fn solve_columns(
     {
         return Err(interrupted(inst, columns, prices));
     }
-    let flow = Flow::solved(
-        Level::priced(inst, columns, adjust, skill_prices),
-        warm,
-        stop,
-    );
+    let flow = Flow::solved(Level::priced(inst, columns, costs), warm, stop);
     if flow.balanced() {
         Ok(flow.into_solution())
     } else {
         Err(interrupted(inst, columns, &flow.prices()))
     }
+}
+
+/// Every robot's travel cost at every column of `inst` (its tasks', then the void's
+/// where it allows it), row-major: [`Costs::travel`] as the instance has them.
+pub(super) fn travel_costs(inst: &Instance) -> Vec<f64> {
+    levels::cost_matrix(inst, 1, inst.num_tasks() + usize::from(inst.allows_void()))
 }
 
 /// What robot i's skills are worth at each task at `skill_prices` (one per task and

@@ -60,7 +60,7 @@ fn counts_at(level: &Level, prices: &[f64]) -> f64 {
 }
 
 /// The dual bound of `prices` (one per column) on the problem [`solve_columns`](super::solve_columns) solves
-/// with these `columns`, `adjust` and `skill_prices` — `Σ_i max_j (π_j − c_ij) + Σ_j
+/// with these `columns` and `costs` — `Σ_i max_j (π_j − c_ij) + Σ_j
 /// max_n (value_j(n) − n π_j)`, every robot and every column's count chosen apart, an
 /// upper bound on every assignment's welfare there whatever the prices — and every
 /// robot's reduced cost at every column (row-major, a row of `columns.len()` per
@@ -70,10 +70,9 @@ pub(in crate::optimum) fn reduced_costs(
     inst: &Instance,
     columns: &[Column],
     prices: &[f64],
-    adjust: &[(usize, usize, f64)],
-    skill_prices: &[f64],
+    costs: Costs,
 ) -> (f64, Vec<f64>) {
-    let level = Level::priced(inst, columns, adjust, skill_prices);
+    let level = Level::priced(inst, columns, costs);
     let open = |j: &usize| !matches!(columns[*j], Column::Closed);
     let mut reduced = vec![f64::INFINITY; level.costs.len()];
     let mut bound = 0.0;
@@ -129,7 +128,7 @@ mod tests {
                 .generate()
                 .unwrap();
             let columns = task_columns(&inst);
-            let Ok(best) = solve_columns(&inst, &columns, None, &[], &[], NEVER) else {
+            let Ok(best) = solve_columns(&inst, &columns, None, Costs::default(), NEVER) else {
                 unreachable!("never stopped")
             };
             let optimum = welfare(&inst, &columns, &best.task_of);

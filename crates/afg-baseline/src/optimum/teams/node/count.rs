@@ -51,8 +51,7 @@ impl Search<'_> {
             self.instance,
             &columns,
             Some(&root.prices),
-            &adjust,
-            &[],
+            self.costs(&adjust, &[]),
             NEVER,
         ) else {
             unreachable!("never stopped")

@@ -51,8 +51,12 @@ impl Search<'_> {
             return;
         };
         let adjust = self.adjust(&root.pairs);
-        let (bound, reduced) =
-            transport::reduced_costs(inst, &relaxed.columns, &relaxed.prices, &adjust, &lambda);
+        let (bound, reduced) = transport::reduced_costs(
+            inst,
+            &relaxed.columns,
+            &relaxed.prices,
+            self.costs(&adjust, &lambda),
+        );
         self.root_dual = Some(RootDual { bound, reduced });
         self.forbid();
     }
@@ -60,6 +64,10 @@ impl Search<'_> {
     /// Keeps out every pair, and rules out every task, that the root's dual rules out
     /// for the best welfare found.
     pub(super) fn forbid(&mut self) {
+        if self.travel.is_empty() {
+            self.travel = transport::travel_costs(self.instance);
+        }
+        let keep_out = self.keep_out_cost();
         let Some(dual) = &self.root_dual else {
             return;
         };
@@ -74,7 +82,7 @@ impl Search<'_> {
                     && self.closes(dual.bound - dual.reduced[i * width + j])
                 {
                     self.forbidden[i * m + j] = true;
-                    self.kept_out.push((i, j));
+                    self.travel[i * width + j] += keep_out;
                 }
             }
         }
@@ -113,8 +121,7 @@ impl Search<'_> {
             inst,
             &relaxed.columns,
             &relaxed.prices,
-            &adjust,
-            &relaxed.lambda,
+            self.costs(&adjust, &relaxed.lambda),
         );
         let width = reduced.len() / n.max(1);
         let mut listed = self.barred(pairs);
@@ -226,7 +233,7 @@ mod tests {
                 }
             }
             games += 1;
-            fixed += usize::from(!search.kept_out.is_empty());
+            fixed += usize::from(search.forbidden.contains(&true));
         }
         assert!(2 * fixed >= games, "{fixed} of {games}");
     }

@@ -94,9 +94,13 @@ impl Search<'_> {
             columns.push(Column::Void);
         }
         let adjust = self.adjust(pairs);
-        let Ok(solution) =
-            transport::solve_columns(inst, &columns, Some(warm), &adjust, &lambda, NEVER)
-        else {
+        let Ok(solution) = transport::solve_columns(
+            inst,
+            &columns,
+            Some(warm),
+            self.costs(&adjust, &lambda),
+            NEVER,
+        ) else {
             unreachable!("never stopped")
         };
         let assignment = assignment_of(inst, &solution.task_of);
