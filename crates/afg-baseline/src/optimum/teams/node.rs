@@ -6,7 +6,7 @@ use std::cmp::Ordering;
 use afg_game::{Assignment, Instance, Point, RobotId, TaskId};
 
 use super::super::transport::{
-    self, Column, Costs, Interrupted, NEVER, Slots, Solution, Stop, assignment_of,
+    self, Column, Interrupted, NEVER, Slots, Solution, Stop, assignment_of,
 };
 
 mod branching;
@@ -327,7 +327,13 @@ impl<'a> Search<'a> {
         let mut decisions = self.root_decisions();
         let columns = (self.columns(&mut decisions, &[]))
             .expect("the root is feasible: the instance holds every robot");
-        match transport::solve_columns(self.instance, &columns, None, Costs::default(), stop) {
+        match transport::solve_columns(
+            self.instance,
+            &columns,
+            None,
+            transport::Costs::default(),
+            stop,
+        ) {
             Ok(solution) => Ok(self
                 .node_of(decisions, Vec::new(), Vec::new(), &columns, solution)
                 .expect("the root fixes no robot")),
@@ -452,36 +458,6 @@ impl<'a> Search<'a> {
             sizes: assignment.sizes().to_vec(),
             assignment: inst.has_skill_rules().then_some(assignment),
         })
-    }
-
-    /// What keeping a robot out of a task adds to its cost there (fixing it takes as
-    /// much off): more than any assignment's welfare can make up.
-    fn keep_out_cost(&self) -> f64 {
-        4.0 * self.bonus
-    }
-
-    /// The cost changes that fix robots at tasks or keep them out: `pairs`'.
-    fn adjust(&self, pairs: &[Pair]) -> Vec<(usize, usize, f64)> {
-        let fix = self.keep_out_cost();
-        pairs
-            .iter()
-            .map(|&(i, j, fixed)| (i.index(), j.index(), if fixed { -fix } else { fix }))
-            .collect()
-    }
-
-    /// A relaxation's costs: the travel costs with the pairs the root's dual rules out
-    /// kept out, `adjust` (see [`Search::adjust`]), and the skills' worth at
-    /// `skill_prices`.
-    fn costs<'s>(
-        &'s self,
-        adjust: &'s [(usize, usize, f64)],
-        skill_prices: &'s [f64],
-    ) -> Costs<'s> {
-        Costs {
-            travel: (!self.travel.is_empty()).then_some(self.travel.as_slice()),
-            adjust,
-            skill_prices,
-        }
     }
 
     /// Whether robot i may join task j at all (the root's dual does not rule it out).

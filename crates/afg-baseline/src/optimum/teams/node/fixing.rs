@@ -26,7 +26,7 @@
 
 use afg_game::{RobotId, TaskId};
 
-use super::super::super::transport;
+use super::super::super::transport::{self, Costs};
 use super::cover::cheapest_team_closes;
 use super::lagrange::Relaxed;
 use super::{Decision, Node, Pair, Search};
@@ -99,6 +99,36 @@ impl Search<'_> {
             let closes = |cost: f64| self.closes(dual.bound - cost);
             self.cannot_earn[j.index()] =
                 cheapest_team_closes(self.instance, j, self.threshold(j), &reduced, closes);
+        }
+    }
+
+    /// What keeping a robot out of a task adds to its cost there (fixing it takes as
+    /// much off): more than any assignment's welfare can make up.
+    pub(super) fn keep_out_cost(&self) -> f64 {
+        4.0 * self.bonus
+    }
+
+    /// The cost changes that fix robots at tasks or keep them out: `pairs`'.
+    pub(super) fn adjust(&self, pairs: &[Pair]) -> Vec<(usize, usize, f64)> {
+        let fix = self.keep_out_cost();
+        pairs
+            .iter()
+            .map(|&(i, j, fixed)| (i.index(), j.index(), if fixed { -fix } else { fix }))
+            .collect()
+    }
+
+    /// A relaxation's costs: the travel costs with the pairs the root's dual rules out
+    /// kept out, `adjust` (see [`Search::adjust`]), and the skills' worth at
+    /// `skill_prices`.
+    pub(super) fn costs<'s>(
+        &'s self,
+        adjust: &'s [(usize, usize, f64)],
+        skill_prices: &'s [f64],
+    ) -> Costs<'s> {
+        Costs {
+            travel: (!self.travel.is_empty()).then_some(self.travel.as_slice()),
+            adjust,
+            skill_prices,
         }
     }
 
