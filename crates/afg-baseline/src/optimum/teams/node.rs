@@ -95,7 +95,7 @@ pub(super) struct Search<'a> {
     /// lookup (empty: none yet).
     forbidden: Vec<bool>,
     /// Every robot's travel cost at every column, those pairs' raised by
-    /// [`Search::keep_out_cost`]: computed once for every relaxation ([`Costs::travel`];
+    /// [`Search::keep_out_cost`]: computed once for every relaxation ([`transport::Costs::travel`];
     /// empty, computed by each, beyond [`MAX_PAIRS`]).
     travel: Vec<f64>,
     /// The tasks that earn in no assignment better than the best found (empty: none
@@ -345,8 +345,9 @@ impl<'a> Search<'a> {
     }
 
     /// Solves a node's relaxations (warm from its parent's prices): the Lagrangian one
-    /// where the root priced the skills, then the envelope's; offers their assignments
-    /// to the best found, and returns the node with the lower bound; `None` if
+    /// where the root priced the skills (the pairs its dual rules out then kept out of
+    /// the node), then the envelope's; offers their assignments to the best found, and
+    /// returns the node with the lower bound, at most its parent's; `None` if
     /// infeasible or closed by the Lagrangian bound.
     pub(super) fn node(
         &mut self,
