@@ -64,13 +64,13 @@ impl Search<'_> {
     /// Keeps out every pair, and rules out every task, that the root's dual rules out
     /// for the best welfare found.
     pub(super) fn forbid(&mut self) {
+        let Some(dual) = self.root_dual.take() else {
+            return; // the root was not priced (a game too large for it)
+        };
         if self.travel.is_empty() {
             self.travel = transport::travel_costs(self.instance);
         }
         let keep_out = self.keep_out_cost();
-        let Some(dual) = &self.root_dual else {
-            return;
-        };
         let (n, m) = (self.instance.num_robots(), self.instance.num_tasks());
         let width = dual.reduced.len() / n.max(1);
         if self.forbidden.is_empty() {
@@ -100,6 +100,7 @@ impl Search<'_> {
             self.cannot_earn[j.index()] =
                 cheapest_team_closes(self.instance, j, self.threshold(j), &reduced, closes);
         }
+        self.root_dual = Some(dual);
     }
 
     /// What keeping a robot out of a task adds to its cost there (fixing it takes as
