@@ -134,9 +134,9 @@ impl Search<'_> {
     }
 
     /// Keeps out of a node, and so of every node below it, each pair that the node's
-    /// Lagrangian relaxation (`relaxed`, its dual) rules out for the best found, as the root's dual does for
-    /// every node: any assignment of the node is worth at most the relaxation's bound
-    /// less its robots' reduced costs there (the bonuses of fixed robots and staffed
+    /// Lagrangian relaxation (`relaxed`, its dual) rules out for the best found, as the
+    /// root's dual does for every node: any assignment of the node is worth at most the
+    /// relaxation's bound less its robots' reduced costs there (the bonuses of fixed robots and staffed
     /// tasks are the same for all of them). Robots fixed by the node, pairs already
     /// out, and tasks decided unstaffed are left as they are.
     pub(super) fn keep_out_below(
