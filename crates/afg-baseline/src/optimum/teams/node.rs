@@ -14,6 +14,7 @@ mod count;
 mod cover;
 mod fixing;
 mod lagrange;
+mod robot_prices;
 mod rounding;
 mod staffing;
 pub(super) use branching::Branch;
@@ -51,6 +52,8 @@ pub(super) struct Node {
     /// How much of each task's team the Lagrangian relaxation at those prices holds
     /// (empty: none solved), which the branching reads first.
     skill_earns: Vec<f64>,
+    /// Its robot-priced bound's prices, where its children's start (`None`: none).
+    robot_prices: Option<robot_prices::RobotPrices>,
     pub(super) sizes: Vec<usize>,
     assignment: Option<Assignment>,
 }
@@ -107,6 +110,8 @@ pub(super) struct Search<'a> {
     skill_step: f64,
     /// Subgradient steps at every node but the root (module `lagrange`).
     node_rounds: usize,
+    /// Which nodes get the robot-priced bound (module `robot_prices`).
+    robot_gate: robot_prices::Gate,
     /// The price of a task's earning in the relaxations (module `count`; 0: none).
     count_price: f64,
     /// The most tasks that can earn at once ([`count::count_cap`]).
@@ -136,27 +141,11 @@ impl<'a> Search<'a> {
     fn with_thresholds(instance: &'a Instance, thresholds: Vec<usize>) -> Self {
         // Every robot lies in the box of their positions: no distance to a task
         // exceeds the one to the box's farthest corner (O(N + M), not N M).
-        let far = Point {
-            x: f64::INFINITY,
-            y: f64::INFINITY,
-        };
-        let near = Point {
-            x: -far.x,
-            y: -far.y,
-        };
-        let (lo, hi) = instance.robots().iter().fold((far, near), |(lo, hi), p| {
-            let lo = Point {
-                x: lo.x.min(p.x),
-                y: lo.y.min(p.y),
-            };
-            (
-                lo,
-                Point {
-                    x: hi.x.max(p.x),
-                    y: hi.y.max(p.y),
-                },
-            )
-        });
+        let mut lo = Point::new(f64::INFINITY, f64::INFINITY);
+        let mut hi = Point::new(-lo.x, -lo.y);
+        for p in instance.robots() {
+            (lo.x, lo.y, hi.x, hi.y) = (lo.x.min(p.x), lo.y.min(p.y), hi.x.max(p.x), hi.y.max(p.y));
+        }
         let max_cost = (instance.tasks().iter())
             .filter(|_| lo.x <= hi.x) // a game with robots
             .map(|t| {
@@ -188,6 +177,7 @@ impl<'a> Search<'a> {
             skill_prices: Vec::new(),
             skill_step: 0.0,
             node_rounds: 0,
+            robot_gate: robot_prices::Gate::default(),
             count_price: 0.0,
             best: Assignment::unassigned(instance.num_robots(), instance.num_tasks()),
             best_welfare: f64::NEG_INFINITY,
@@ -391,6 +381,11 @@ impl<'a> Search<'a> {
         if let Some(dual) = &dual {
             self.keep_out_below(&decisions, &mut pairs, &dual.relaxed);
         }
+        let robot_prices = match &dual {
+            Some(dual) => self.price_robots(&decisions, &pairs, &dual.relaxed, parent)?,
+            None => None,
+        };
+        let robot_bound = robot_prices.as_ref().map_or(f64::INFINITY, |r| r.bound);
         let (skill_prices, skill_earns) =
             dual.map_or((Vec::new(), Vec::new()), |d| (d.lambda, d.relaxed.earns));
         let adjust = self.adjust(&pairs);
@@ -407,8 +402,9 @@ impl<'a> Search<'a> {
         // A child's assignments are its parent's too: its bound is at most the parent's.
         let inherited = parent.map_or(f64::INFINITY, |p| p.bound);
         Some(Node {
-            bound: node.bound.min(skill_bound).min(inherited),
+            bound: node.bound.min(skill_bound).min(robot_bound).min(inherited),
             skill_earns,
+            robot_prices,
             ..node
         })
     }
@@ -455,6 +451,7 @@ impl<'a> Search<'a> {
             bound,
             skill_prices,
             skill_earns: Vec::new(),
+            robot_prices: None,
             prices,
             sizes: assignment.sizes().to_vec(),
             assignment: inst.has_skill_rules().then_some(assignment),
