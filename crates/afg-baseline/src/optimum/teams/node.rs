@@ -1,5 +1,7 @@
 //! The branch and bound's nodes: what a node decides, its relaxation (a concave game
-//! for the transport solver), and how it branches.
+//! for the transport solver), and how it branches. A skill game's node has two more
+//! bounds, the lowest kept: the skills priced (module `lagrange`) and, in long
+//! searches, the robots priced (module `robot_prices`).
 
 use std::cmp::Ordering;
 

@@ -1,4 +1,4 @@
-//! A second bound at a node (ours): the robots' one-task rule priced, and every task's
+//! A third bound at a node (ours): the robots' one-task rule priced, and every task's
 //! best team on its own.
 //!
 //! Given a price u_i on each robot, every task j picks the team S worth most to it
@@ -8,17 +8,17 @@
 //! one team, so its price is paid once and returned once. This is the Lagrangian
 //! bound of the model over whole teams (one column per team, as column generation
 //! solves it), and where skills bind it is far tighter than the transport relaxation
-//! with the skills priced, which lets a team hold a fraction of a skill through a
-//! robot's price: on `sparse-skills` seed 7 (100 × 20) the root's is 188.12 against
-//! 188.68 (the optimum 187.39), about HiGHS's root bound after its cuts.
+//! with the skills priced, which lets a robot bring a fraction of its skills to each
+//! of two teams: on `sparse-skills` seed 7 (100 × 20) 48 steps take the root's from
+//! 188.67 to 188.15 (the optimum is 187.39; HiGHS's root bound after its cuts 188.13).
 //!
-//! A task's best team is a covering knapsack: a dynamic programme over its candidates
-//! that hold a skill it requires, its state the units met of each skill and the members
-//! taken, then the cheapest of its other candidates as further members. The prices
-//! start at the node's Lagrangian relaxation's robot potentials (where this bound is at
-//! most that one's) or its parent's, and move by subgradient steps: a robot in no team
-//! is priced lower, one in several higher. Where every robot is in exactly one team
-//! the teams are an assignment worth the bound, offered to the best found.
+//! A task's best team is a covering knapsack (module `team`). The prices start at the
+//! node's Lagrangian relaxation's robot potentials (where this bound is at most that
+//! one's) or at its parent's, and move by subgradient steps: a robot in no team is
+//! priced lower, one in several higher. Where every robot is in exactly one team the
+//! teams are an assignment worth the bound, offered to the best found. A node pays a
+//! programme per task per step, so only nodes of searches that run long, whose
+//! Lagrangian bound is near the best found, are priced ([`Gate`]).
 
 use afg_game::{Assignment, RobotId};
 
