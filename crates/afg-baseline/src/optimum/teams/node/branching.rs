@@ -83,13 +83,13 @@ impl Search<'_> {
             .max_by(|x, y| x.1.total_cmp(&y.1))?;
         let row = &held[j.index() * s..][..s];
         let short = (0..s).find(|&k| row[k] < u64::from(inst.requires(j)[k]))?;
-        let decided = |i: RobotId| {
-            node.pairs.iter().any(|&(r, _, fixed)| r == i && fixed)
-                || node.pairs.iter().any(|&(r, t, _)| r == i && t == j)
-        };
+        // A robot the node fixed somewhere, or kept out of j, is decided.
+        let barred = self.barred(&node.pairs);
+        let m = inst.num_tasks();
         let robot = inst
             .robot_ids()
-            .filter(|&i| inst.skills(i)[short] > 0 && a.task_of(i) != Some(j) && !decided(i))
+            .filter(|&i| inst.skills(i)[short] > 0 && a.task_of(i) != Some(j))
+            .filter(|&i| !barred[i.index() * m + j.index()])
             .filter(|&i| self.allowed(i, j))
             .min_by(|&x, &y| inst.cost(x, j).total_cmp(&inst.cost(y, j)));
         // Where every robot that could bring the skill was ruled out since the node was
