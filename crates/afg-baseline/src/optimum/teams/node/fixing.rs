@@ -205,10 +205,10 @@ impl Search<'_> {
 
 #[cfg(test)]
 mod tests {
-    use afg_game::{Assignment, Instance, TaskId};
+    use afg_game::{Assignment, Instance};
 
-    use super::super::lagrange::tests::{every_assignment, skill_knobs};
-    use super::super::{Decision, Search};
+    use super::super::Search;
+    use super::super::lagrange::tests::{every_assignment, in_region, skill_knobs};
 
     /// Every assignment of `inst`, its optimum, and its search with the root priced and
     /// the pairs and tasks ruled out for a best found `below` the optimum (a share).
@@ -320,7 +320,6 @@ mod tests {
             if let Some(branch) = search.branch(&root) {
                 regions.extend(search.children(&root, branch));
             }
-            let s = inst.num_skills();
             let tol = 1e-9 * optimum.abs().max(1.0);
             for (decisions, pairs) in regions {
                 let Some(Some(dual)) = search.skill_bound(&decisions, &pairs, &root) else {
@@ -331,16 +330,7 @@ mod tests {
                 search.keep_out_below(&decisions, &mut after, &dual.relaxed);
                 let out = &after[pairs.len()..];
                 kept += out.len();
-                let of_node = |a: &&Assignment| {
-                    let held = inst.skills_held(a);
-                    let earns = |j: TaskId| inst.earns(j, a.size(j), &held[j.index() * s..][..s]);
-                    (pairs.iter()).all(|&(i, j, fixed)| (a.task_of(i) == Some(j)) == fixed)
-                        && inst.task_ids().all(|j| match decisions[j.index()] {
-                            Decision::Staffed => earns(j),
-                            Decision::Unstaffed => !earns(j),
-                            Decision::Open => true,
-                        })
-                };
+                let of_node = |a: &&Assignment| in_region(&inst, &decisions, &pairs, a);
                 for a in assignments.iter().filter(of_node) {
                     if inst.welfare(a) > best + tol {
                         for &(i, j, _) in out {

@@ -301,7 +301,7 @@ pub(super) mod tests {
     use afg_game::{Assignment, GeneratorKnobs, Instance, TaskId};
     use proptest::prelude::*;
 
-    use super::super::Search;
+    use super::super::{Decision, Pair, Search};
 
     /// Every assignment of `inst` (with the void where allowed) that respects its
     /// capacities.
@@ -317,6 +317,25 @@ pub(super) mod tests {
                 .collect();
             Assignment::from_tasks(inst, tasks).ok()
         })
+    }
+
+    /// Whether assignment `a` lies in the region of a node that decided `decisions`
+    /// and fixed or kept out `pairs`.
+    pub(in super::super) fn in_region(
+        inst: &Instance,
+        decisions: &[Decision],
+        pairs: &[Pair],
+        a: &Assignment,
+    ) -> bool {
+        let s = inst.num_skills();
+        let held = inst.skills_held(a);
+        let earns = |j: TaskId| inst.earns(j, a.size(j), &held[j.index() * s..][..s]);
+        (pairs.iter()).all(|&(i, j, fixed)| (a.task_of(i) == Some(j)) == fixed)
+            && inst.task_ids().all(|j| match decisions[j.index()] {
+                Decision::Staffed => earns(j),
+                Decision::Unstaffed => !earns(j),
+                Decision::Open => true,
+            })
     }
 
     /// The best welfare over every assignment.

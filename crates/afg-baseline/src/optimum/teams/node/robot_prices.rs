@@ -230,10 +230,10 @@ impl Search<'_> {
 mod tests {
     use std::collections::BinaryHeap;
 
-    use afg_game::{Assignment, Family, Instance, TaskId};
+    use afg_game::{Assignment, Family, Instance};
 
-    use super::super::lagrange::tests::{brute_force, every_assignment, skill_knobs};
-    use super::super::{Decision, Search};
+    use super::super::Search;
+    use super::super::lagrange::tests::{brute_force, every_assignment, in_region, skill_knobs};
     use super::{Gate, RobotPrices};
 
     /// A search that robot-prices every node from its first.
@@ -258,7 +258,6 @@ mod tests {
             let inst = (skill_knobs(0.4, (0, 2)).config(6, 3, seed).unwrap())
                 .generate()
                 .unwrap();
-            let s = inst.num_skills();
             let assignments: Vec<Assignment> = every_assignment(&inst).collect();
             let optimum = brute_force(&inst);
             let tol = 1e-9 * optimum.abs().max(1.0);
@@ -274,16 +273,7 @@ mod tests {
                 regions.extend(search.children(&root, branch));
             }
             for (k, (decisions, pairs)) in regions.into_iter().enumerate() {
-                let of_node = |a: &&Assignment| {
-                    let held = inst.skills_held(a);
-                    let earns = |j: TaskId| inst.earns(j, a.size(j), &held[j.index() * s..][..s]);
-                    (pairs.iter()).all(|&(i, j, fixed)| (a.task_of(i) == Some(j)) == fixed)
-                        && inst.task_ids().all(|j| match decisions[j.index()] {
-                            Decision::Staffed => earns(j),
-                            Decision::Unstaffed => !earns(j),
-                            Decision::Open => true,
-                        })
-                };
+                let of_node = |a: &&Assignment| in_region(&inst, &decisions, &pairs, a);
                 let region = (assignments.iter().filter(of_node))
                     .map(|a| inst.welfare(a))
                     .fold(f64::NEG_INFINITY, f64::max);
