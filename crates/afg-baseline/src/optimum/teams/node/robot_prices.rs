@@ -135,17 +135,22 @@ impl Search<'_> {
     }
 
     /// Robot i's potential in a node's Lagrangian relaxation: its best gain over the
-    /// tasks it is free to join (`barred`: [`Search::barred`]), where the robot-priced
-    /// bound is at most that relaxation's.
+    /// tasks it is free to join (`barred`: [`Search::barred`]) and the void where it is
+    /// allowed, where the robot-priced bound is at most that relaxation's.
     fn robot_potentials(&self, relaxed: &Relaxed, barred: &[bool]) -> Vec<f64> {
         let inst = self.instance;
         let m = inst.num_tasks();
+        let void = if inst.allows_void() {
+            0.0
+        } else {
+            f64::NEG_INFINITY
+        };
         inst.robot_ids()
             .map(|i| {
                 (inst.task_ids().zip(skill_rebates(inst, i, &relaxed.lambda)))
                     .filter(|&(j, _)| self.allowed(i, j) && !barred[i.index() * m + j.index()])
                     .map(|(j, rebate)| rebate - inst.cost(i, j) + relaxed.prices[j.index()])
-                    .fold(f64::NEG_INFINITY, f64::max)
+                    .fold(void, f64::max)
             })
             .collect()
     }
@@ -230,7 +235,7 @@ impl Search<'_> {
 mod tests {
     use std::collections::BinaryHeap;
 
-    use afg_game::{Assignment, Family, Instance};
+    use afg_game::{Assignment, Family, GeneratorKnobs, Instance, Point, Task};
 
     use super::super::Search;
     use super::super::lagrange::tests::{brute_force, every_assignment, in_region, skill_knobs};
@@ -248,16 +253,19 @@ mod tests {
 
     /// At any robot prices the bound holds every assignment of the node's region (the
     /// root's and its children's, on small skill games whose best found is set below
-    /// the optimum): it closes only nodes with nothing better, and from the Lagrangian
+    /// the optimum, half of them with the void): it closes only nodes with nothing better, and from the Lagrangian
     /// relaxation's robot potentials it is never above that relaxation's bound and
     /// lower in some.
     #[test]
     fn every_robot_price_bounds_the_node() {
         let (mut priced, mut lower) = (0, 0);
         for seed in 0..40 {
-            let inst = (skill_knobs(0.4, (0, 2)).config(6, 3, seed).unwrap())
-                .generate()
-                .unwrap();
+            // Every other game lets robots stay out (the void).
+            let knobs = GeneratorKnobs {
+                allow_void: seed % 2 == 1,
+                ..skill_knobs(0.4, (0, 2))
+            };
+            let inst = knobs.config(6, 3, seed).unwrap().generate().unwrap();
             let assignments: Vec<Assignment> = every_assignment(&inst).collect();
             let optimum = brute_force(&inst);
             let tol = 1e-9 * optimum.abs().max(1.0);
@@ -317,6 +325,32 @@ mod tests {
         assert!(priced >= 20 && lower >= 5, "{lower} lower of {priced}");
     }
 
+    /// Where robots may stay out, a robot's potential is never below 0 (staying out
+    /// gains it nothing, and its price must not be negative for the bound to hold): two
+    /// robots 3 away from the one task, which pays at most 1, start at exactly 0.
+    #[test]
+    fn a_robot_free_to_stay_out_starts_at_zero() {
+        let task = Task {
+            position: Point::new(3.0, 0.0),
+            reward: 1.0,
+            eps: 2.0,
+            capacity: None,
+        };
+        let robots = vec![Point::new(0.0, 0.0); 2];
+        let inst = Instance::with_void(robots, vec![task], 1.0)
+            .unwrap()
+            .with_teams(vec![1], &[vec![1], vec![0]], &[vec![1]])
+            .unwrap();
+        let mut search = robot_priced(&inst);
+        let root = search
+            .node(search.root_decisions(), Vec::new(), None)
+            .unwrap();
+        let lambda = vec![0.5; inst.num_skills()];
+        let relaxed = (search.relax(&root.decisions, &root.pairs, &lambda, &root.prices)).unwrap();
+        let barred = search.barred(&root.pairs);
+        assert_eq!(search.robot_potentials(&relaxed, &barred), vec![0.0, 0.0]);
+    }
+
     /// Where skills bind, the steps take the bound well below the skill-priced
     /// relaxation's: at the root of `sparse-skills` seed 7 (100 × 20; its optimum,
     /// 187.388, as the best found), from 188.67 to below 188.25 in six calls of
@@ -352,13 +386,15 @@ mod tests {
     }
 
     /// With every node robot-priced, the search still ends at the optimum: brute force
-    /// on small skill games.
+    /// on small skill games, half of them with the void.
     #[test]
     fn a_robot_priced_search_finds_the_optimum() {
         for seed in 0..60 {
-            let inst = (skill_knobs(0.4, (0, 2)).config(6, 3, seed).unwrap())
-                .generate()
-                .unwrap();
+            let knobs = GeneratorKnobs {
+                allow_void: seed % 2 == 1,
+                ..skill_knobs(0.4, (0, 2))
+            };
+            let inst = knobs.config(6, 3, seed).unwrap().generate().unwrap();
             let optimum = brute_force(&inst);
             let mut search = robot_priced(&inst);
             let mut root = search
