@@ -5,7 +5,7 @@ use afg_game::{Instance, RobotId, TaskId};
 
 /// The most cells (states × counts × candidates) a task's programme may fill: a node
 /// where one would fill more is not robot-priced.
-const MAX_WORK: usize = 1 << 22;
+const MAX_WORK: usize = 1 << 20;
 
 /// What a task's team must be at a node.
 #[derive(Clone, Copy, Debug, PartialEq)]
