@@ -38,8 +38,10 @@ const TARGET_BELOW: f64 = 1.5;
 /// before it would pay)...
 const AFTER_NODES: u64 = 200;
 /// ...at nodes whose Lagrangian bound is within this share of the best found (it
-/// closes about a third of a percent, not more).
+/// closes about a third of a percent, not more)...
 const WITHIN: f64 = 0.002;
+/// ...where no task's programme fills more cells (states × counts × candidates).
+const MAX_WORK: usize = 1 << 20;
 /// Steps without a lower bound before the step size halves.
 const PATIENCE: usize = 3;
 
@@ -53,11 +55,13 @@ pub(super) struct RobotPrices {
 }
 
 /// Which nodes are robot-priced: once the search has solved `after_nodes` nodes, those
-/// whose Lagrangian bound is within `within` (a share) of the best found.
+/// whose Lagrangian bound is within `within` (a share) of the best found, where no
+/// task's programme fills more than `max_work` cells.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Gate {
     pub(super) after_nodes: u64,
     pub(super) within: f64,
+    pub(super) max_work: usize,
 }
 
 impl Default for Gate {
@@ -65,6 +69,7 @@ impl Default for Gate {
         Gate {
             after_nodes: AFTER_NODES,
             within: WITHIN,
+            max_work: MAX_WORK,
         }
     }
 }
@@ -123,7 +128,7 @@ impl Search<'_> {
                 }
             })
             .collect();
-        if !tasks.iter().all(|at| at.fits(inst)) {
+        if !tasks.iter().all(|at| at.fits(inst, gate.max_work)) {
             return Some(None);
         }
         let (start, step) = match parent.and_then(|p| p.robot_prices.as_ref()) {
@@ -247,6 +252,7 @@ mod tests {
         search.robot_gate = Gate {
             after_nodes: 0,
             within: f64::INFINITY,
+            max_work: usize::MAX,
         };
         search
     }

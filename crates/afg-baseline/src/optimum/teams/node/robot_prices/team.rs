@@ -3,10 +3,6 @@
 
 use afg_game::{Instance, RobotId, TaskId};
 
-/// The most cells (states × counts × candidates) a task's programme may fill: a node
-/// where one would fill more is not robot-priced.
-const MAX_WORK: usize = 1 << 20;
-
 /// What a task's team must be at a node.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) enum Role {
@@ -38,12 +34,13 @@ impl TaskAt<'_> {
             .collect()
     }
 
-    /// Whether its programme fits [`MAX_WORK`] (and its states a `u16`).
-    pub(super) fn fits(&self, inst: &Instance) -> bool {
+    /// Whether its programme fills at most `max_work` cells (states × counts ×
+    /// candidates), and its states fit a `u16`.
+    pub(super) fn fits(&self, inst: &Instance, max_work: usize) -> bool {
         let states = (self.needs(inst).iter()).try_fold(1usize, |n, &(_, r)| n.checked_mul(r + 1));
         let robots = self.candidates.len() + self.fixed.len() + 1;
         states.is_some_and(|s| {
-            s <= usize::from(u16::MAX) && s.saturating_mul(robots * robots) <= MAX_WORK
+            s <= usize::from(u16::MAX) && s.saturating_mul(robots * robots) <= max_work
         })
     }
 }
