@@ -85,12 +85,10 @@ impl Search<'_> {
         let short = (0..s).find(|&k| row[k] < u64::from(inst.requires(j)[k]))?;
         // A robot the node fixed somewhere, or kept out of j, is decided.
         let barred = self.barred(&node.pairs);
-        let m = inst.num_tasks();
         let robot = inst
             .robot_ids()
             .filter(|&i| inst.skills(i)[short] > 0 && a.task_of(i) != Some(j))
-            .filter(|&i| !barred[i.index() * m + j.index()])
-            .filter(|&i| self.allowed(i, j))
+            .filter(|&i| self.free(&barred, i, j))
             .min_by(|&x, &y| inst.cost(x, j).total_cmp(&inst.cost(y, j)));
         // Where every robot that could bring the skill was ruled out since the node was
         // made (a better assignment found), the task is staffed (no longer possible) or

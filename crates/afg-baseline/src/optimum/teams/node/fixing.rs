@@ -177,15 +177,19 @@ impl Search<'_> {
     /// join it: allowed there, and not `barred` (see [`Search::barred`]).
     pub(super) fn skills_reachable(&self, j: TaskId, barred: &[bool]) -> bool {
         let inst = self.instance;
-        let m = inst.num_tasks();
         let mut held = vec![0u64; inst.num_skills()];
-        let free = |i: &RobotId| self.allowed(*i, j) && !barred[i.index() * m + j.index()];
-        for i in inst.robot_ids().filter(free) {
+        for i in inst.robot_ids().filter(|&i| self.free(barred, i, j)) {
             for (h, &q) in held.iter_mut().zip(inst.skills(i)) {
                 *h += u64::from(q);
             }
         }
         inst.skills_met(j, &held)
+    }
+
+    /// Whether robot i is free to join task j at a node: allowed there, and not
+    /// `barred` (see [`Search::barred`]).
+    pub(super) fn free(&self, barred: &[bool], i: RobotId, j: TaskId) -> bool {
+        self.allowed(i, j) && !barred[i.index() * self.instance.num_tasks() + j.index()]
     }
 
     /// Where `pairs` bar robot i from task j (fixed elsewhere, or kept out of it):

@@ -96,10 +96,8 @@ impl Search<'_> {
         let barred = self.barred(pairs);
         let mut candidates = vec![Vec::new(); m];
         for i in inst.robot_ids() {
-            for j in inst.task_ids() {
-                if self.allowed(i, j) && !barred[i.index() * m + j.index()] {
-                    candidates[j.index()].push(i.index());
-                }
+            for j in inst.task_ids().filter(|&j| self.free(&barred, i, j)) {
+                candidates[j.index()].push(i.index());
             }
         }
         let mut fixed = vec![Vec::new(); m];
@@ -120,6 +118,7 @@ impl Search<'_> {
                 };
                 TaskAt {
                     j,
+                    needs: team::skill_needs(inst, j),
                     threshold: self.threshold(j),
                     capacity,
                     role,
@@ -128,7 +127,7 @@ impl Search<'_> {
                 }
             })
             .collect();
-        if !tasks.iter().all(|at| at.fits(inst, gate.max_work)) {
+        if !tasks.iter().all(|at| at.fits(gate.max_work)) {
             return Some(None);
         }
         let (start, step) = match parent.and_then(|p| p.robot_prices.as_ref()) {
@@ -144,7 +143,6 @@ impl Search<'_> {
     /// allowed, where the robot-priced bound is at most that relaxation's.
     fn robot_potentials(&self, relaxed: &Relaxed, barred: &[bool]) -> Vec<f64> {
         let inst = self.instance;
-        let m = inst.num_tasks();
         let void = if inst.allows_void() {
             0.0
         } else {
@@ -153,7 +151,7 @@ impl Search<'_> {
         inst.robot_ids()
             .map(|i| {
                 (inst.task_ids().zip(skill_rebates(inst, i, &relaxed.lambda)))
-                    .filter(|&(j, _)| self.allowed(i, j) && !barred[i.index() * m + j.index()])
+                    .filter(|&(j, _)| self.free(barred, i, j))
                     .map(|(j, rebate)| rebate - inst.cost(i, j) + relaxed.prices[j.index()])
                     .fold(void, f64::max)
             })

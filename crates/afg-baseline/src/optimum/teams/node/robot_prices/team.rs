@@ -14,10 +14,11 @@ pub(super) enum Role {
     Idle { room: usize },
 }
 
-/// One task at a node: its threshold, its role, the robots free to join it and those
-/// the node fixed there.
+/// One task at a node: its skill needs ([`skill_needs`]), its threshold, its role, the
+/// robots free to join it and those the node fixed there.
 pub(super) struct TaskAt<'c> {
     pub(super) j: TaskId,
+    pub(super) needs: Vec<(usize, usize)>,
     pub(super) threshold: usize,
     pub(super) capacity: usize,
     pub(super) role: Role,
@@ -25,19 +26,19 @@ pub(super) struct TaskAt<'c> {
     pub(super) fixed: &'c [usize],
 }
 
-impl TaskAt<'_> {
-    /// How much of each skill it requires, where it requires some.
-    fn needs(&self, inst: &Instance) -> Vec<(usize, usize)> {
-        (inst.requires(self.j).iter().enumerate())
-            .filter(|&(_, &r)| r > 0)
-            .map(|(s, &r)| (s, r as usize))
-            .collect()
-    }
+/// How much of each skill task j requires (skill, units), where it requires some.
+pub(super) fn skill_needs(inst: &Instance, j: TaskId) -> Vec<(usize, usize)> {
+    (inst.requires(j).iter().enumerate())
+        .filter(|&(_, &r)| r > 0)
+        .map(|(s, &r)| (s, r as usize))
+        .collect()
+}
 
+impl TaskAt<'_> {
     /// Whether its programme fills at most `max_work` cells (states × counts ×
     /// candidates), and its states fit a `u16`.
-    pub(super) fn fits(&self, inst: &Instance, max_work: usize) -> bool {
-        let states = (self.needs(inst).iter()).try_fold(1usize, |n, &(_, r)| n.checked_mul(r + 1));
+    pub(super) fn fits(&self, max_work: usize) -> bool {
+        let states = (self.needs.iter()).try_fold(1usize, |n, &(_, r)| n.checked_mul(r + 1));
         let robots = self.candidates.len() + self.fixed.len() + 1;
         states.is_some_and(|s| {
             s <= usize::from(u16::MAX) && s.saturating_mul(robots * robots) <= max_work
@@ -120,7 +121,7 @@ fn earning_team(
     dp: &mut Programme,
     members: &mut Vec<usize>,
 ) -> f64 {
-    let needs = at.needs(inst);
+    let needs = &at.needs;
     let value = inst.value_function(at.j);
     let holds = |i: usize| {
         let q = inst.skills(RobotId(i as u32));
@@ -149,7 +150,7 @@ fn earning_team(
         .min(dp.layers.len())
         .min(core + cheap + at.fixed.len()))
         + 1;
-    fill(inst, &needs, states, counts, optional, w, dp);
+    fill(inst, needs, states, counts, optional, w, dp);
     // The covering members (c of them), then the f cheapest other candidates.
     let full = states - 1;
     let mut best = (f64::NEG_INFINITY, 0, 0);
@@ -237,7 +238,7 @@ mod tests {
     use proptest::prelude::*;
 
     use super::super::super::lagrange::tests::skill_knobs;
-    use super::{Programme, Role, TaskAt, best_team};
+    use super::{Programme, Role, TaskAt, best_team, skill_needs};
 
     /// What team `members` is worth to task `at` at weights `w`, by the rules
     /// [`best_team`] maximises (minus infinity where the task may not hold it).
@@ -288,7 +289,8 @@ mod tests {
             let candidates: Vec<usize> = (0..8).filter(|&i| chosen[i] >= 2).collect();
             let fixed: Vec<usize> = (0..8).filter(|&i| chosen[i] == 1).collect();
             let role = [Role::Earn, Role::Either { capacity }, Role::Idle { room: capacity / 2 }][role];
-            let at = TaskAt { j: TaskId(0), threshold, capacity, role, candidates: &candidates, fixed: &fixed };
+            let needs = skill_needs(&inst, TaskId(0));
+            let at = TaskAt { j: TaskId(0), needs, threshold, capacity, role, candidates: &candidates, fixed: &fixed };
             let mut best = f64::NEG_INFINITY;
             for subset in 0u32..1 << candidates.len() {
                 let mut members = fixed.clone();
