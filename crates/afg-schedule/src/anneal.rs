@@ -22,6 +22,10 @@ pub(crate) struct Plan<'a> {
     /// Waiting beyond `max_wait` before each position.
     overwait: Vec<f64>,
     cost: Cost,
+    /// The fleets and waiting of the last [`Plan::trial`], where it wrote them: they
+    /// become the plan's own when it is accepted.
+    trial_fleets: Vec<Fleet>,
+    trial_overwait: Vec<f64>,
     ready: Vec<(f64, usize)>,
     team: Vec<usize>,
 }
@@ -62,12 +66,14 @@ impl<'a> Plan<'a> {
             decoder,
             before: vec![decoder.start(); order.len() + 1],
             overwait: vec![0.0; order.len() + 1],
+            trial_fleets: vec![decoder.start(); order.len() + 1],
+            trial_overwait: vec![0.0; order.len() + 1],
             order,
             cost: Cost::default(),
             ready: Vec::new(),
             team: Vec::new(),
         };
-        plan.cost = plan.replay(0, usize::MAX, true);
+        plan.replay_all();
         plan
     }
 
@@ -76,37 +82,67 @@ impl<'a> Plan<'a> {
         self.cost
     }
 
-    /// Decodes from position `from` on; with `keep`, stores the fleets it passes. Past
-    /// `changed` (the last position a move touched), a fleet equal to the plan's own at
-    /// the same place means the rest of the plan is as it was: the replay stops there
-    /// and the cost is the plan's. `changed` at or past the end replays it all.
-    fn replay(&mut self, from: usize, changed: usize, keep: bool) -> Cost {
-        let mut fleet = self.before[from].clone();
-        let mut overwait = self.overwait[from];
+    /// Decodes the order from position `from` on, the plan's fleets kept as they are
+    /// and the ones it passes written to the trial's. Past `changed` (the last position
+    /// a move touched), a fleet equal to the plan's own at the same place means the rest
+    /// of the plan is as it was: the decode stops there and the cost is the plan's.
+    /// `changed` at or past the end decodes it all.
+    fn trial(&mut self, from: usize, changed: usize) -> Trial {
+        self.trial_fleets[from].clone_from(&self.before[from]);
+        self.trial_overwait[from] = self.overwait[from];
         for p in from..self.order.len() {
             let j = self.order[p];
+            let (done, next) = self.trial_fleets.split_at_mut(p + 1);
+            let (fleet, after) = (&done[p], &mut next[0]);
             let (start, over) = self
                 .decoder
-                .staff(&fleet, j, &mut self.ready, &mut self.team);
-            overwait += over;
-            self.decoder.assign(&mut fleet, j, start, &self.team);
-            let unchanged =
-                p == changed && overwait == self.overwait[p + 1] && fleet == self.before[p + 1];
-            if unchanged {
-                return self.cost;
-            }
-            if keep {
-                self.before[p + 1].clone_from(&fleet);
-                self.overwait[p + 1] = overwait;
+                .staff(fleet, j, &mut self.ready, &mut self.team);
+            after.clone_from(fleet);
+            self.decoder.assign(after, j, start, &self.team);
+            let overwait = self.trial_overwait[p] + over;
+            self.trial_overwait[p + 1] = overwait;
+            if p == changed && overwait == self.overwait[p + 1] && *after == self.before[p + 1] {
+                return Trial {
+                    cost: self.cost,
+                    from,
+                    end: p + 1,
+                };
             }
         }
-        let (makespan, mean_back) = self.decoder.score(&fleet);
-        Cost {
-            makespan,
-            mean_back,
-            overwait,
+        let (makespan, mean_back) = self.decoder.score(&self.trial_fleets[self.order.len()]);
+        Trial {
+            cost: Cost {
+                makespan,
+                mean_back,
+                overwait: self.trial_overwait[self.order.len()],
+            },
+            from,
+            end: self.order.len() + 1,
         }
     }
+
+    /// Makes the last trial's fleets the plan's own (the order already is).
+    fn accept(&mut self, trial: Trial) {
+        let changed = trial.from + 1..trial.end;
+        self.before[changed.clone()].swap_with_slice(&mut self.trial_fleets[changed.clone()]);
+        self.overwait[changed.clone()].swap_with_slice(&mut self.trial_overwait[changed]);
+        self.cost = trial.cost;
+    }
+
+    /// Decodes the whole order into the plan.
+    fn replay_all(&mut self) {
+        let trial = self.trial(0, usize::MAX);
+        self.accept(trial);
+    }
+}
+
+/// What decoding a changed order found: its cost, and the positions `from + 1..end`
+/// whose fleets it wrote.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Trial {
+    cost: Cost,
+    from: usize,
+    end: usize,
 }
 
 /// One change to the order: take `len` tasks out at `from` and put them back at `to`, or
@@ -239,9 +275,10 @@ pub(crate) fn anneal(
         let mv = Move::draw(&plan.order, &neighbours, rng);
         let from = mv.apply(&mut plan.order);
         let changed = mv.last();
-        let delta = plan.replay(from, changed, false).value() - plan.cost.value();
+        let trial = plan.trial(from, changed);
+        let delta = trial.cost.value() - plan.cost.value();
         if delta <= 0.0 || rng.random::<f64>() < (-delta / temperature).exp() {
-            plan.cost = plan.replay(from, changed, true);
+            plan.accept(trial);
             if plan.cost.better_than(best) {
                 best = plan.cost;
                 best_order.clone_from(&plan.order);
@@ -251,7 +288,7 @@ pub(crate) fn anneal(
         }
     }
     plan.order = best_order;
-    plan.cost = plan.replay(0, usize::MAX, true);
+    plan.replay_all();
     step
 }
 
@@ -288,21 +325,24 @@ mod tests {
             for _ in 0..200 {
                 let mv = Move::draw(&plan.order, &neighbours, &mut rng);
                 let from = mv.apply(&mut plan.order);
-                let early = plan.replay(from, mv.last(), false);
-                let full = plan.replay(from, usize::MAX, false);
-                assert_eq!(early, full);
+                let full = plan.trial(from, usize::MAX);
+                let early = plan.trial(from, mv.last());
+                assert_eq!(early.cost, full.cost);
                 checked += 1;
-                stopped += usize::from(early == plan.cost && full == plan.cost);
+                stopped += usize::from(early.end < full.end);
                 if rng.random_bool(0.5) {
-                    plan.cost = plan.replay(from, mv.last(), true);
-                    assert_eq!(plan.cost, full);
+                    plan.accept(early);
+                    assert_eq!(plan.cost, full.cost);
                 } else {
                     mv.undo(&mut plan.order);
                 }
             }
-            // the stored fleets stay the plan's own
+            // the stored fleets stay the plan's own: a decode from every position
+            // costs what the whole plan does
             let cost = plan.cost;
-            assert_eq!(plan.replay(0, usize::MAX, false), cost);
+            for from in 0..14 {
+                assert_eq!(plan.trial(from, usize::MAX).cost, cost);
+            }
         }
         assert!(stopped > checked / 10, "{stopped} of {checked}");
     }

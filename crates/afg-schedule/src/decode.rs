@@ -12,6 +12,9 @@ use crate::instance::straight;
 /// without skills picks its team (0: the earliest arrivals, whoever they are).
 const TRAVEL_WEIGHT: f64 = 0.3;
 
+/// Teams up to this size are picked by insertion (see [`smallest`]).
+const SMALL_TEAM: usize = 16;
+
 /// The most travel times kept in a table (128 MiB); larger instances compute them.
 const TABLE_LIMIT: usize = 1 << 24;
 
@@ -133,14 +136,13 @@ impl Decoder {
     ) -> Option<f64> {
         let k = self.team_floor[j];
         let arrive = |i: usize| fleet.free[i] + self.time(fleet.at[i], j);
-        ready.clear();
-        ready.extend(
-            (0..self.num_robots)
-                .map(|i| (arrive(i) + TRAVEL_WEIGHT * self.time(fleet.at[i], j), i)),
-        );
-        ready.select_nth_unstable_by(k - 1, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let keyed = (0..self.num_robots).map(|i| {
+            let drive = self.time(fleet.at[i], j);
+            (fleet.free[i] + drive + TRAVEL_WEIGHT * drive, i)
+        });
+        smallest(keyed, k, ready);
         team.clear();
-        team.extend(ready[..k].iter().map(|r| r.1));
+        team.extend(ready.iter().map(|r| r.1));
         let start = team.iter().map(|&i| arrive(i)).fold(f64::MIN, f64::max);
         let first = team.iter().map(|&i| arrive(i)).fold(f64::MAX, f64::min);
         (start - first <= self.max_wait).then_some(start)
@@ -326,5 +328,71 @@ impl Decoder {
             }
         }
         routes
+    }
+}
+
+/// The `k` smallest of `items` by (key, index) into `out`, in no particular order:
+/// kept sorted by insertion while k is small (a team's size; O(N k) and no
+/// partitioning), selected in place beyond.
+fn smallest(items: impl Iterator<Item = (f64, usize)>, k: usize, out: &mut Vec<(f64, usize)>) {
+    let less = |a: &(f64, usize), b: &(f64, usize)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).is_lt();
+    out.clear();
+    if k > SMALL_TEAM {
+        out.extend(items);
+        out.select_nth_unstable_by(k - 1, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        out.truncate(k);
+        return;
+    }
+    let mut best = [(f64::INFINITY, usize::MAX); SMALL_TEAM];
+    let mut len = 0;
+    for item in items {
+        if len == k {
+            if !less(&item, &best[k - 1]) {
+                continue;
+            }
+        } else {
+            len += 1;
+        }
+        // Shift the larger ones up one place and drop the item in.
+        let mut at = len - 1;
+        while at > 0 && less(&item, &best[at - 1]) {
+            best[at] = best[at - 1];
+            at -= 1;
+        }
+        best[at] = item;
+    }
+    out.extend_from_slice(&best[..len]);
+}
+
+#[cfg(test)]
+mod tests {
+    use proptest::prelude::*;
+    use rand::SeedableRng;
+    use rand::seq::SliceRandom;
+    use rand_chacha::ChaCha8Rng;
+
+    use super::*;
+
+    proptest! {
+        /// The k smallest by (key, index) are the first k of the sorted list, for teams
+        /// picked by insertion and by selection alike, ties in the keys included, in
+        /// whatever order the items come.
+        #[test]
+        fn smallest_are_the_first_of_the_sorted(
+            keys in proptest::collection::vec(0u8..6, 1..40),
+            k in 1usize..40,
+            seed in any::<u64>(),
+        ) {
+            let k = k.min(keys.len());
+            let mut items: Vec<(f64, usize)> =
+                keys.iter().enumerate().map(|(i, &key)| (f64::from(key) / 4.0, i)).collect();
+            items.shuffle(&mut ChaCha8Rng::seed_from_u64(seed));
+            let mut sorted = items.clone();
+            sorted.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            let mut out = vec![(9.0, 99)]; // cleared first
+            smallest(items.iter().copied(), k, &mut out);
+            out.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            prop_assert_eq!(out, sorted[..k].to_vec());
+        }
     }
 }
