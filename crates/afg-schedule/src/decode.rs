@@ -335,11 +335,12 @@ impl Decoder {
 /// kept sorted by insertion while k is small (a team's size; O(N k) and no
 /// partitioning), selected in place beyond.
 fn smallest(items: impl Iterator<Item = (f64, usize)>, k: usize, out: &mut Vec<(f64, usize)>) {
-    let less = |a: &(f64, usize), b: &(f64, usize)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).is_lt();
+    let order = |a: &(f64, usize), b: &(f64, usize)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
+    let less = |a: &(f64, usize), b: &(f64, usize)| order(a, b).is_lt();
     out.clear();
     if k > SMALL_TEAM {
         out.extend(items);
-        out.select_nth_unstable_by(k - 1, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        out.select_nth_unstable_by(k - 1, order);
         out.truncate(k);
         return;
     }
