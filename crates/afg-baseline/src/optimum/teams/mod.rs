@@ -270,9 +270,14 @@ impl TeamOptimum {
             }
         };
         let m = instance.num_tasks();
-        search.dive(&root, &out_of_time, &mut |node, fractional| {
+        let leaf = search.dive(&root, &out_of_time, &mut |node, fractional| {
             Self::half_rounding(instance, &node.relaxation(m), fractional)
         });
+        // The dive's rounding reads no skills: its last node's earning tasks get the
+        // skills they lack before the root's skill prices aim below the best found.
+        if let Some(leaf) = leaf {
+            search.skill_dive(leaf, &out_of_time);
+        }
         search.price_root(&mut root, &out_of_time);
         // With skills, the staffing neighbourhood once the search runs long.
         let mut staffing_after = instance.has_skill_rules().then(|| root.clone());
@@ -460,7 +465,7 @@ impl TeamOptimum {
             })
             .collect();
         let node = search.node(decisions, Vec::new(), None)?;
-        search.skill_dive(node);
+        search.skill_dive(node, NEVER);
         let (best, welfare, _) = search.into_best();
         Some((best, welfare))
     }

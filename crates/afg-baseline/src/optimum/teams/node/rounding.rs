@@ -52,11 +52,17 @@ impl Search<'_> {
     /// task, or keeps it out where that leaves no assignment, or, where neither does
     /// (the robots that hold the skill are fixed at other tasks), gives the task up
     /// (unstaffed, its robots free again), and re-solves, until no earning task lacks a
-    /// skill or no robot can bring one. Every assignment met is offered to the best
-    /// found. Nothing happens in a game without skills.
-    pub(in crate::optimum::teams) fn skill_dive(&mut self, node: Node) {
+    /// skill or no robot can bring one, or `out_of_time`. Every assignment met is offered
+    /// to the best found. Nothing happens in a game without skills.
+    pub(in crate::optimum::teams) fn skill_dive(
+        &mut self,
+        node: Node,
+        out_of_time: &dyn Fn() -> bool,
+    ) {
         let mut current = node;
-        while let Some(branch @ Branch::Pair(_, task)) = self.skill_branch(&current) {
+        while !out_of_time()
+            && let Some(branch @ Branch::Pair(_, task)) = self.skill_branch(&current)
+        {
             let [(join, with), (keep_out, without)] = self.children(&current, branch);
             let give_up = || {
                 let mut decisions = current.decisions.clone();
@@ -82,13 +88,14 @@ impl Search<'_> {
     /// Rounds the relaxation down to an assignment with no task between 0 and its
     /// threshold, a good first incumbent: `round` decides every such task of a node at
     /// once (staffed or not; all unstaffed where its choice asks for too many robots),
-    /// and the node is re-solved until none is left or `out_of_time`.
+    /// and the node is re-solved until none is left or `out_of_time`. Returns the node
+    /// where it ended with no task left to decide (`None`: stopped before).
     pub(in crate::optimum::teams) fn dive(
         &mut self,
         root: &Node,
         out_of_time: &dyn Fn() -> bool,
         round: &mut dyn FnMut(&Node, &[TaskId]) -> Vec<bool>,
-    ) {
+    ) -> Option<Node> {
         let mut current = root.clone();
         while !out_of_time() {
             let sizes = &current.sizes;
@@ -99,7 +106,7 @@ impl Search<'_> {
                 .filter(|&j| sizes[j.index()] > 0 && sizes[j.index()] < self.threshold(j))
                 .collect();
             if fractional.is_empty() {
-                return;
+                return Some(current);
             }
             let staff = round(&current, &fractional);
             let rounded = |keep: bool| {
@@ -119,8 +126,9 @@ impl Search<'_> {
                 .or_else(|| self.node(rounded(false), pairs, Some(&current)));
             match next {
                 Some(next) => current = next,
-                None => return,
+                None => return None,
             }
         }
+        None
     }
 }
