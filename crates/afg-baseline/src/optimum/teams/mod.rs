@@ -270,12 +270,10 @@ impl TeamOptimum {
             }
         };
         let m = instance.num_tasks();
-        let leaf = search.dive(&root, &out_of_time, &mut |node, fractional| {
+        // The dive rounds without skills: a skill dive brings its last node what it lacks.
+        if let Some(leaf) = search.dive(&root, &out_of_time, &mut |node, fractional| {
             Self::half_rounding(instance, &node.relaxation(m), fractional)
-        });
-        // The dive's rounding reads no skills: its last node's earning tasks get the
-        // skills they lack before the root's skill prices aim below the best found.
-        if let Some(leaf) = leaf {
+        }) {
             search.skill_dive(leaf, &out_of_time);
         }
         search.price_root(&mut root, &out_of_time);
