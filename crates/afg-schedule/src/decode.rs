@@ -121,7 +121,7 @@ impl Decoder {
     fn ready(&self, fleet: &Fleet, j: usize, ready: &mut Vec<(f64, usize)>) {
         ready.clear();
         ready.extend((0..self.num_robots).map(|i| (fleet.free[i] + self.time(fleet.at[i], j), i)));
-        ready.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        ready.sort_unstable_by(by_key);
     }
 
     /// The k robots that arrive first when driving counts [`TRAVEL_WEIGHT`] times more:
@@ -331,16 +331,20 @@ impl Decoder {
     }
 }
 
+/// Robots keyed by a time, the soonest first, ties by the lower index.
+fn by_key(a: &(f64, usize), b: &(f64, usize)) -> std::cmp::Ordering {
+    a.0.total_cmp(&b.0).then(a.1.cmp(&b.1))
+}
+
 /// The `k` smallest of `items` by (key, index) into `out`, in no particular order:
 /// kept sorted by insertion while k is small (a team's size; O(N k) and no
 /// partitioning), selected in place beyond.
 fn smallest(items: impl Iterator<Item = (f64, usize)>, k: usize, out: &mut Vec<(f64, usize)>) {
-    let order = |a: &(f64, usize), b: &(f64, usize)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
-    let less = |a: &(f64, usize), b: &(f64, usize)| order(a, b).is_lt();
+    let less = |a: &(f64, usize), b: &(f64, usize)| by_key(a, b).is_lt();
     out.clear();
     if k > SMALL_TEAM {
         out.extend(items);
-        out.select_nth_unstable_by(k - 1, order);
+        out.select_nth_unstable_by(k - 1, by_key);
         out.truncate(k);
         return;
     }
@@ -389,10 +393,10 @@ mod tests {
                 keys.iter().enumerate().map(|(i, &key)| (f64::from(key) / 4.0, i)).collect();
             items.shuffle(&mut ChaCha8Rng::seed_from_u64(seed));
             let mut sorted = items.clone();
-            sorted.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            sorted.sort_by(by_key);
             let mut out = vec![(9.0, 99)]; // cleared first
             smallest(items.iter().copied(), k, &mut out);
-            out.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            out.sort_by(by_key);
             prop_assert_eq!(out, sorted[..k].to_vec());
         }
     }
