@@ -53,16 +53,22 @@ impl Search<'_> {
     /// (the robots that hold the skill are fixed at other tasks), gives the task up
     /// (unstaffed, its robots free again), and re-solves, until no earning task lacks a
     /// skill or no robot can bring one, or `out_of_time`. Every assignment met is offered
-    /// to the best found. Nothing happens in a game without skills.
+    /// to the best found. Nothing happens in a game without skills. Returns the node
+    /// where no earning task lacks a skill that a robot can bring (`None`: stopped
+    /// before, out of time or out of children).
     pub(in crate::optimum::teams) fn skill_dive(
         &mut self,
         node: Node,
         out_of_time: &dyn Fn() -> bool,
-    ) {
+    ) -> Option<Node> {
         let mut current = node;
-        while !out_of_time()
-            && let Some(branch @ Branch::Pair(_, task)) = self.skill_branch(&current)
-        {
+        loop {
+            if out_of_time() {
+                return None;
+            }
+            let Some(branch @ Branch::Pair(_, task)) = self.skill_branch(&current) else {
+                return Some(current);
+            };
             let [(join, with), (keep_out, without)] = self.children(&current, branch);
             let give_up = || {
                 let mut decisions = current.decisions.clone();
@@ -78,10 +84,7 @@ impl Search<'_> {
                     let (decisions, pairs) = give_up();
                     self.node(decisions, pairs, Some(&current))
                 });
-            match next {
-                Some(next) => current = next,
-                None => return,
-            }
+            current = next?;
         }
     }
 

@@ -75,19 +75,20 @@ impl Search<'_> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::Search;
     use super::super::lagrange::tests::{brute_force, skill_knobs};
+    use super::super::{Branch, Search};
     use crate::TeamOptimum;
     use crate::optimum::transport::NEVER;
 
     /// The solve's first dive rounds without reading skills; the skill dive from its
     /// last node brings the skills it left out: on some small skill games it raises the
-    /// best found (to an assignment's welfare, never above the optimum), and out of time
-    /// it solves nothing.
+    /// best found (to an assignment's welfare, never above the optimum), it goes on until
+    /// no robot can bring a skill an earning task lacks, and out of time it solves
+    /// nothing.
     #[test]
     fn the_skill_dive_after_the_first_dive_raises_the_best_found() {
         let knobs = skill_knobs(0.3, (1, 2));
-        let mut raised = 0;
+        let (mut raised, mut steps) = (0, 0);
         for seed in 0..60 {
             let inst = knobs.config(6, 3, seed).unwrap().generate().unwrap();
             let optimum = brute_force(&inst);
@@ -101,15 +102,22 @@ mod tests {
                 continue;
             };
             let (nodes, before) = (search.nodes(), search.best_welfare());
-            search.skill_dive(leaf.clone(), &|| true);
+            assert!(search.skill_dive(leaf.clone(), &|| true).is_none());
             assert_eq!((search.nodes(), search.best_welfare()), (nodes, before));
-            search.skill_dive(leaf, NEVER);
+            let end = search.skill_dive(leaf, NEVER);
             let found = search.best_welfare();
             assert_eq!(inst.welfare(&search.best), found, "seed {seed}");
             assert!(found >= before && found <= optimum + 1e-9, "seed {seed}");
             raised += usize::from(found > before + 1e-9);
+            // it goes on until no robot can bring a skill an earning task lacks
+            if let Some(end) = end {
+                let left = search.skill_branch(&end);
+                assert!(!matches!(left, Some(Branch::Pair(..))), "seed {seed}");
+                steps += usize::from(search.nodes() > nodes + 1);
+            }
         }
         assert!(raised >= 5, "raised on {raised} of 60");
+        assert!(steps >= 5, "{steps} of 60 dives took more than one step");
     }
 
     /// From the root's own offer, the neighbourhood reaches the optimum (brute force)
