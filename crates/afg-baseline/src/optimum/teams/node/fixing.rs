@@ -67,9 +67,11 @@ impl Search<'_> {
         let Some(dual) = self.root_dual.take() else {
             return; // the root was not priced (a game too large for it)
         };
-        if self.travel.is_empty() {
-            self.travel = transport::travel_costs(self.instance);
-        }
+        // The root is priced only where the travel table is kept (`MAX_PAIRS`).
+        debug_assert!(
+            !self.travel.is_empty(),
+            "a priced root without a travel table"
+        );
         let keep_out = self.keep_out_cost();
         let (n, m) = (self.instance.num_robots(), self.instance.num_tasks());
         let width = dual.reduced.len() / n.max(1);
