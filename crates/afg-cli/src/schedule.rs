@@ -77,6 +77,10 @@ pub struct SolveArgs {
     /// Print one JSON object per instance instead of text.
     #[arg(long)]
     json: bool,
+    /// Instances solved at once, each on one core (0: one per core). Results come out
+    /// in the order of the input whatever the number.
+    #[arg(long, default_value_t = 1)]
+    jobs: usize,
 }
 
 /// `afg schedule score`.
@@ -188,15 +192,12 @@ fn solve(args: &SolveArgs) -> Result<()> {
     };
     let mut records = String::new();
     let (mut makespans, mut bounds) = (0.0, 0.0);
-    for (line, inst) in instances.iter().enumerate() {
-        let solved = inst
-            .solve(&options)
-            .with_context(|| format!("{} line {}", args.input.display(), line + 1))?;
+    let solve_one = |inst: &ScheduleInstance| -> Result<(SolvedLine, ScheduleRecord)> {
+        let solved = inst.solve(&options)?;
         let run = &solved.run;
-        let max_wait = run.max_wait;
         let bound = inst.lower_bound();
         let out = SolvedLine {
-            line,
+            line: 0,
             index: inst.index,
             makespan: run.makespan,
             bound: bound.makespan,
@@ -204,37 +205,45 @@ fn solve(args: &SolveArgs) -> Result<()> {
             travel: run.travel,
             waiting: run.waiting,
             longest_wait: run.longest_wait,
-            max_wait,
+            max_wait: run.max_wait,
             time_use: run.time_use(),
             steps: solved.steps,
             seconds: solved.seconds,
         };
+        let record = ScheduleRecord {
+            index: inst.index,
+            method: Some("afg".into()),
+            routes: solved.schedule.routes,
+        };
+        Ok((out, record))
+    };
+    in_order(&instances, args.jobs, solve_one, |line, result| {
+        let (mut out, record) =
+            result.with_context(|| format!("{} line {}", args.input.display(), line + 1))?;
+        out.line = line;
         makespans += out.makespan;
         bounds += out.bound;
         if args.json {
             println!("{}", serde_json::to_string(&out)?);
         } else {
             println!(
-                "line {line}: makespan {:.3}  bound {:.3}  gap {:.1} %  travel {:.3}  mean wait {:.3}  longest wait {:.3} (max_wait {max_wait})  {} steps in {:.2} s",
+                "line {line}: makespan {:.3}  bound {:.3}  gap {:.1} %  travel {:.3}  mean wait {:.3}  longest wait {:.3} (max_wait {})  {} steps in {:.2} s",
                 out.makespan,
                 out.bound,
                 100.0 * out.gap,
                 out.travel,
                 out.waiting,
                 out.longest_wait,
+                out.max_wait,
                 out.steps,
                 out.seconds
             );
             println!("  {}", per_robot(&out.time_use));
         }
-        let record = ScheduleRecord {
-            index: inst.index,
-            method: Some("afg".into()),
-            routes: solved.schedule.routes,
-        };
         records.push_str(&serde_json::to_string(&record)?);
         records.push('\n');
-    }
+        Ok(())
+    })?;
     if !args.json && instances.len() > 1 {
         let n = instances.len() as f64;
         println!(
@@ -248,6 +257,54 @@ fn solve(args: &SolveArgs) -> Result<()> {
         write_atomic_making_dirs(out, records.as_bytes())?;
     }
     Ok(())
+}
+
+/// Runs `work` on every item, `jobs` at a time (0: one per core), and hands each result
+/// to `report` in the items' order as soon as it and every one before it are done. The
+/// first error `report` returns stops the work (items already started finish).
+fn in_order<I: Sync, T: Send>(
+    items: &[I],
+    jobs: usize,
+    work: impl Fn(&I) -> T + Sync,
+    mut report: impl FnMut(usize, T) -> Result<()>,
+) -> Result<()> {
+    use std::collections::BTreeMap;
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+    let jobs = match jobs {
+        0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        j => j,
+    }
+    .min(items.len().max(1));
+    let (next, stop) = (AtomicUsize::new(0), AtomicBool::new(false));
+    std::thread::scope(|scope| {
+        let (send, receive) = std::sync::mpsc::channel();
+        for _ in 0..jobs {
+            let send = send.clone();
+            let (next, stop, work) = (&next, &stop, &work);
+            scope.spawn(move || {
+                while !stop.load(Ordering::Relaxed) {
+                    let k = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(item) = items.get(k) else { return };
+                    if send.send((k, work(item))).is_err() {
+                        return;
+                    }
+                }
+            });
+        }
+        drop(send);
+        let (mut waiting, mut due) = (BTreeMap::new(), 0);
+        for (k, result) in receive {
+            waiting.insert(k, result);
+            while let Some(result) = waiting.remove(&due) {
+                if let Err(e) = report(due, result) {
+                    stop.store(true, Ordering::Relaxed);
+                    return Err(e);
+                }
+                due += 1;
+            }
+        }
+        Ok(())
+    })
 }
 
 /// Where the robots' time goes, in words.

@@ -204,3 +204,82 @@ fn bad_input_is_refused_in_one_line() {
         );
     }
 }
+
+#[test]
+fn instances_solved_at_once_come_out_as_one_at_a_time_in_order() {
+    let dir = fresh("jobs");
+    let inst = dir.join("i.jsonl");
+    let inst = inst.to_str().unwrap();
+    // A larger instance first, so that the small ones after it are done before it.
+    let mut lines = String::new();
+    for (robots, tasks, count) in [("12", "60", "1"), ("6", "12", "4")] {
+        let out = afg(&[
+            "schedule", "gen", "--robots", robots, "--tasks", tasks, "--count", count, "--out",
+            inst,
+        ]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        lines += &std::fs::read_to_string(inst).unwrap();
+    }
+    std::fs::write(inst, lines).unwrap();
+    // Each run's lines without their timing, and its schedules.
+    let run = |jobs: &str| {
+        let plans = dir.join(format!("s{jobs}.jsonl"));
+        let out = afg(&[
+            "schedule",
+            "solve",
+            "--input",
+            inst,
+            "--steps",
+            "3000",
+            "--json",
+            "--jobs",
+            jobs,
+            "--out",
+            plans.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let lines: Vec<serde_json::Value> = stdout(&out)
+            .lines()
+            .map(|l| {
+                let mut v: serde_json::Value = serde_json::from_str(l).unwrap();
+                v.as_object_mut().unwrap().remove("seconds");
+                v
+            })
+            .collect();
+        (lines, std::fs::read_to_string(plans).unwrap())
+    };
+    let one = run("1");
+    assert_eq!(one.0.len(), 5);
+    assert!(one.0.iter().enumerate().all(|(k, v)| v["line"] == k));
+    assert_eq!(run("3"), one);
+    assert_eq!(run("0"), one);
+
+    // The second of three instances has no schedule within its own max_wait: the first
+    // is printed, the error names line 2, and nothing is written.
+    let bad = dir.join("bad.jsonl");
+    let ok = r#"{"speed":1,"max_wait":10,"depots":[[0,0]],"robots":[{"x":0,"y":0,"depot":0},{"x":0,"y":0,"depot":0}],"tasks":[{"x":1,"y":0,"min_team":2,"duration":1}]}"#;
+    let apart = r#"{"speed":1,"max_wait":0.5,"depots":[[0,0],[5,0]],"robots":[{"x":0,"y":0,"depot":0},{"x":5,"y":0,"depot":1}],"tasks":[{"x":1,"y":0,"min_team":2,"duration":1}]}"#;
+    std::fs::write(&bad, format!("{ok}\n{apart}\n{ok}\n")).unwrap();
+    let plans = dir.join("never.jsonl");
+    let out = afg(&[
+        "schedule",
+        "solve",
+        "--input",
+        bad.to_str().unwrap(),
+        "--steps",
+        "100",
+        "--jobs",
+        "3",
+        "--out",
+        plans.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        stdout(&out).starts_with("line 0: makespan"),
+        "{}",
+        stdout(&out)
+    );
+    assert!(!stdout(&out).contains("line 2:"), "{}", stdout(&out));
+    assert!(stderr(&out).contains("line 2"), "{}", stderr(&out));
+    assert!(!plans.exists());
+}
