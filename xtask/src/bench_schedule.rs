@@ -320,14 +320,21 @@ fn cpsat_lines(rows: &[Row], args: &BenchScheduleArgs) -> String {
     );
     for (k, t) in args.cpsat_times.iter().enumerate() {
         let found: Vec<&&Row> = ran.iter().filter(|r| r.cpsat[k].is_some()).collect();
-        let afg_at = args.times.iter().position(|x| x == t);
-        let afg = afg_at.map_or("—".into(), |a| {
-            if found.is_empty() {
-                "—".into()
-            } else {
-                format!("{:.3}", mean(found.iter().map(|r| r.afg[a])))
+        // afg at the same time, or at the longest of its times below it (said so)
+        let afg_at = (0..args.times.len())
+            .filter(|&a| args.times[a] <= *t)
+            .max_by(|&a, &b| args.times[a].total_cmp(&args.times[b]));
+        let afg = match afg_at {
+            Some(a) if !found.is_empty() => {
+                let value = mean(found.iter().map(|r| r.afg[a]));
+                if args.times[a] == *t {
+                    format!("{value:.3}")
+                } else {
+                    format!("{value:.3} (afg at {} s)", args.times[a])
+                }
             }
-        });
+            _ => "—".into(),
+        };
         let cp = if found.is_empty() {
             "—".into()
         } else {

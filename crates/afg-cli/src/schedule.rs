@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 
 use afg_game::fs::write_atomic_making_dirs;
 use afg_schedule::{
-    Family, Generate, ScheduleInstance, ScheduleRecord, SolveOptions, TimeUse, read_instances,
-    read_schedules,
+    Family, Generate, Schedule, ScheduleInstance, ScheduleRecord, SolveOptions, TimeUse,
+    read_instances, read_schedules,
 };
 use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand};
@@ -77,6 +77,10 @@ pub struct SolveArgs {
     /// Print one JSON object per instance instead of text.
     #[arg(long)]
     json: bool,
+    /// Schedules to improve, one per instance (JSON Lines, as `--out` writes them): the
+    /// search starts from each, and keeps it where it finds nothing better.
+    #[arg(long)]
+    start: Option<PathBuf>,
     /// Instances solved at once, each on one core (0: one per core). Results come out
     /// in the order of the input whatever the number.
     #[arg(long, default_value_t = 1)]
@@ -182,18 +186,30 @@ struct SolvedLine {
     seconds: f64,
 }
 
+/// The instances, each with the schedule `--start` gives it (None without).
+fn with_starts(args: &SolveArgs) -> Result<Vec<(ScheduleInstance, Option<Schedule>)>> {
+    Ok(match &args.start {
+        Some(start) => {
+            let (instances, records) = paired(&args.input, start)?;
+            let starts = records.iter().map(|r| Some(r.schedule()));
+            instances.into_iter().zip(starts).collect()
+        }
+        None => read(&args.input)?.into_iter().map(|i| (i, None)).collect(),
+    })
+}
+
 fn solve(args: &SolveArgs) -> Result<()> {
-    let instances = read(&args.input)?;
-    let options = SolveOptions {
-        time_limit: args.time_limit,
-        steps: args.steps,
-        seed: args.seed,
-        max_wait: args.max_wait,
-    };
+    let work = with_starts(args)?;
     let mut records = String::new();
     let (mut makespans, mut bounds) = (0.0, 0.0);
-    let solve_one = |inst: &ScheduleInstance| -> Result<(SolvedLine, ScheduleRecord)> {
-        let solved = inst.solve(&options)?;
+    let solve_one = |(inst, start): &(ScheduleInstance, Option<Schedule>)| -> Result<(SolvedLine, ScheduleRecord)> {
+        let solved = inst.solve(&SolveOptions {
+            time_limit: args.time_limit,
+            steps: args.steps,
+            seed: args.seed,
+            max_wait: args.max_wait,
+            start: start.clone(),
+        })?;
         let run = &solved.run;
         let bound = inst.lower_bound();
         let out = SolvedLine {
@@ -217,7 +233,7 @@ fn solve(args: &SolveArgs) -> Result<()> {
         };
         Ok((out, record))
     };
-    in_order(&instances, args.jobs, solve_one, |line, result| {
+    in_order(&work, args.jobs, solve_one, |line, result| {
         let (mut out, record) =
             result.with_context(|| format!("{} line {}", args.input.display(), line + 1))?;
         out.line = line;
@@ -226,29 +242,17 @@ fn solve(args: &SolveArgs) -> Result<()> {
         if args.json {
             println!("{}", serde_json::to_string(&out)?);
         } else {
-            println!(
-                "line {line}: makespan {:.3}  bound {:.3}  gap {:.1} %  travel {:.3}  mean wait {:.3}  longest wait {:.3} (max_wait {})  {} steps in {:.2} s",
-                out.makespan,
-                out.bound,
-                100.0 * out.gap,
-                out.travel,
-                out.waiting,
-                out.longest_wait,
-                out.max_wait,
-                out.steps,
-                out.seconds
-            );
-            println!("  {}", per_robot(&out.time_use));
+            print_solved(&out);
         }
         records.push_str(&serde_json::to_string(&record)?);
         records.push('\n');
         Ok(())
     })?;
-    if !args.json && instances.len() > 1 {
-        let n = instances.len() as f64;
+    if !args.json && work.len() > 1 {
+        let n = work.len() as f64;
         println!(
             "mean of {} instances: makespan {:.3}, bound {:.3}",
-            instances.len(),
+            work.len(),
             makespans / n,
             bounds / n
         );
@@ -257,6 +261,24 @@ fn solve(args: &SolveArgs) -> Result<()> {
         write_atomic_making_dirs(out, records.as_bytes())?;
     }
     Ok(())
+}
+
+/// One solved instance, in words.
+fn print_solved(out: &SolvedLine) {
+    println!(
+        "line {}: makespan {:.3}  bound {:.3}  gap {:.1} %  travel {:.3}  mean wait {:.3}  longest wait {:.3} (max_wait {})  {} steps in {:.2} s",
+        out.line,
+        out.makespan,
+        out.bound,
+        100.0 * out.gap,
+        out.travel,
+        out.waiting,
+        out.longest_wait,
+        out.max_wait,
+        out.steps,
+        out.seconds
+    );
+    println!("  {}", per_robot(&out.time_use));
 }
 
 /// Runs `work` on every item, `jobs` at a time (0: one per core), and hands each result

@@ -283,3 +283,59 @@ fn instances_solved_at_once_come_out_as_one_at_a_time_in_order() {
     assert!(stderr(&out).contains("line 2"), "{}", stderr(&out));
     assert!(!plans.exists());
 }
+
+#[test]
+fn a_search_started_from_its_own_schedules_never_loses_ground() {
+    let dir = fresh("start");
+    let (inst, first, second) = (
+        dir.join("i.jsonl"),
+        dir.join("a.jsonl"),
+        dir.join("b.jsonl"),
+    );
+    let (inst, first, second) = (
+        inst.to_str().unwrap(),
+        first.to_str().unwrap(),
+        second.to_str().unwrap(),
+    );
+    let out = afg(&[
+        "schedule", "gen", "--robots", "8", "--tasks", "20", "--count", "3", "--out", inst,
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let makespans = |out: &Output| -> Vec<f64> {
+        stdout(out)
+            .lines()
+            .map(|l| {
+                serde_json::from_str::<serde_json::Value>(l).unwrap()["makespan"]
+                    .as_f64()
+                    .unwrap()
+            })
+            .collect()
+    };
+    let out = afg(&[
+        "schedule", "solve", "--input", inst, "--steps", "3000", "--json", "--out", first,
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let before = makespans(&out);
+    let out = afg(&[
+        "schedule", "solve", "--input", inst, "--steps", "0", "--seed", "7", "--json", "--start",
+        first, "--out", second,
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let after = makespans(&out);
+    assert_eq!(after.len(), 3);
+    assert!(
+        before.iter().zip(&after).all(|(b, a)| a <= b),
+        "{before:?} {after:?}"
+    );
+
+    // One schedule for three instances is refused before any search.
+    let one = std::fs::read_to_string(first).unwrap();
+    std::fs::write(second, one.lines().next().unwrap()).unwrap();
+    let out = afg(&["schedule", "solve", "--input", inst, "--start", second]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        stderr(&out).contains("holds 1 schedule(s) for the 3 instance(s)"),
+        "{}",
+        stderr(&out)
+    );
+}

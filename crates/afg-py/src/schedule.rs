@@ -205,10 +205,11 @@ fn evaluation_dict<'py>(py: Python<'py>, run: &Evaluation) -> PyResult<Bound<'py
 
 /// Plans a schedule: a dict with `routes` (one int64 array per robot), the evaluator's
 /// numbers (`makespan`, `travel`, `waiting`, `longest_wait`, `start`, `finish`, …), the
-/// certified `bound` and `gap`, and the search's `steps` and `seconds`. The GIL is
-/// released while it searches.
+/// certified `bound` and `gap`, and the search's `steps` and `seconds`. `start`: routes
+/// to improve (the search starts from them and keeps them where it finds nothing
+/// better). The GIL is released while it searches.
 #[pyfunction]
-#[pyo3(signature = (instance, time_limit=None, steps=None, seed=0, max_wait=None))]
+#[pyo3(signature = (instance, time_limit=None, steps=None, seed=0, max_wait=None, start=None))]
 fn schedule<'py>(
     py: Python<'py>,
     instance: &PyScheduleInstance,
@@ -216,6 +217,7 @@ fn schedule<'py>(
     steps: Option<u64>,
     seed: u64,
     max_wait: Option<f64>,
+    start: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let inst = Arc::clone(&instance.inner);
     let options = SolveOptions {
@@ -223,6 +225,7 @@ fn schedule<'py>(
         steps,
         seed,
         max_wait,
+        start: start.map(routes_from).transpose()?,
     };
     let (solved, bound) = py
         .detach(|| -> Result<_, ScheduleError> { Ok((inst.solve(&options)?, inst.lower_bound())) })

@@ -79,3 +79,16 @@ def test_refusals_are_afg_errors_naming_the_problem():
         afg.ScheduleInstance.parse('{"speed":0,"max_wait":1,"depots":[[0,0]],"robots":[],"tasks":[]}')
     with pytest.raises(afg.MissingFileError):
         afg.ScheduleInstance.read("/no/such/file.jsonl")
+
+
+def test_a_start_is_searched_on_and_never_lost():
+    instances = afg.ScheduleInstance.read(SET / "dcmrta-20a50t.jsonl")
+    ctas = published_routes()[0]
+    weak = afg.score_schedule(instances[0], ctas)
+    better = afg.schedule(instances[0], steps=2000, start=[np.asarray(r) for r in ctas])
+    assert better["valid"] and better["makespan"] < weak["makespan"] - 1
+    plan = afg.schedule(instances[0], steps=5000, seed=1)
+    kept = afg.schedule(instances[0], steps=0, seed=2, start=plan["routes"])
+    assert kept["makespan"] <= plan["makespan"]
+    with pytest.raises(afg.InvalidInputError, match="task ids start at 0"):
+        afg.schedule(instances[0], steps=10, start=[[-1]])

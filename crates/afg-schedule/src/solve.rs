@@ -37,6 +37,10 @@ pub struct SolveOptions {
     pub seed: u64,
     /// The longest any robot may wait for its team (default: the instance's `max_wait`).
     pub max_wait: Option<f64>,
+    /// A schedule to improve (a plan of one's own, or an earlier search's): the search
+    /// starts from its tasks in the order they start, and where it is valid under the
+    /// `max_wait` asked for and nothing found is better, it is what comes back.
+    pub start: Option<Schedule>,
 }
 
 /// What the scheduler found.
@@ -46,7 +50,8 @@ pub struct Solved {
     pub schedule: Schedule,
     /// The schedule played by the evaluator under the `max_wait` asked for (valid).
     pub run: Evaluation,
-    /// The order of the tasks it was decoded from.
+    /// The order of the tasks it was decoded from (where the start given comes back,
+    /// its tasks in the order they start).
     pub order: Vec<usize>,
     /// Search steps taken.
     pub steps: u64,
@@ -77,9 +82,14 @@ impl ScheduleInstance {
             )));
         }
         let clock = Instant::now();
+        let given = match &options.start {
+            Some(schedule) => Some((schedule, self.evaluate_with(schedule, max_wait)?)),
+            None => None,
+        };
+        let given_order = given.as_ref().map(|(_, run)| by_start(run));
         let decoder = Decoder::new(self, max_wait);
         let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
-        let mut plan = first_plan(self, &decoder, &mut rng);
+        let mut plan = first_plan(self, &decoder, &mut rng, given_order.clone());
         let limit = match (options.time_limit, options.steps) {
             (None, None) => Some(Duration::from_secs(1)),
             (t, _) => t.map(Duration::from_secs_f64),
@@ -89,6 +99,18 @@ impl ScheduleInstance {
         let reserve = clock.elapsed();
         let deadline = limit.map(|l| clock + l.saturating_sub(reserve));
         let steps = anneal(&mut plan, &mut rng, deadline, options.steps);
+        if let (Some((schedule, run)), Some(order)) = (given, given_order)
+            && run.is_valid()
+            && (plan.cost().overwait > 0.0 || run.makespan <= plan.cost().makespan)
+        {
+            return Ok(Solved {
+                schedule: schedule.clone(),
+                run,
+                order,
+                steps,
+                seconds: clock.elapsed().as_secs_f64(),
+            });
+        }
         if plan.cost().overwait > 0.0 {
             return Err(ScheduleError::Setting(format!(
                 "found no schedule whose teams all gather within max_wait {max_wait} in the search given \
@@ -119,8 +141,21 @@ impl ScheduleInstance {
     }
 }
 
-/// The best of a few orders: nearest task first from the depot, by distance, and shuffles.
-fn first_plan<'a>(inst: &ScheduleInstance, decoder: &'a Decoder, rng: &mut ChaCha8Rng) -> Plan<'a> {
+/// A schedule's tasks in the order they start (ties by task id).
+fn by_start(run: &Evaluation) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..run.start.len()).collect();
+    order.sort_by(|&a, &b| run.start[a].total_cmp(&run.start[b]).then(a.cmp(&b)));
+    order
+}
+
+/// The best of a few orders: nearest task first from the depot, by distance, shuffles,
+/// and the order of a schedule given to start from.
+fn first_plan<'a>(
+    inst: &ScheduleInstance,
+    decoder: &'a Decoder,
+    rng: &mut ChaCha8Rng,
+    given: Option<Vec<usize>>,
+) -> Plan<'a> {
     let m = inst.num_tasks();
     let home = [inst.depots[0][0], inst.depots[0][1]];
     let far = |j: usize| (inst.tasks[j].x - home[0]).hypot(inst.tasks[j].y - home[1]);
@@ -134,9 +169,45 @@ fn first_plan<'a>(inst: &ScheduleInstance, decoder: &'a Decoder, rng: &mut ChaCh
         }
         candidates.push(o);
     }
+    candidates.extend(given);
     candidates
         .into_iter()
         .map(|o| Plan::new(decoder, o))
         .reduce(|a, b| if b.cost().better_than(a.cost()) { b } else { a })
         .expect("five candidates")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Family, Generate};
+
+    /// The order of a schedule given to start from is among the first plans: the plan
+    /// the search starts from is no worse than that order decoded.
+    #[test]
+    fn the_first_plan_is_no_worse_than_a_given_order() {
+        for seed in 0..10 {
+            let inst = Generate {
+                family: Family::Dcmrta,
+                robots: 8,
+                tasks: 20,
+                seed,
+            }
+            .instance()
+            .unwrap();
+            let decoder = Decoder::new(&inst, inst.max_wait);
+            let searched = inst
+                .solve(&SolveOptions {
+                    steps: Some(5_000),
+                    seed,
+                    ..SolveOptions::default()
+                })
+                .unwrap()
+                .order;
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            let first = first_plan(&inst, &decoder, &mut rng, Some(searched.clone())).cost();
+            let given = Plan::new(&decoder, searched).cost();
+            assert!(!given.better_than(first), "seed {seed}");
+        }
+    }
 }

@@ -309,3 +309,78 @@ fn on_dcmrtas_set_every_schedule_keeps_waits_within_10_and_beats_the_best_publis
         assert!(inst.lower_bound().makespan <= run.makespan);
     }
 }
+
+/// A schedule given to start from: the search improves on a weak one (the published
+/// CTAS-D routes), never returns worse than a valid one (a search of no steps from
+/// afg's own schedule gives that schedule back), never returns one that breaks the
+/// `max_wait` asked for, and refuses one that is not a schedule of the instance.
+#[test]
+fn a_start_is_improved_or_given_back() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../datasets/dcmrta-20a50t");
+    let instances = read_instances(&root.join("dcmrta-20a50t.jsonl")).unwrap();
+    let published = afg_schedule::read_schedules(&root.join("dcmrta-20a50t-routes.jsonl")).unwrap();
+    let (mut given_back, mut bettered) = (0, 0);
+    for (inst, record) in instances.iter().zip(&published).take(4) {
+        let ctas = record.schedule();
+        let ctas_run = inst.evaluate(&ctas).unwrap();
+        assert!(ctas_run.is_valid(), "under the set's own max_wait 100");
+        let from_ctas = |n: u64| {
+            inst.solve(&SolveOptions {
+                start: Some(ctas.clone()),
+                ..steps(n, 0)
+            })
+            .unwrap()
+        };
+        assert!(from_ctas(0).makespan() <= ctas_run.makespan);
+        assert!(from_ctas(2_000).makespan() < ctas_run.makespan - 1.0);
+
+        let own = inst.solve(&steps(20_000, 1)).unwrap();
+        let again = inst
+            .solve(&SolveOptions {
+                start: Some(own.schedule.clone()),
+                ..steps(0, 2)
+            })
+            .unwrap();
+        assert!(again.makespan() <= own.makespan());
+        given_back += usize::from(again.schedule == own.schedule);
+        bettered += usize::from(again.makespan() < own.makespan());
+
+        // Under max_wait 10 CTAS-D's routes break it: never given back, only its order used.
+        let strict = inst
+            .solve(&SolveOptions {
+                start: Some(ctas.clone()),
+                max_wait: Some(10.0),
+                ..steps(0, 0)
+            })
+            .unwrap();
+        assert!(
+            !inst
+                .evaluate_with(&ctas, 10.0)
+                .unwrap()
+                .long_waits
+                .is_empty()
+        );
+        assert!(
+            inst.evaluate_with(&strict.schedule, 10.0)
+                .unwrap()
+                .is_valid()
+        );
+    }
+    assert_eq!(given_back + bettered, 4);
+    assert!(
+        given_back >= 1,
+        "{given_back} given back, {bettered} bettered"
+    );
+
+    let inst = &instances[0];
+    let mut unknown = published[0].schedule();
+    unknown.routes[0].push(50);
+    let err = inst
+        .solve(&SolveOptions {
+            start: Some(unknown),
+            ..steps(10, 0)
+        })
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("50"), "{err}");
+}

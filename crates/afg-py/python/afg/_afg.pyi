@@ -363,10 +363,12 @@ def schedule(
     steps: Optional[int] = None,
     seed: int = 0,
     max_wait: Optional[float] = None,
+    start: Optional[Sequence[Union[npt.NDArray[np.int64], Sequence[int]]]] = None,
 ) -> Dict[str, Any]:
     """Plans a schedule: ``routes`` (one int64 array per robot), ``makespan``, ``bound``,
     ``gap``, ``travel``, ``waiting``, ``longest_wait``, ``start``/``finish`` per task,
-    ``steps``, ``seconds``."""
+    ``steps``, ``seconds``. ``start``: routes to improve (the search starts from them
+    and keeps them where it finds nothing better)."""
 
 def score_schedule(
     instance: ScheduleInstance,
