@@ -37,9 +37,10 @@ pub struct SolveOptions {
     pub seed: u64,
     /// The longest any robot may wait for its team (default: the instance's `max_wait`).
     pub max_wait: Option<f64>,
-    /// A schedule to improve (a plan of one's own, or an earlier search's): the search
-    /// starts from its tasks in the order they start, and where it is valid under the
-    /// `max_wait` asked for and nothing found is better, it is what comes back.
+    /// A schedule to improve (a plan of one's own, or an earlier search's): its tasks in
+    /// the order they start are one of the orders the search may start from, and where
+    /// it is valid under the `max_wait` asked for and nothing found is better, it is
+    /// what comes back.
     pub start: Option<Schedule>,
 }
 
