@@ -234,8 +234,13 @@ fn solve(args: &SolveArgs) -> Result<()> {
         Ok((out, record))
     };
     in_order(&work, args.jobs, solve_one, |line, result| {
-        let (mut out, record) =
-            result.with_context(|| format!("{} line {}", args.input.display(), line + 1))?;
+        let (mut out, record) = result.with_context(|| {
+            let at = format!("{} line {}", args.input.display(), line + 1);
+            match &args.start {
+                Some(start) => format!("{at}, started from {} line {}", start.display(), line + 1),
+                None => at,
+            }
+        })?;
         out.line = line;
         makespans += out.makespan;
         bounds += out.bound;

@@ -328,8 +328,25 @@ fn a_search_started_from_its_own_schedules_never_loses_ground() {
         "{before:?} {after:?}"
     );
 
-    // One schedule for three instances is refused before any search.
+    // A start that names a task the instance lacks is refused, naming its file and line.
     let one = std::fs::read_to_string(first).unwrap();
+    let mut lines: Vec<String> = one.lines().map(String::from).collect();
+    let mut bad: serde_json::Value = serde_json::from_str(&lines[1]).unwrap();
+    bad["routes"][0] = serde_json::json!([999]);
+    lines[1] = bad.to_string();
+    std::fs::write(second, lines.join("\n")).unwrap();
+    let out = afg(&[
+        "schedule", "solve", "--input", inst, "--steps", "0", "--start", second,
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let text = stderr(&out);
+    assert!(
+        text.contains(&format!("started from {second} line 2"))
+            && text.contains("sends robot 0 to task 999"),
+        "{text}"
+    );
+
+    // One schedule for three instances is refused before any search.
     std::fs::write(second, one.lines().next().unwrap()).unwrap();
     let out = afg(&["schedule", "solve", "--input", inst, "--start", second]);
     assert_eq!(out.status.code(), Some(1));
