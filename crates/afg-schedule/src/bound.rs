@@ -9,12 +9,12 @@
 //! successive shortest paths, lies below the driving of any schedule (it drops only
 //! the order in time). Some of that order comes back as one limit per two tasks: a
 //! robot that goes from a to b arrives after a is done, so no robot goes from b to a,
-//! and at most min(team of a, team of b) go between them at all. Those limits are priced
-//! into the driving (a Lagrangian relaxation, its prices set by subgradient rounds;
-//! every round is itself a bound). With skills the same holds for the robots that hold each skill
-//! alone: they must bring every unit of it that the tasks require. The bound is the
-//! largest of these loads and the longest single trip (a round trip to one task and its
-//! duration).
+//! and at most min(team of a, team of b) go between them at all. Those limits are
+//! priced into the driving (a Lagrangian relaxation, its prices set by subgradient
+//! rounds; every round is itself a bound). With skills the same holds for the robots
+//! that hold each skill alone: they must bring every unit of it that the tasks
+//! require. The bound is the largest of these loads and the longest single trip (a
+//! round trip to one task and its duration).
 
 use serde::{Deserialize, Serialize};
 
@@ -216,18 +216,17 @@ impl ScheduleInstance {
                     .collect()
             })
             .collect();
-        debug_assert_eq!(
-            left.iter().map(|l| l.1).sum::<usize>(),
-            right.iter().map(|r| r.1).sum::<usize>()
-        );
+        let supply: Vec<usize> = left.iter().map(|l| l.1).collect();
+        let demand: Vec<usize> = right.iter().map(|r| r.1).collect();
+        let units: usize = supply.iter().sum();
+        debug_assert_eq!(units, demand.iter().sum::<usize>());
         let shared = needed().count();
         let task = |a: usize| left[a].2.expect("the first nodes are tasks");
-        let units: usize = left.iter().map(|l| l.1).sum();
         let nodes = left.len() + right.len();
         let rounds = (ONE_WAY_WORK / (units * nodes * nodes).max(1)).min(ONE_WAY_ROUNDS);
         crate::transport::min_cost_one_way(
-            &left.iter().map(|l| l.1).collect::<Vec<_>>(),
-            &right.iter().map(|r| r.1).collect::<Vec<_>>(),
+            &supply,
+            &demand,
             &cost,
             shared,
             |a, b| {
